@@ -1,0 +1,172 @@
+"""Element groups as struct-of-arrays, ready for the numba kernels.
+
+A :class:`ContinuumGroup` is one element type with one or more materials; an
+:class:`InterfaceGroup` is one joint set (one law, one integration rule). Python checks shapes once
+here and turns kernel status codes into exceptions that name the group and the element.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..elements import continuum as ck
+from ..elements import interface as ik
+from ..elements.shapes import ELEMENT_TYPES, shape_functions
+from ..errors import STATUS_BAD_GEOMETRY, STATUS_BAD_JACOBIAN, STATUS_NAN, MeshError, NumericalError
+from ..materials import mohr_coulomb as mc
+from .dofmap import DofMap
+
+
+def raise_for_status(status: int, info: np.ndarray, group: str, what: str, element_ids=None):
+    """Turn a kernel status code into an exception naming the group and element."""
+    if status == 0:
+        return
+    e = int(info[0])
+    label = int(element_ids[e]) if element_ids is not None and 0 <= e < len(element_ids) else e
+    if status == STATUS_BAD_JACOBIAN:
+        raise MeshError(f"{what}: inverted or degenerate element (non-positive Jacobian determinant)", group, [label])
+    if status == STATUS_BAD_GEOMETRY:
+        raise MeshError(f"{what}: degenerate interface (zero length or area)", group, [label])
+    if status == STATUS_NAN:
+        raise NumericalError(f"{what}: NaN or infinity in element group '{group}', element {label}")
+    raise NumericalError(f"{what}: kernel status {status} in element group '{group}', element {label}")
+
+
+@dataclass
+class ContinuumGroup:
+    """Continuum elements of one type.
+
+    name: element group (scene material group); type: element type; conn (ne, nen);
+    dofs (ne, nen*dim); D_table (n_mat, ns, ns) Pa; material_index (ne,); thickness (ne,) m;
+    density (ne,) kg/m3; tables N (ngp, nen), dN (ngp, dim, nen), weights (ngp,).
+    """
+
+    name: str
+    type: str
+    conn: np.ndarray
+    dofs: np.ndarray
+    D_table: np.ndarray
+    material_index: np.ndarray
+    thickness: np.ndarray
+    density: np.ndarray
+    N: np.ndarray = field(init=False)
+    dN: np.ndarray = field(init=False)
+    weights: np.ndarray = field(init=False)
+    scatter: np.ndarray | None = None
+
+    def __post_init__(self):
+        self.N, self.dN, self.weights = ck.element_tables(self.type)
+        self.info = np.zeros(1, dtype=np.int64)
+
+    @property
+    def n_elem(self) -> int:
+        return len(self.conn)
+
+    @property
+    def n_edof(self) -> int:
+        return self.dofs.shape[1]
+
+    def stiffness(self, coords: np.ndarray) -> np.ndarray:
+        ke = np.empty((self.n_elem, self.n_edof, self.n_edof))
+        st = ck.continuum_stiffness(coords, self.conn, self.dN, self.weights, self.D_table, self.material_index,
+                                    self.thickness, ke, self.info)
+        raise_for_status(st, self.info, self.name, "stiffness")
+        return ke
+
+    def body_force(self, coords: np.ndarray, accel: np.ndarray) -> np.ndarray:
+        """Consistent nodal forces (ne, n_edof) of the body force density ``density * accel`` (N/m3)."""
+        b = np.ascontiguousarray(self.density[:, None] * np.asarray(accel, dtype=np.float64)[None, :])
+        fe = np.empty((self.n_elem, self.n_edof))
+        st = ck.continuum_body_force(coords, self.conn, self.N, self.dN, self.weights, b, self.thickness, fe, self.info)
+        raise_for_status(st, self.info, self.name, "body force")
+        return fe
+
+    def stress(self, coords: np.ndarray, u: np.ndarray) -> np.ndarray:
+        ns = self.D_table.shape[1]
+        out = np.empty((self.n_elem, len(self.weights), ns))
+        st = ck.continuum_stress(coords, self.conn, self.dN, self.D_table, self.material_index, u, out, self.info)
+        raise_for_status(st, self.info, self.name, "stress")
+        return out
+
+
+class InterfaceGroup:
+    """One joint set: interface elements with one law and one integration rule.
+
+    conn (ne, 2*ns): bottom face nodes then top face nodes; params (N_JOINT_PARAMS,);
+    state_committed / state_trial (ne, nip, N_JOINT_STATE); delta / traction (ne, nip, dim).
+    law: 'mohr_coulomb' or 'linear' (a linear joint never changes state: tension is carried).
+    """
+
+    def __init__(self, name, type_, conn, coords, dim, params, thickness, law, scheme, n_points=None):
+        self.name, self.type, self.law, self.scheme = name, type_, law, scheme
+        self.conn = np.ascontiguousarray(conn, dtype=np.int64)
+        self.dofs = DofMap.node_dofs(self.conn, dim)
+        face = {"interface_line2": "line2", "interface_line3": "line3"}[type_]
+        pts, self.weights = ik.interface_rule(face, scheme, n_points)
+        self.N, self.dN = shape_functions(face, pts)
+        self.weights = np.ascontiguousarray(self.weights, dtype=np.float64)
+        self.nip = len(self.weights)
+        ne = len(self.conn)
+        self.params_table = np.ascontiguousarray(np.asarray(params, dtype=np.float64)[None, :])
+        self.param_index = np.zeros(ne, dtype=np.int64)
+        self.thickness = np.ascontiguousarray(thickness, dtype=np.float64)
+        # trial / commit / revert: ``state_committed`` is the last converged state; ``state_base`` is
+        # what the kernel reads in this step: the committed state plus bonds latched broken in
+        # earlier iterations of the step (see :meth:`latch_broken_bonds`); ``state_trial`` is written.
+        self.state_committed = np.zeros((ne, self.nip, mc.N_JOINT_STATE))
+        self.state_base = np.zeros_like(self.state_committed)
+        self.state_trial = np.zeros_like(self.state_committed)
+        self.delta = np.zeros((ne, self.nip, dim))
+        self.traction = np.zeros((ne, self.nip, dim))
+        self.fe = np.zeros((ne, self.dofs.shape[1]))
+        self.ke = np.zeros((ne, self.dofs.shape[1], self.dofs.shape[1]))
+        self.info = np.zeros(1, dtype=np.int64)
+        self.scatter = None
+        self.points = np.zeros((ne, self.nip, dim))
+        self.frame = np.zeros((ne, self.nip, dim, dim))
+        self.jw = np.zeros((ne, self.nip))
+        st = ik.interface_geometry(coords, self.conn, self.N, self.dN, self.weights, self.points, self.frame, self.jw, self.info)
+        raise_for_status(st, self.info, name, "interface geometry")
+
+    @property
+    def n_elem(self) -> int:
+        return len(self.conn)
+
+    @property
+    def nonlinear(self) -> bool:
+        return self.law == "mohr_coulomb"
+
+    def evaluate(self, coords, u, want_tangent=True):
+        """Evaluate tractions, nodal forces and (optionally) tangents from the committed state."""
+        st = ik.interface_evaluate(coords, self.conn, u, self.N, self.dN, self.weights, self.thickness,
+                                   self.params_table, self.param_index, self.state_base, self.state_trial,
+                                   self.delta, self.traction, self.fe, self.ke, want_tangent, self.info)
+        raise_for_status(st, self.info, self.name, "joint evaluation")
+
+    def commit(self):
+        self.state_committed[:] = self.state_trial
+        self.state_base[:] = self.state_trial
+
+    def revert(self):
+        """Discard everything since the last commit (trial state and latched bonds)."""
+        self.state_base[:] = self.state_committed
+        self.state_trial[:] = self.state_committed
+
+    def latch_broken_bonds(self) -> int:
+        """Keep bonds that broke in the last evaluation broken for the rest of the step.
+
+        Bond failure is irreversible, and with cohesion the shear traction drops from up to c to 0
+        when a point opens; letting an iteration "un-break" a bond makes Newton chatter between the
+        two sides of that jump. Returns the number of newly latched points.
+        """
+        col = mc.S_BOND_BROKEN
+        new = (self.state_trial[:, :, col] != 0) & (self.state_base[:, :, col] == 0)
+        n = int(new.sum())
+        if n:
+            self.state_base[:, :, col][new] = 1.0
+        return n
+
+    def state_codes(self, trial=True) -> np.ndarray:
+        s = self.state_trial if trial else self.state_committed
+        return s[:, :, mc.S_CODE].astype(np.int8)

@@ -1,0 +1,107 @@
+"""The assembled finite element model: groups, DOF map, sparsity pattern and evaluation.
+
+The linear continuum part is assembled once: a full-DOF CSR matrix gives the continuum internal
+forces (``K_c u``, reactions included) and its free-DOF part is scattered once per set of
+constraints. Only interfaces are re-evaluated in Newton iterations, so a scene whose joints stick
+costs one interface pass and one sparse mat-vec per iteration.
+"""
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..errors import MeshError
+from .dofmap import DofMap
+from .groups import ContinuumGroup, InterfaceGroup
+from .sparsity import build_pattern, scatter_matrix, scatter_vector
+
+
+class Model:
+    """Finite element model.
+
+    coords (n_nodes, dim) m; cgroups: continuum groups; igroups: interface groups (joint sets).
+    """
+
+    def __init__(self, coords: np.ndarray, cgroups: list[ContinuumGroup], igroups: list[InterfaceGroup]):
+        self.coords = np.ascontiguousarray(coords, dtype=np.float64)
+        self.dim = self.coords.shape[1]
+        self.n_nodes = len(self.coords)
+        self.n_dof = self.n_nodes * self.dim
+        self.cgroups, self.igroups = cgroups, igroups
+        used = np.zeros(self.n_nodes, dtype=bool)
+        for g in list(cgroups) + list(igroups):
+            used[g.conn.ravel()] = True
+        if not used.all():
+            bad = np.nonzero(~used)[0]
+            raise MeshError(f"{len(bad)} node(s) belong to no element, e.g. node {bad[0]} at {self.coords[bad[0]].tolist()}")
+        # full-DOF continuum stiffness (constant for linear elastic blocks)
+        rows, cols, vals = [], [], []
+        self._ke_cache = []
+        for g in cgroups:
+            ke = g.stiffness(self.coords)
+            nd = g.n_edof
+            rows.append(np.repeat(g.dofs, nd, axis=1).ravel())
+            cols.append(np.tile(g.dofs, (1, nd)).ravel())
+            vals.append(ke.reshape(len(ke), -1).ravel())
+        self.K_continuum = sp.csr_matrix(
+            (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(self.n_dof, self.n_dof)
+        )
+        self.K_continuum.sum_duplicates()
+        self.dofmap: DofMap | None = None
+
+    @property
+    def nonlinear(self) -> bool:
+        return any(g.nonlinear for g in self.igroups)
+
+    def set_constraints(self, constrained: np.ndarray) -> None:
+        """Build the DOF map, sparsity pattern and scatter maps for a set of constrained DOFs."""
+        if self.dofmap is not None and np.array_equal(self.dofmap.constrained, constrained):
+            return
+        self.dofmap = dm = DofMap(self.n_nodes, self.dim, constrained)
+        groups = list(self.cgroups) + list(self.igroups)
+        self.indptr, self.indices, scatters = build_pattern([g.dofs for g in groups], dm.eq_of_dof, dm.n_eq)
+        for g, s in zip(groups, scatters):
+            g.scatter = s
+        self.K_linear_data = np.zeros(len(self.indices))
+        for g in self.cgroups:
+            scatter_matrix(g.stiffness(self.coords), g.scatter, self.K_linear_data)
+
+    def evaluate(self, u: np.ndarray, want_tangent: bool = True):
+        """Internal forces (n_dof,) N at all DOFs and the free-DOF tangent (CSR) at displacement ``u``.
+
+        Interfaces are evaluated from their committed state (trial state updated).
+        """
+        f = self.K_continuum @ u
+        data = self.K_linear_data.copy() if want_tangent else None
+        for g in self.igroups:
+            g.evaluate(self.coords, u, want_tangent)
+            scatter_vector(g.fe, g.dofs, f)
+            if want_tangent:
+                scatter_matrix(g.ke, g.scatter, data)
+        K = None
+        if want_tangent:
+            n = self.dofmap.n_eq
+            K = sp.csr_matrix((data, self.indices, self.indptr), shape=(n, n))
+        return f, K
+
+    def set_open_tangent(self, factor: float) -> None:
+        """Tangent factor of open joint points (0: consistent; 1: initial stiffness). Residuals unchanged."""
+        from ..materials.mohr_coulomb import P_OPEN_TANGENT
+
+        for g in self.igroups:
+            g.params_table[:, P_OPEN_TANGENT] = factor
+
+    def commit(self) -> None:
+        for g in self.igroups:
+            g.commit()
+
+    def revert(self) -> None:
+        for g in self.igroups:
+            g.revert()
+
+    def latch_broken_bonds(self) -> int:
+        return sum(g.latch_broken_bonds() for g in self.igroups if g.nonlinear)
+
+    def state_signature(self) -> bytes:
+        """Bytes that change whenever any joint changes state (stick/slip/open)."""
+        return b"".join(g.state_codes(trial=True).tobytes() for g in self.igroups if g.nonlinear)

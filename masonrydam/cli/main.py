@@ -1,0 +1,93 @@
+"""``masonrydam`` command line.
+
+    masonrydam run SCENE.toml -o OUT.nc      run a scene, print a summary, write netCDF
+    masonrydam run --default -o OUT.nc       run the bundled default scene
+    masonrydam check SCENE.toml              validate a scene and build its model, without solving
+    masonrydam export-mesh SCENE.toml -o M.vtu   write the scene's mesh (units and joints) for ParaView
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+from importlib import resources
+from pathlib import Path
+
+from ..errors import MasonrydamError
+
+
+def default_scene_path() -> Path:
+    return Path(str(resources.files("masonrydam") / "scenes" / "wall_push.toml"))
+
+
+def _scene_arg(args):
+    if getattr(args, "default", False) or args.scene is None:
+        return default_scene_path()
+    return Path(args.scene)
+
+
+def _cmd_run(args):
+    from ..scene.run import run
+
+    scene = _scene_arg(args)
+    out = args.output or (scene.stem + ".nc")
+    run(scene, output=out, progress=not args.no_progress, summary=True)
+    return 0
+
+
+def _cmd_check(args):
+    from ..scene.build import build_mesh, build_model, build_stages, effects
+    from ..scene.scene import Scene
+
+    sc = Scene.from_toml(_scene_arg(args))
+    mesh = build_mesh(sc.normalized, sc.base_dir)
+    model = build_model(sc.normalized, mesh)
+    build_stages(sc.normalized, mesh, model)
+    print(f"scene '{sc.name}' is valid: {model.n_nodes} nodes, {model.n_dof} DOFs, "
+          f"{mesh.n_elements()} elements, {mesh.n_interfaces()} interfaces")
+    for e in effects(sc.normalized, model):
+        print("  effect:", e)
+    return 0
+
+
+def _cmd_export(args):
+    from ..mesh.io import to_meshio
+    from ..scene.build import build_mesh
+    from ..scene.scene import Scene
+
+    sc = Scene.from_toml(_scene_arg(args))
+    mesh = build_mesh(sc.normalized, sc.base_dir)
+    to_meshio(mesh).write(args.output)
+    print(f"wrote {args.output}: {mesh.n_elements()} elements, {mesh.n_interfaces()} interfaces")
+    return 0
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(prog="masonrydam", description="Nonlinear analysis of jointed masonry and block dams")
+    sub = p.add_subparsers(dest="command", required=True)
+    r = sub.add_parser("run", help="run a scene and write results to netCDF")
+    r.add_argument("scene", nargs="?", help="scene TOML file (default: the bundled wall_push scene)")
+    r.add_argument("--default", action="store_true", help="run the bundled default scene")
+    r.add_argument("-o", "--output", help="output netCDF file (default: SCENE.nc in the current folder)")
+    r.add_argument("--no-progress", action="store_true", help="no progress bar")
+    r.set_defaults(func=_cmd_run)
+    c = sub.add_parser("check", help="validate a scene and build its model without solving")
+    c.add_argument("scene", nargs="?")
+    c.add_argument("--default", action="store_true")
+    c.set_defaults(func=_cmd_check)
+    e = sub.add_parser("export-mesh", help="write the scene's mesh (meshio formats: .vtu, .msh, .xdmf)")
+    e.add_argument("scene", nargs="?")
+    e.add_argument("--default", action="store_true")
+    e.add_argument("-o", "--output", required=True)
+    e.set_defaults(func=_cmd_export)
+    args = p.parse_args(argv)
+    try:
+        return args.func(args)
+    except MasonrydamError as exc:
+        print(f"masonrydam: error: {exc}", file=sys.stderr)
+        for note in getattr(exc, "__notes__", []):
+            print(f"masonrydam: {note}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,458 @@
+"""Zero-thickness interface (joint) elements, seed paper sec. 3.3 (Tzamtzis & Asteris, eqs. 1-11).
+
+An interface element joins a *bottom* face and a *top* face with coincident (or nearly coincident)
+nodes. Supported faces: ``line2`` / ``line3`` (2D, elements of 2+2 / 3+3 nodes) and ``quad4``,
+``quad8``, ``tri3`` (3D, 4+4 / 8+8 / 3+3 nodes). Connectivity rows are
+``[bottom_0 .. bottom_{ns-1}, top_0 .. top_{ns-1}]``, both faces in the face-type node order
+(masonrydam.elements.shapes).
+
+Kinematics (seed eqs. 1-6 and 10). At a point xi of the reference face the relative displacement
+in global axes is ``Du = sum_i N_i(xi) (u_top_i - u_bot_i)`` and in the local frame
+``delta = R Du`` with the rows of R the unit tangent(s) then the unit normal, i.e.
+``delta = B q`` with ``B = R [-N_1 I .. -N_ns I, N_1 I .. N_ns I]`` and q the element DOFs
+(node-major, bottom nodes first). The frame is taken from the reference (undeformed) mid-surface
+``x_mid,i = (x_bot,i + x_top,i) / 2`` (small-displacement formulation, so R does not depend on u):
+
+- 2D: ``e_t = (dx/dxi) / |dx/dxi|``, ``e_n`` = ``e_t`` rotated +90 deg (counter-clockwise),
+  ``j = |dx/dxi|`` (m per unit xi);
+- 3D: ``e_1 = (dx/dxi) / |dx/dxi|``, ``n = (dx/dxi x dx/deta) / |dx/dxi x dx/deta|``,
+  ``e_2 = n x e_1``, ``j = |dx/dxi x dx/deta|`` (m^2 per unit reference area).
+
+The top face lies on the ``+n`` side (an opening is a positive normal relative displacement).
+
+Internal force and stiffness (seed eqs. 7-10; the seed's local [K'] and the transformation [H]
+are folded into B):
+``fe = sum_ip B^T t j w h`` and ``ke = sum_ip B^T C B j w h`` with t and C = dt/d delta the traction
+and tangent of the joint law (masonrydam.materials.mohr_coulomb), w the rule weight and h the
+out-of-plane thickness (2D; pass ones in 3D).
+
+Integration (``interface_rule``). Schellekens & de Borst (1993, IJNME 36:43-66, "On the numerical
+integration of interface elements") showed that Gauss integration of stiff linear interfaces couples
+the nodes of an element and produces spurious oscillations of the tractions along a joint, while
+nodal integration (Newton-Cotes / Lobatto points on the nodes) gives an uncoupled set of node-pair
+springs and smooth tractions. The default scheme here is therefore ``"lumped"`` (nodal), which for
+line2, line3, quad4 and tri3 is identical to Newton-Cotes (trapezoid / Simpson / vertex rules).
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from ..errors import STATUS_BAD_GEOMETRY, STATUS_NAN, STATUS_OK
+from ..materials.mohr_coulomb import mohr_coulomb_update
+from .quadrature import QUADRATURE_SCHEMES, line_rule, tensor_rule, triangle_rule
+from .shapes import ELEMENT_TYPES, reference_nodes, shape_functions
+
+INTERFACE_FACE_TYPES = ("line2", "line3", "quad4", "quad8", "tri3")
+DEFAULT_INTERFACE_SCHEME = "lumped"
+
+# relative tolerance of the zero-length / zero-area check: j < _GEOM_TOL * (face size)^(dim-1)
+_GEOM_TOL = 1e-12
+
+# integral of each node's shape function over the reference face, in node order
+# (line: [-1, 1]; quad: [-1, 1]^2; triangle: unit simplex of area 1/2)
+_LUMPED_WEIGHTS = {
+    "line2": (1.0, 1.0),
+    "line3": (1.0 / 3.0, 1.0 / 3.0, 4.0 / 3.0),
+    "quad4": (1.0, 1.0, 1.0, 1.0),
+    "tri3": (1.0 / 6.0, 1.0 / 6.0, 1.0 / 6.0),
+}
+
+
+def interface_rule(face_type: str, scheme: str = DEFAULT_INTERFACE_SCHEME, n: int | None = None):
+    """Integration rule on the reference face of an interface element.
+
+    Parameters
+    ----------
+    face_type : ``"line2"``, ``"line3"`` (2D) or ``"quad4"``, ``"quad8"``, ``"tri3"`` (3D).
+    scheme :
+        ``"lumped"`` (default) - nodal integration: one point at each node (in the face's node order)
+        with weight = integral of that node's shape function over the reference face
+        (line2: 1, 1; line3: 1/3, 1/3, 4/3 = Simpson; quad4: 1 x 4; tri3: 1/6 x 3);
+        ``"lobatto"`` / ``"newton-cotes"`` - Gauss-Lobatto (tensor) rule, default ``n`` = nodes per
+        edge so that the points sit on the nodes (line3 / quad8: 3 per direction = Simpson, for quad8
+        the 3x3 rule also has a centre point); tri3: the vertex rule (only n = 3);
+        ``"gauss"`` - Gauss-Legendre, ``n`` per direction (default = nodes per edge); tri3: the
+        symmetric ``n``-point triangle rule (1, 3 or 6; default 3).
+    n : points per direction (total for triangles), see above.
+
+    Returns
+    -------
+    points : float64 (nip, dim_ref) natural coordinates; weights : float64 (nip,).
+
+    The default is nodal ("lumped") integration because Gauss integration of stiff interfaces
+    couples the nodes and makes the tractions oscillate (Schellekens & de Borst 1993, IJNME
+    36:43-66); nodal / Newton-Cotes integration does not.
+
+    Raises
+    ------
+    ValueError for an unknown face type or scheme, a bad ``n``, and for ``quad8`` with ``"lumped"``:
+    the integrals of the serendipity corner functions are negative (-1/3), which would give
+    negative node-pair springs; use ``"lobatto"`` (3x3 Newton-Cotes) or ``"gauss"`` for quad8.
+    """
+    if face_type not in INTERFACE_FACE_TYPES:
+        raise ValueError(f"unknown interface face type {face_type!r}; use one of {INTERFACE_FACE_TYPES}")
+    if scheme not in QUADRATURE_SCHEMES:
+        raise ValueError(f"unknown interface integration scheme {scheme!r}; use one of {QUADRATURE_SCHEMES}")
+    et = ELEMENT_TYPES[face_type]
+    per_edge = len(et.edges[0])  # nodes per edge: 2 (linear) or 3 (quadratic)
+
+    if scheme == "lumped":
+        if n is not None and n != et.n_nodes:
+            raise ValueError(f"{face_type}: the lumped rule has one point per node ({et.n_nodes}), got n={n}")
+        if face_type == "quad8":
+            raise ValueError(
+                "quad8: lumped (row-sum) integration gives negative corner weights (-1/3); "
+                "use scheme='lobatto' (3x3 Newton-Cotes) or 'gauss'"
+            )
+        pts = reference_nodes(face_type).astype(np.float64)
+        # exact integrals of the shape functions over the reference face (node order)
+        w = np.array(_LUMPED_WEIGHTS[face_type], dtype=np.float64)
+        return np.ascontiguousarray(pts), np.ascontiguousarray(w, dtype=np.float64)
+
+    if et.family == "tri":
+        if scheme == "gauss":
+            n = 3 if n is None else n
+            pts, w = triangle_rule(n)
+            return np.ascontiguousarray(pts, dtype=np.float64), np.ascontiguousarray(w, dtype=np.float64)
+        if n is not None and n != 3:
+            raise ValueError(f"tri3: the Newton-Cotes (vertex) rule has 3 points, got n={n}")
+        return reference_nodes("tri3").astype(np.float64), np.full(3, 1.0 / 6.0)
+
+    n = per_edge if n is None else int(n)
+    minimum = 2 if scheme != "gauss" else 1
+    if n < minimum:
+        raise ValueError(f"{face_type}: scheme {scheme!r} needs n >= {minimum} points per direction, got {n}")
+    if et.dim == 1:
+        pts, w = line_rule(scheme, n)
+    else:
+        pts, w = tensor_rule(scheme, n, et.dim)
+    return np.ascontiguousarray(pts, dtype=np.float64), np.ascontiguousarray(w, dtype=np.float64)
+
+
+def interface_tables(face_type: str, scheme: str = DEFAULT_INTERFACE_SCHEME, n: int | None = None):
+    """Rule and shape tables ready for the kernels.
+
+    Returns ``(N (nip, ns), dN (nip, dim_ref, ns), weights (nip,), points (nip, dim_ref))``, float64,
+    C-contiguous; see :func:`interface_rule` for the arguments.
+    """
+    pts, w = interface_rule(face_type, scheme, n)
+    N, dN = shape_functions(face_type, pts)
+    return N, dN, w, pts
+
+
+@njit(cache=True)
+def _mid_surface(coords, conn, e, ns, dim, xm):
+    """Reference mid-surface node coordinates of element e into xm (ns, dim); returns the face size
+    (largest distance of a mid-surface node from the first one, m)."""
+    for a in range(ns):
+        b = conn[e, a]
+        t = conn[e, ns + a]
+        for k in range(dim):
+            xm[a, k] = 0.5 * (coords[b, k] + coords[t, k])
+    size = 0.0
+    for a in range(1, ns):
+        d2 = 0.0
+        for k in range(dim):
+            dx = xm[a, k] - xm[0, k]
+            d2 += dx * dx
+        if d2 > size:
+            size = d2
+    return math.sqrt(size)
+
+
+@njit(cache=True)
+def _frame(xm, dN, g, dim, R, size):
+    """Local frame R (dim, dim) (rows: tangent(s), normal) and Jacobian j at integration point g.
+
+    Returns j (> 0), 0.0 for a degenerate (zero length / area) point, or NaN for non-finite input.
+    """
+    ns = xm.shape[0]
+    if dim == 2:
+        tx = 0.0
+        ty = 0.0
+        for a in range(ns):
+            tx += dN[g, 0, a] * xm[a, 0]
+            ty += dN[g, 0, a] * xm[a, 1]
+        j = math.sqrt(tx * tx + ty * ty)
+        if not math.isfinite(j):
+            return np.nan
+        if j <= _GEOM_TOL * size or j == 0.0:
+            return 0.0
+        tx /= j
+        ty /= j
+        R[0, 0] = tx
+        R[0, 1] = ty
+        R[1, 0] = -ty
+        R[1, 1] = tx
+        return j
+    # dim == 3: covariant base vectors a1 = dx/dxi, a2 = dx/deta
+    a1x = 0.0
+    a1y = 0.0
+    a1z = 0.0
+    a2x = 0.0
+    a2y = 0.0
+    a2z = 0.0
+    for a in range(ns):
+        a1x += dN[g, 0, a] * xm[a, 0]
+        a1y += dN[g, 0, a] * xm[a, 1]
+        a1z += dN[g, 0, a] * xm[a, 2]
+        a2x += dN[g, 1, a] * xm[a, 0]
+        a2y += dN[g, 1, a] * xm[a, 1]
+        a2z += dN[g, 1, a] * xm[a, 2]
+    nx = a1y * a2z - a1z * a2y
+    ny = a1z * a2x - a1x * a2z
+    nz = a1x * a2y - a1y * a2x
+    j = math.sqrt(nx * nx + ny * ny + nz * nz)
+    l1 = math.sqrt(a1x * a1x + a1y * a1y + a1z * a1z)
+    if not (math.isfinite(j) and math.isfinite(l1)):
+        return np.nan
+    if j <= _GEOM_TOL * size * size or j == 0.0 or l1 == 0.0:
+        return 0.0
+    nx /= j
+    ny /= j
+    nz /= j
+    e1x = a1x / l1
+    e1y = a1y / l1
+    e1z = a1z / l1
+    # e2 = n x e1
+    R[0, 0] = e1x
+    R[0, 1] = e1y
+    R[0, 2] = e1z
+    R[1, 0] = ny * e1z - nz * e1y
+    R[1, 1] = nz * e1x - nx * e1z
+    R[1, 2] = nx * e1y - ny * e1x
+    R[2, 0] = nx
+    R[2, 1] = ny
+    R[2, 2] = nz
+    return j
+
+
+@njit(cache=True)
+def interface_evaluate(
+    coords,
+    conn,
+    u,
+    N,
+    dN,
+    weights,
+    thickness,
+    params_table,
+    param_index,
+    state_committed,
+    state_trial,
+    delta_out,
+    traction_out,
+    fe_out,
+    ke_out,
+    want_tangent,
+    info,
+):
+    """Internal forces, tangent stiffness and joint state of a group of interface elements.
+
+    Parameters
+    ----------
+    coords : float64 (n_nodes, dim)
+        Reference nodal coordinates (m), dim = 2 or 3.
+    conn : int64 (n_elem, 2*ns)
+        Bottom nodes in face order, then top nodes in the same order.
+    u : float64 (n_dof,)
+        Global displacements (m), ``dof = node*dim + comp``.
+    N : float64 (nip, ns);  dN : float64 (nip, dim-1, ns);  weights : float64 (nip,)
+        Shape tables and rule on the reference face (:func:`interface_tables`).
+    thickness : float64 (n_elem,)
+        Out-of-plane thickness (m) in 2D; ones in 3D.
+    params_table : float64 (n_param_sets, N_JOINT_PARAMS);  param_index : int64 (n_elem,)
+        Joint-law parameters (masonrydam.materials.mohr_coulomb.joint_params) and the set of each element.
+    state_committed : float64 (n_elem, nip, N_JOINT_STATE)
+        Committed joint states; read only.
+    state_trial : float64 (n_elem, nip, N_JOINT_STATE), out
+    delta_out : float64 (n_elem, nip, dim), out
+        Local relative displacements ``[s1, (s2,) n]`` (m), opening positive.
+    traction_out : float64 (n_elem, nip, dim), out
+        Local tractions ``[tau1, (tau2,) t_n]`` (Pa), tension positive.
+    fe_out : float64 (n_elem, 2*ns*dim), out
+        Element internal force vectors (N), node-major element DOF order.
+    ke_out : float64 (n_elem, 2*ns*dim, 2*ns*dim), out
+        Element tangent matrices (N/m); written only if ``want_tangent`` (otherwise it is never
+        accessed and may be a dummy array such as ``np.empty((0, 0, 0))``). Non-symmetric while
+        a joint slips with friction.
+    want_tangent : bool
+    info : int64 (1,), out
+        Index of the failing element when the status is not OK.
+
+    Returns
+    -------
+    int : STATUS_OK; STATUS_BAD_GEOMETRY for a zero-length / zero-area element (or integration
+    point); STATUS_NAN for non-finite input or output. The element index goes to ``info[0]``.
+
+    Equations: ``Du = sum_i N_i (u_top_i - u_bot_i)``, ``delta = R Du`` (seed eqs. 4-6, 10);
+    ``fe = sum_ip B^T t j w h``, ``ke = sum_ip B^T C B j w h`` with
+    ``B = R [-N_1 I .. -N_ns I, N_1 I .. N_ns I]`` (seed eqs. 5, 7, 9, 10). The global-axes
+    blocks are ``fe_{bot,i} = -N_i R^T t jwh``, ``fe_{top,i} = +N_i R^T t jwh`` and
+    ``ke_{ai,bk} = s_a s_b N_i N_k R^T C R jwh`` with ``s_bot = -1``, ``s_top = +1``.
+    """
+    n_elem = conn.shape[0]
+    dim = coords.shape[1]
+    nip = N.shape[0]
+    ns = N.shape[1]
+    ndof_half = ns * dim
+
+    xm = np.empty((ns, dim))
+    du = np.empty((ns, dim))
+    R = np.zeros((dim, dim))
+    C = np.empty((dim, dim))
+    tg = np.empty(dim)
+    RC = np.empty((dim, dim))  # R^T C
+    Cg = np.empty((dim, dim))  # R^T C R
+    Dug = np.empty(dim)
+
+    for e in range(n_elem):
+        for r in range(2 * ndof_half):
+            fe_out[e, r] = 0.0
+        if want_tangent:
+            for r in range(2 * ndof_half):
+                for c2 in range(2 * ndof_half):
+                    ke_out[e, r, c2] = 0.0
+
+        size = _mid_surface(coords, conn, e, ns, dim, xm)
+        for a in range(ns):
+            b = conn[e, a]
+            t = conn[e, ns + a]
+            for k in range(dim):
+                du[a, k] = u[t * dim + k] - u[b * dim + k]
+        h = thickness[e]
+        pidx = param_index[e]
+
+        for g in range(nip):
+            j = _frame(xm, dN, g, dim, R, size)
+            if not math.isfinite(j):
+                info[0] = e
+                return STATUS_NAN
+            if j == 0.0:
+                info[0] = e
+                return STATUS_BAD_GEOMETRY
+
+            # relative displacement in global then local axes
+            for k in range(dim):
+                s = 0.0
+                for a in range(ns):
+                    s += N[g, a] * du[a, k]
+                Dug[k] = s
+            for r in range(dim):
+                s = 0.0
+                for k in range(dim):
+                    s += R[r, k] * Dug[k]
+                delta_out[e, g, r] = s
+
+            status = mohr_coulomb_update(
+                params_table[pidx],
+                delta_out[e, g],
+                state_committed[e, g],
+                state_trial[e, g],
+                traction_out[e, g],
+                C,
+            )
+            if status != STATUS_OK:
+                info[0] = e
+                return status
+
+            jwh = j * weights[g] * h
+            # global traction R^T t
+            for k in range(dim):
+                s = 0.0
+                for r in range(dim):
+                    s += R[r, k] * traction_out[e, g, r]
+                tg[k] = s * jwh
+            for a in range(ns):
+                Na = N[g, a]
+                for k in range(dim):
+                    fe_out[e, a * dim + k] -= Na * tg[k]
+                    fe_out[e, ndof_half + a * dim + k] += Na * tg[k]
+
+            if want_tangent:
+                # Cg = R^T C R * jwh
+                for k in range(dim):
+                    for r in range(dim):
+                        s = 0.0
+                        for q in range(dim):
+                            s += R[q, k] * C[q, r]
+                        RC[k, r] = s
+                for k in range(dim):
+                    for m in range(dim):
+                        s = 0.0
+                        for r in range(dim):
+                            s += RC[k, r] * R[r, m]
+                        Cg[k, m] = s * jwh
+                for a in range(ns):
+                    Na = N[g, a]
+                    if Na == 0.0:
+                        continue
+                    for b in range(ns):
+                        NaNb = Na * N[g, b]
+                        if NaNb == 0.0:
+                            continue
+                        for k in range(dim):
+                            ra = a * dim + k
+                            for m in range(dim):
+                                cb = b * dim + m
+                                v = NaNb * Cg[k, m]
+                                ke_out[e, ra, cb] += v
+                                ke_out[e, ra, ndof_half + cb] -= v
+                                ke_out[e, ndof_half + ra, cb] -= v
+                                ke_out[e, ndof_half + ra, ndof_half + cb] += v
+
+        for r in range(2 * ndof_half):
+            if not math.isfinite(fe_out[e, r]):
+                info[0] = e
+                return STATUS_NAN
+    return STATUS_OK
+
+
+@njit(cache=True)
+def interface_geometry(coords, conn, N, dN, weights, points_out, frame_out, jw_out, info):
+    """Integration-point coordinates, local frames and tributary lengths / areas.
+
+    Parameters
+    ----------
+    coords : float64 (n_nodes, dim);  conn : int64 (n_elem, 2*ns)
+    N : float64 (nip, ns);  dN : float64 (nip, dim-1, ns);  weights : float64 (nip,)
+    points_out : float64 (n_elem, nip, dim), out
+        Integration points on the reference mid-surface (m).
+    frame_out : float64 (n_elem, nip, dim, dim), out
+        Local frame R, rows = unit tangent(s) then unit normal (global components).
+    jw_out : float64 (n_elem, nip), out
+        ``j * w``: tributary length (2D, m; multiply by the thickness for an area) or area (3D, m^2).
+    info : int64 (1,), out — failing element index.
+
+    Returns
+    -------
+    int : STATUS_OK, STATUS_BAD_GEOMETRY (zero length / area) or STATUS_NAN.
+    """
+    n_elem = conn.shape[0]
+    dim = coords.shape[1]
+    nip = N.shape[0]
+    ns = N.shape[1]
+    xm = np.empty((ns, dim))
+    R = np.zeros((dim, dim))
+    for e in range(n_elem):
+        size = _mid_surface(coords, conn, e, ns, dim, xm)
+        for g in range(nip):
+            j = _frame(xm, dN, g, dim, R, size)
+            if not math.isfinite(j):
+                info[0] = e
+                return STATUS_NAN
+            if j == 0.0:
+                info[0] = e
+                return STATUS_BAD_GEOMETRY
+            for k in range(dim):
+                s = 0.0
+                for a in range(ns):
+                    s += N[g, a] * xm[a, k]
+                points_out[e, g, k] = s
+                for m in range(dim):
+                    frame_out[e, g, k, m] = R[k, m]
+            jw_out[e, g] = j * weights[g]
+    return STATUS_OK

@@ -1,0 +1,87 @@
+"""Quadrature rules on reference elements.
+
+All rules return ``(points, weights)`` with ``points`` of shape ``(n_points, dim_ref)``
+and ``weights`` of shape ``(n_points,)`` in the element's natural coordinates.
+
+Reference domains: line and quadrilateral/hexahedron on ``[-1, 1]^d``; triangle on the unit
+simplex ``{xi >= 0, eta >= 0, xi + eta <= 1}`` (area 1/2).
+
+Schemes for interfaces (Schellekens & de Borst 1993, IJNME 36, 43-66):
+
+- ``"gauss"``: Gauss-Legendre, exact for polynomials of degree ``2n-1``;
+- ``"lobatto"`` (alias ``"newton-cotes"``): Gauss-Lobatto points, which for the ``n`` equal to the
+  number of nodes along an edge coincide with the nodes (2 points: trapezoid, 3 points: Simpson);
+- ``"lumped"``: nodal integration, one point at each node with the weight equal to the integral of
+  that node's shape function (row sum of the consistent matrix).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+QUADRATURE_SCHEMES = ("gauss", "lobatto", "newton-cotes", "lumped")
+
+
+def gauss_legendre_1d(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Gauss-Legendre rule with ``n`` points on [-1, 1]: points (n,), weights (n,)."""
+    if n < 1:
+        raise ValueError(f"Gauss-Legendre rule needs at least 1 point, got {n}")
+    x, w = np.polynomial.legendre.leggauss(n)
+    return x.astype(np.float64), w.astype(np.float64)
+
+
+def gauss_lobatto_1d(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Gauss-Lobatto rule with ``n >= 2`` points on [-1, 1], end points included.
+
+    Interior points are the roots of P'_{n-1}; weights 2 / (n (n-1) P_{n-1}(x)^2)
+    (Abramowitz & Stegun 25.4.32).
+    """
+    if n < 2:
+        raise ValueError(f"Gauss-Lobatto rule needs at least 2 points, got {n}")
+    p = np.polynomial.legendre.Legendre.basis(n - 1)
+    interior = np.sort(p.deriv().roots().real) if n > 2 else np.zeros(0)
+    x = np.concatenate(([-1.0], interior, [1.0]))
+    w = 2.0 / (n * (n - 1) * p(x) ** 2)
+    return x.astype(np.float64), w.astype(np.float64)
+
+
+def line_rule(scheme: str, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """1D rule on [-1, 1] as ``(points (n, 1), weights (n,))``."""
+    if scheme == "gauss":
+        x, w = gauss_legendre_1d(n)
+    elif scheme in ("lobatto", "newton-cotes"):
+        x, w = gauss_lobatto_1d(n)
+    else:
+        raise ValueError(f"unknown line quadrature scheme {scheme!r}; use one of {QUADRATURE_SCHEMES}")
+    return x[:, None], w
+
+
+def tensor_rule(scheme: str, n: int, dim: int) -> tuple[np.ndarray, np.ndarray]:
+    """Tensor-product rule on [-1, 1]^dim: points (n**dim, dim), weights (n**dim,).
+
+    The first coordinate varies fastest.
+    """
+    x, w = line_rule(scheme, n)
+    x = x[:, 0]
+    grids = np.meshgrid(*([x] * dim), indexing="ij")
+    wgrids = np.meshgrid(*([w] * dim), indexing="ij")
+    pts = np.stack([g.ravel(order="F") for g in grids], axis=1)
+    wts = np.prod(np.stack([g.ravel(order="F") for g in wgrids], axis=1), axis=1)
+    return pts.astype(np.float64), wts.astype(np.float64)
+
+
+def triangle_rule(n_points: int) -> tuple[np.ndarray, np.ndarray]:
+    """Symmetric triangle rules on the unit simplex (weights sum to 1/2).
+
+    1 point (degree 1), 3 points (degree 2, Strang & Fix), 6 points (degree 4, Dunavant 1985).
+    """
+    if n_points == 1:
+        return np.array([[1 / 3, 1 / 3]]), np.array([0.5])
+    if n_points == 3:
+        p = np.array([[1 / 6, 1 / 6], [2 / 3, 1 / 6], [1 / 6, 2 / 3]])
+        return p, np.full(3, 1 / 6)
+    if n_points == 6:
+        a, b = 0.445948490915965, 0.091576213509771
+        wa, wb = 0.223381589678011 / 2, 0.109951743655322 / 2
+        p = np.array([[a, a], [1 - 2 * a, a], [a, 1 - 2 * a], [b, b], [1 - 2 * b, b], [b, 1 - 2 * b]])
+        return p, np.array([wa, wa, wa, wb, wb, wb])
+    raise ValueError(f"no triangle rule with {n_points} points (use 1, 3 or 6)")

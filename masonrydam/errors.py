@@ -1,0 +1,61 @@
+"""Exceptions raised by masonrydam.
+
+Every error names the offending scene key, value, element or part of the model, so that a user can
+fix the input without reading a traceback.
+"""
+from __future__ import annotations
+
+
+class MasonrydamError(Exception):
+    """Base class of all masonrydam errors."""
+
+
+class SceneError(MasonrydamError, ValueError):
+    """Invalid scene input. ``key`` is the dotted path of the offending entry (e.g. ``joints.bed.friction_angle``)."""
+
+    def __init__(self, key: str, message: str):
+        self.key = key
+        super().__init__(f"scene key '{key}': {message}")
+
+
+class MeshError(MasonrydamError, ValueError):
+    """Invalid mesh: degenerate or inverted elements, unknown cell types, missing sets."""
+
+    def __init__(self, message: str, group: str | None = None, elements=None):
+        self.group = group
+        self.elements = None if elements is None else list(elements)
+        where = ""
+        if group is not None:
+            where += f"element group '{group}'"
+        if self.elements:
+            shown = ", ".join(str(e) for e in self.elements[:10])
+            more = f" (+{len(self.elements) - 10} more)" if len(self.elements) > 10 else ""
+            where += f" element(s) {shown}{more}"
+        super().__init__(f"{where}: {message}" if where else message)
+
+
+class MechanismError(MasonrydamError, RuntimeError):
+    """The structure (or a part of it) can move as a rigid body: missing supports or a floating block.
+
+    ``parts`` is a list of human-readable descriptions of the free parts.
+    """
+
+    def __init__(self, message: str, parts=None):
+        self.parts = list(parts or [])
+        detail = "".join(f"\n  - {p}" for p in self.parts)
+        super().__init__(message + detail)
+
+
+class ConvergenceError(MasonrydamError, RuntimeError):
+    """A step could not be converged even after the allowed step cuts."""
+
+
+class NumericalError(MasonrydamError, FloatingPointError):
+    """A NaN or infinity appeared in a residual, a stiffness or a solution."""
+
+
+# Status codes returned by numba kernels (kernels never raise; Python turns codes into exceptions).
+STATUS_OK = 0
+STATUS_BAD_JACOBIAN = 1  # non-positive or tiny Jacobian determinant; info[0] = element index
+STATUS_NAN = 2  # NaN/inf produced; info[0] = element index
+STATUS_BAD_GEOMETRY = 3  # degenerate interface (zero length / area); info[0] = element index

@@ -1,0 +1,106 @@
+"""Mesh input and output through meshio.
+
+Reading (:func:`read_mesh`): any format meshio reads (gmsh .msh, VTU, XDMF, ...). Continuum cells
+are grouped by their named physical group (gmsh) or cell set; named lower-dimensional groups become
+facet sets and node sets; the facet groups listed as joints get interfaces inserted.
+
+Writing (:func:`to_meshio`): continuum blocks and interfaces as separate cell blocks, so ParaView
+shows units and joints; a 2D interface is written as a degenerate (zero-area) quad
+``[b0, b1, t1, t0]`` (quadratic interfaces as two such quads).
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..elements.shapes import MESHIO_TO_TYPE
+from ..errors import MeshError, SceneError
+from .interfaces import insert_interfaces
+from .model import CellBlock, FacetSet, Mesh
+
+
+def read_mesh(path: str | Path, joints: list[str], dim: int = 2, key: str = "mesh.file") -> Mesh:
+    import meshio
+
+    path = Path(path)
+    if not path.exists():
+        raise SceneError(key, f"mesh file '{path}' does not exist")
+    try:
+        m = meshio.read(path)
+    except Exception as exc:  # meshio raises many types
+        raise SceneError(key, f"meshio could not read '{path}': {exc}") from None
+    points = m.points[:, :dim].copy()
+    if m.points.shape[1] > dim and np.abs(m.points[:, dim:]).max(initial=0) > 0:
+        raise SceneError(key, f"'{path}' has non-zero z coordinates but the scene is {dim}D")
+    tag_name = {}
+    for name, (tag, _gdim) in (m.field_data or {}).items():
+        tag_name[int(tag)] = name
+    phys = m.cell_data.get("gmsh:physical")
+    groups: dict[tuple, list] = {}
+    facet_groups: dict[str, list] = {}
+    node_sets: dict[str, list] = {}
+    for bi, cb in enumerate(m.cells):
+        tags = phys[bi] if phys is not None else np.zeros(len(cb.data), dtype=int)
+        for tag in np.unique(tags):
+            sel = cb.data[tags == tag]
+            name = tag_name.get(int(tag), f"group{int(tag)}")
+            if cb.type in ("vertex",):
+                node_sets.setdefault(name, []).extend(sel.ravel().tolist())
+            elif cb.type in ("line", "line3"):
+                facet_groups.setdefault(name, []).append((cb.type, sel))
+                node_sets.setdefault(name, []).extend(sel.ravel().tolist())
+            elif cb.type in MESHIO_TO_TYPE:
+                groups.setdefault((MESHIO_TO_TYPE[cb.type], name), []).append(sel)
+            else:
+                raise MeshError(f"'{path}': unsupported cell type '{cb.type}' in group '{name}'")
+    for name, ids in (m.point_sets or {}).items():
+        node_sets.setdefault(name, []).extend(np.asarray(ids).ravel().tolist())
+    blocks = [CellBlock(t, np.vstack(v), name) for (t, name), v in sorted(groups.items())]
+    if not blocks:
+        raise MeshError(f"'{path}' contains no 2D continuum cells")
+    facet_sets = {}
+    for name, lst in facet_groups.items():
+        types = {t for t, _ in lst}
+        if len(types) > 1:
+            raise MeshError(f"'{path}': facet group '{name}' mixes line and line3 cells")
+        facet_sets[name] = FacetSet("line2" if types.pop() == "line" else "line3", np.vstack([a for _, a in lst]))
+    for j in joints:
+        if j not in facet_sets:
+            raise SceneError("mesh.joints", f"joint group '{j}' is not a line group of '{path}' "
+                                            f"(line groups: {sorted(facet_sets)})")
+    mesh = Mesh(points, blocks, [], {k: np.array(v) for k, v in node_sets.items()},
+                {k: v for k, v in facet_sets.items() if k not in joints})
+    # drop points not used by any cell (gmsh geometry points)
+    used = np.zeros(len(points), dtype=bool)
+    for b in blocks:
+        used[b.cells.ravel()] = True
+    if not used.all():
+        new = np.cumsum(used) - 1
+        mesh = Mesh(points[used], [CellBlock(b.type, new[b.cells], b.name) for b in blocks], [],
+                    {k: new[v[used[v]]] for k, v in mesh.node_sets.items()},
+                    {k: FacetSet(f.type, new[f.facets]) for k, f in mesh.facet_sets.items()})
+    if not joints:
+        return mesh
+    return insert_interfaces(mesh, {j: facet_sets[j].facets if used.all() else
+                                    (np.cumsum(used) - 1)[facet_sets[j].facets] for j in joints})
+
+
+def to_meshio(mesh: Mesh, point_data=None, cell_data=None):
+    """A ``meshio.Mesh`` with one cell block per continuum group and per joint set."""
+    import meshio
+
+    from ..elements.shapes import ELEMENT_TYPES
+
+    cells = []
+    for b in mesh.blocks:
+        cells.append((ELEMENT_TYPES[b.type].meshio_name, b.cells))
+    for j in mesh.joints:
+        c = j.cells
+        if j.type == "interface_line2":
+            quads = c[:, [0, 1, 3, 2]]
+        else:
+            quads = np.vstack([c[:, [0, 2, 5, 3]], c[:, [2, 1, 4, 5]]])
+        cells.append(("quad", quads))
+    pts = mesh.points if mesh.dim == 3 else np.column_stack([mesh.points, np.zeros(mesh.n_nodes)])
+    return meshio.Mesh(pts, cells, point_data=point_data or {}, cell_data=cell_data or {})

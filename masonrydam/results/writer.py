@@ -1,0 +1,134 @@
+"""Streaming netCDF4 writer for analysis results.
+
+The file is created before the first step with an unlimited ``step`` dimension; every converged
+step is appended and flushed (``sync``), so a run that stops (non-convergence, a mechanism, a kill)
+leaves a readable file with every finished step, marked ``completed = "false"`` with the reason.
+``xarray.open_dataset`` reads it; every variable carries ``units`` and ``long_name``.
+"""
+from __future__ import annotations
+
+import datetime as _dt
+import json
+
+import netCDF4
+import numpy as np
+
+from .._version import __version__
+
+STATE_FLAGS = {"flag_values": np.array([0, 1, 2], dtype=np.int8), "flag_meanings": "stick slip open"}
+
+
+class ResultWriter:
+    """Write a static analysis to ``path``.
+
+    nodes: (n_out,) node indices recorded; coords: (n_nodes, dim);
+    joint_points: dict with 'x' (n_jp, dim), 'set' (n_jp,) int, 'set_names', 'element' (n_jp,),
+    'point' (n_jp,), 'normal' (n_jp, dim), 'weight' (n_jp,) (tributary length*thickness or area, m2).
+    """
+
+    def __init__(self, path, coords, nodes, joint_points, dim, attrs: dict):
+        self.path = str(path)
+        self.dim = dim
+        self.nc = nc = netCDF4.Dataset(self.path, "w", format="NETCDF4")
+        comps = ["x", "y", "z"][:dim]
+        shear = ["t"] if dim == 2 else ["t1", "t2"]
+        nc.createDimension("step", None)
+        nc.createDimension("node", len(nodes))
+        nc.createDimension("component", dim)
+        nc.createDimension("joint_point", len(joint_points["element"]))
+        nc.createDimension("shear_direction", dim - 1)
+        self._string_coord("component", ("component",), comps, "displacement/force component")
+        self._string_coord("shear_direction", ("shear_direction",), shear, "joint tangential direction")
+        self._var("step", "i4", ("step",), "1", "analysis step (converged increments, all stages)")
+        self._var("load_factor", "f8", ("step",), "1", "load factor within the stage (0 to 1)")
+        self._var("stage", "i4", ("step",), "1", "stage index (see attribute stage_names)")
+        self.nc["stage"].stage_names = json.dumps(attrs.get("stage_names", []))
+        self._var("iterations", "i4", ("step",), "1", "Newton iterations of the step")
+        v = self._var("node", "i8", ("node",), "1", "node index in the model")
+        v[:] = nodes
+        for k, c in enumerate(comps):
+            v = self._var(c, "f8", ("node",), "m", f"{c} coordinate of the node (undeformed)")
+            v[:] = coords[nodes, k]
+        jp = joint_points
+        v = self._var("joint_set", "i4", ("joint_point",), "1", "joint set index (see attribute set_names)")
+        v[:] = jp["set"]
+        v.set_names = json.dumps(jp["set_names"])
+        self._var("joint_element", "i8", ("joint_point",), "1", "interface element index within its joint set")[:] = jp["element"]
+        self._var("joint_integration_point", "i4", ("joint_point",), "1", "integration point index within the element")[:] = jp["point"]
+        for k, c in enumerate(comps):
+            self._var(f"joint_{c}", "f8", ("joint_point",), "m", f"{c} coordinate of the joint integration point")[:] = jp["x"][:, k]
+            self._var(f"joint_normal_{c}", "f8", ("joint_point",), "1", f"{c} component of the joint unit normal (bottom to top)")[:] = jp["normal"][:, k]
+        self._var("joint_weight", "f8", ("joint_point",), "m2",
+                  "joint area represented by the integration point (length x thickness in 2D)")[:] = jp["weight"]
+        self._var("displacement", "f8", ("step", "node", "component"), "m", "nodal displacement")
+        self._var("reaction", "f8", ("step", "node", "component"), "N",
+                  "reaction force at constrained DOFs (zero elsewhere)")
+        self._var("joint_opening", "f8", ("step", "joint_point"), "m",
+                  "normal relative displacement top minus bottom (opening positive)")
+        self._var("joint_slip", "f8", ("step", "joint_point", "shear_direction"), "m",
+                  "tangential relative displacement top minus bottom")
+        self._var("joint_plastic_slip", "f8", ("step", "joint_point", "shear_direction"), "m",
+                  "irreversible (plastic) part of the tangential relative displacement")
+        self._var("joint_traction_normal", "f8", ("step", "joint_point"), "Pa",
+                  "normal traction on the joint (tension positive)")
+        self._var("joint_traction_shear", "f8", ("step", "joint_point", "shear_direction"), "Pa",
+                  "shear traction on the joint")
+        v = self._var("joint_state", "i1", ("step", "joint_point"), "1", "joint state: 0 stick, 1 slip, 2 open")
+        v.flag_values = STATE_FLAGS["flag_values"]
+        v.flag_meanings = STATE_FLAGS["flag_meanings"]
+        nc.Conventions = "CF-1.8"
+        nc.title = attrs.get("title", "masonrydam analysis")
+        nc.source = f"masonrydam {__version__}"
+        nc.masonrydam_version = __version__
+        nc.history = f"{_dt.datetime.now(_dt.timezone.utc).isoformat(timespec='seconds')} created by masonrydam {__version__}"
+        for k, val in attrs.items():
+            if k in ("title", "stage_names"):
+                continue
+            nc.setncattr(k, val if isinstance(val, (str, int, float)) else json.dumps(val))
+        nc.completed = "false"
+        nc.status = "running"
+        nc.sync()
+        self.n = 0
+
+    def _string_coord(self, name, dims, values, long_name):
+        v = self.nc.createVariable(name, str, dims)
+        for i, s in enumerate(values):
+            v[i] = s
+        v.long_name = long_name
+        v.units = "1"
+
+    def _var(self, name, dtype, dims, units, long_name):
+        v = self.nc.createVariable(name, dtype, dims, zlib=False)
+        v.units = units
+        v.long_name = long_name
+        return v
+
+    def write_step(self, stage, load_factor, iterations, displacement, reaction, joints):
+        """Append one converged step. displacement, reaction: (n_out, dim);
+        joints: dict opening (n_jp,), slip (n_jp, dim-1), plastic_slip, t_normal, t_shear, state."""
+        k = self.n
+        nc = self.nc
+        nc["step"][k] = k
+        nc["load_factor"][k] = load_factor
+        nc["stage"][k] = stage
+        nc["iterations"][k] = iterations
+        nc["displacement"][k] = displacement
+        nc["reaction"][k] = reaction
+        if len(joints["opening"]):
+            nc["joint_opening"][k] = joints["opening"]
+            nc["joint_slip"][k] = joints["slip"]
+            nc["joint_plastic_slip"][k] = joints["plastic_slip"]
+            nc["joint_traction_normal"][k] = joints["t_normal"]
+            nc["joint_traction_shear"][k] = joints["t_shear"]
+            nc["joint_state"][k] = joints["state"]
+        self.n += 1
+        nc.sync()
+
+    def close(self, completed: bool, status: str, extra_attrs: dict | None = None):
+        if not self.nc.isopen():
+            return
+        for k, val in (extra_attrs or {}).items():
+            self.nc.setncattr(k, val if isinstance(val, (str, int, float)) else json.dumps(val))
+        self.nc.completed = "true" if completed else "false"
+        self.nc.status = status
+        self.nc.close()

@@ -1,0 +1,301 @@
+"""Scene schema: validation and normalisation of a scene dictionary (from TOML or Python).
+
+:func:`normalize` checks every key (unknown keys are errors, with the closest known key suggested),
+converts quantities to SI, fills defaults and returns a new plain dictionary. Every error is a
+:class:`~masonrydam.errors.SceneError` naming the dotted key, raised before any meshing or solving.
+"""
+from __future__ import annotations
+
+import difflib
+import inspect
+import math
+
+from ..elements.quadrature import QUADRATURE_SCHEMES
+from ..errors import SceneError
+from ..solvers.linear import LINEAR_SOLVERS
+from .units import quantity
+
+COMPONENT_NAMES = ("x", "y", "z")
+JOINT_LAWS = ("mohr_coulomb", "linear")
+LOAD_TYPES = ("self_weight", "nodal", "edge_traction", "edge_pressure", "displacement")
+HYPOTHESES = ("plane_stress", "plane_strain")
+
+
+def _check_keys(d: dict, allowed, where: str):
+    if not isinstance(d, dict):
+        raise SceneError(where, f"expected a table, got {type(d).__name__}")
+    for k in d:
+        if k not in allowed:
+            close = difflib.get_close_matches(k, list(allowed), n=1)
+            hint = f"; did you mean '{close[0]}'?" if close else f"; known keys: {', '.join(sorted(allowed))}"
+            raise SceneError(f"{where}.{k}" if where else k, f"unknown key{hint}")
+
+
+def _choice(value, options, key):
+    if value not in options:
+        raise SceneError(key, f"must be one of {list(options)}, got {value!r}")
+    return value
+
+
+def _int(value, key, minimum=None):
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise SceneError(key, f"expected an integer, got {value!r}")
+    if minimum is not None and value < minimum:
+        raise SceneError(key, f"must be >= {minimum}, got {value}")
+    return value
+
+
+def _bool(value, key):
+    if not isinstance(value, bool):
+        raise SceneError(key, f"expected true or false, got {value!r}")
+    return value
+
+
+def _positive(value, dimension, key, allow_zero=False):
+    v = quantity(value, dimension, key)
+    if not math.isfinite(v) or (v < 0 if allow_zero else v <= 0):
+        raise SceneError(key, f"must be {'>= 0' if allow_zero else '> 0'}, got {value!r}")
+    return v
+
+
+def _vector(value, dimension, key, dim):
+    if not isinstance(value, (list, tuple)) or len(value) != dim:
+        raise SceneError(key, f"expected a list of {dim} values, got {value!r}")
+    return [quantity(v, dimension, f"{key}[{i}]") for i, v in enumerate(value)]
+
+
+def _components(value, key, dim):
+    if isinstance(value, str):
+        value = [value]
+    if not isinstance(value, (list, tuple)) or not value:
+        raise SceneError(key, f"expected a list of components from {COMPONENT_NAMES[:dim]}, got {value!r}")
+    for c in value:
+        if c not in COMPONENT_NAMES[:dim]:
+            raise SceneError(key, f"unknown component {c!r}; use {list(COMPONENT_NAMES[:dim])}")
+    if len(set(value)) != len(value):
+        raise SceneError(key, f"repeated component in {value!r}")
+    return list(value)
+
+
+def _model(d):
+    _check_keys(d, {"name", "dimension", "hypothesis", "thickness", "gravity"}, "model")
+    dim = _int(d.get("dimension", 2), "model.dimension")
+    if dim != 2:
+        raise SceneError("model.dimension", f"only 2D scenes are supported in this version, got {dim}")
+    out = {
+        "name": str(d.get("name", "scene")),
+        "dimension": dim,
+        "hypothesis": _choice(d.get("hypothesis", "plane_stress"), HYPOTHESES, "model.hypothesis"),
+        "thickness": _positive(d.get("thickness", 1.0), "length", "model.thickness"),
+    }
+    out["gravity"] = _vector(d.get("gravity", [0.0, -9.80665]), "acceleration", "model.gravity", dim)
+    return out
+
+
+def _mesh(d):
+    from generators import GENERATORS
+
+    _check_keys(d, {"generator", "parameters", "file", "joints"}, "mesh")
+    has_gen, has_file = "generator" in d, "file" in d
+    if has_gen == has_file:
+        raise SceneError("mesh", "give exactly one of 'generator' (with 'parameters') or 'file'")
+    if has_gen:
+        name = _choice(d["generator"], sorted(GENERATORS), "mesh.generator")
+        params = d.get("parameters", {})
+        sig = inspect.signature(GENERATORS[name])
+        allowed = {p for p in sig.parameters if p != "key"}
+        _check_keys(params, allowed, "mesh.parameters")
+        missing = [p.name for p in sig.parameters.values() if p.default is inspect.Parameter.empty and p.name not in params]
+        if missing:
+            raise SceneError(f"mesh.parameters.{missing[0]}", f"required by generator '{name}'")
+        conv = {}
+        for k, v in params.items():
+            kind = str(sig.parameters[k].annotation)
+            pkey = f"mesh.parameters.{k}"
+            if kind == "float":  # generator lengths (m)
+                conv[k] = quantity(v, "length", pkey)
+            elif kind == "int":
+                conv[k] = _int(v, pkey)
+            elif kind == "bool":
+                conv[k] = _bool(v, pkey)
+            elif kind == "str" and not isinstance(v, str):
+                raise SceneError(pkey, f"expected a string, got {v!r}")
+            else:
+                conv[k] = v
+        return {"generator": name, "parameters": conv}
+    joints = d.get("joints", [])
+    if not isinstance(joints, list) or not all(isinstance(j, str) for j in joints):
+        raise SceneError("mesh.joints", f"expected a list of physical group names, got {joints!r}")
+    return {"file": str(d["file"]), "joints": joints}
+
+
+def _material(name, d):
+    key = f"materials.{name}"
+    _check_keys(d, {"model", "youngs_modulus", "poisson_ratio", "density"}, key)
+    _choice(d.get("model", "linear_elastic"), ("linear_elastic",), f"{key}.model")
+    for req in ("youngs_modulus", "poisson_ratio"):
+        if req not in d:
+            raise SceneError(f"{key}.{req}", "is required")
+    E = _positive(d["youngs_modulus"], "stress", f"{key}.youngs_modulus")
+    if E < 1e6:
+        raise SceneError(f"{key}.youngs_modulus", f"{E:g} Pa is implausibly small for masonry or concrete; "
+                                                   f"values are SI (Pa): did you mean '{E:g} MPa'?")
+    nu = d["poisson_ratio"]
+    if isinstance(nu, bool) or not isinstance(nu, (int, float)) or not (-1.0 < nu < 0.5):
+        raise SceneError(f"{key}.poisson_ratio", f"must be in (-1, 0.5), got {nu!r}")
+    rho = _positive(d.get("density", 0.0), "density", f"{key}.density", allow_zero=True)
+    if rho > 3e4:
+        raise SceneError(f"{key}.density", f"{rho:g} kg/m3 is implausible; did you give a unit weight in N/m3?")
+    return {"model": "linear_elastic", "youngs_modulus": E, "poisson_ratio": float(nu), "density": rho}
+
+
+def _joint(name, d):
+    key = f"joints.{name}"
+    _check_keys(d, {"law", "normal_stiffness", "shear_stiffness", "cohesion", "friction_angle", "tensile_strength",
+                    "residual_shear_stiffness", "integration", "points"}, key)
+    law = _choice(d.get("law", "mohr_coulomb"), JOINT_LAWS, f"{key}.law")
+    for req in ("normal_stiffness", "shear_stiffness"):
+        if req not in d:
+            raise SceneError(f"{key}.{req}", "is required")
+    kn = _positive(d["normal_stiffness"], "stiffness", f"{key}.normal_stiffness")
+    ks = _positive(d["shear_stiffness"], "stiffness", f"{key}.shear_stiffness")
+    out = {"law": law, "normal_stiffness": kn, "shear_stiffness": ks}
+    if law == "mohr_coulomb":
+        if "friction_angle" not in d:
+            raise SceneError(f"{key}.friction_angle", "is required for the Mohr-Coulomb law (degrees)")
+        phi = quantity(d["friction_angle"], "angle", f"{key}.friction_angle")
+        if not 0.0 <= phi < 90.0:
+            raise SceneError(f"{key}.friction_angle", f"must be in [0, 90) degrees, got {d['friction_angle']!r}")
+        out["friction_angle"] = phi
+        out["cohesion"] = _positive(d.get("cohesion", 0.0), "stress", f"{key}.cohesion", allow_zero=True)
+        out["tensile_strength"] = _positive(d.get("tensile_strength", 0.0), "stress", f"{key}.tensile_strength", True)
+        ksr = _positive(d.get("residual_shear_stiffness", 0.0), "stiffness", f"{key}.residual_shear_stiffness", True)
+        if ksr >= ks:
+            raise SceneError(f"{key}.residual_shear_stiffness", f"must be smaller than shear_stiffness ({ks:g}), got {ksr:g}")
+        out["residual_shear_stiffness"] = ksr
+    else:
+        for k in ("cohesion", "friction_angle", "tensile_strength", "residual_shear_stiffness"):
+            if k in d:
+                raise SceneError(f"{key}.{k}", "has no meaning for a linear joint (law = 'linear')")
+    out["integration"] = _choice(d.get("integration", "lumped"), QUADRATURE_SCHEMES, f"{key}.integration")
+    if "points" in d:
+        out["points"] = _int(d["points"], f"{key}.points", 1)
+        if out["integration"] == "lumped":
+            raise SceneError(f"{key}.points", "lumped integration has one point per node; remove 'points'")
+    return out
+
+
+def _load(d, key, dim):
+    if not isinstance(d, dict) or "type" not in d:
+        raise SceneError(f"{key}.type", "every load needs a 'type'")
+    t = _choice(d["type"], LOAD_TYPES, f"{key}.type")
+    if t == "self_weight":
+        _check_keys(d, {"type", "factor"}, key)
+        f = d.get("factor", 1.0)
+        if isinstance(f, bool) or not isinstance(f, (int, float)):
+            raise SceneError(f"{key}.factor", f"expected a number, got {f!r}")
+        return {"type": t, "factor": float(f)}
+    if "set" not in d:
+        raise SceneError(f"{key}.set", "is required")
+    if t == "nodal":
+        _check_keys(d, {"type", "set", "force"}, key)
+        return {"type": t, "set": str(d["set"]), "force": _vector(d.get("force"), "force", f"{key}.force", dim)}
+    if t == "edge_traction":
+        _check_keys(d, {"type", "set", "traction"}, key)
+        return {"type": t, "set": str(d["set"]), "traction": _vector(d.get("traction"), "stress", f"{key}.traction", dim)}
+    if t == "edge_pressure":
+        _check_keys(d, {"type", "set", "pressure"}, key)
+        if "pressure" not in d:
+            raise SceneError(f"{key}.pressure", "is required (Pa, positive pushes into the body)")
+        return {"type": t, "set": str(d["set"]), "pressure": quantity(d["pressure"], "stress", f"{key}.pressure")}
+    _check_keys(d, {"type", "set", "components", "value"}, key)
+    comps = _components(d.get("components"), f"{key}.components", dim)
+    val = d.get("value")
+    if not isinstance(val, (list, tuple)) or len(val) != len(comps):
+        raise SceneError(f"{key}.value", f"expected {len(comps)} value(s) for components {comps}, got {val!r}")
+    return {"type": t, "set": str(d["set"]), "components": comps,
+            "value": [quantity(v, "length", f"{key}.value[{i}]") for i, v in enumerate(val)]}
+
+
+def _solver(d):
+    _check_keys(d, {"method", "line_search", "max_iterations", "force_tolerance", "energy_tolerance",
+                    "max_step_cuts", "linear_solver"}, "solver")
+    out = {
+        "method": _choice(d.get("method", "newton"), ("newton", "modified_newton"), "solver.method"),
+        "line_search": _bool(d.get("line_search", True), "solver.line_search"),
+        "max_iterations": _int(d.get("max_iterations", 30), "solver.max_iterations", 1),
+        "max_step_cuts": _int(d.get("max_step_cuts", 8), "solver.max_step_cuts", 0),
+        "linear_solver": _choice(d.get("linear_solver", "auto"), LINEAR_SOLVERS, "solver.linear_solver"),
+    }
+    for k, default in (("force_tolerance", 1e-6), ("energy_tolerance", 1e-10)):
+        v = d.get(k, default)
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 < v < 1:
+            raise SceneError(f"solver.{k}", f"must be a number in (0, 1), got {v!r}")
+        out[k] = float(v)
+    return out
+
+
+def _selection(value, key):
+    if value == "all" or value is None:
+        return "all"
+    if isinstance(value, str):
+        return [value]
+    if isinstance(value, list) and all(isinstance(v, str) for v in value):
+        return value
+    raise SceneError(key, f"expected 'all' or a list of set names, got {value!r}")
+
+
+def normalize(raw: dict) -> dict:
+    """Validate ``raw`` and return the normalised scene (SI floats, defaults filled)."""
+    _check_keys(raw, {"model", "mesh", "materials", "joints", "supports", "stages", "solver", "output"}, "")
+    for req in ("mesh", "materials", "stages"):
+        if req not in raw:
+            raise SceneError(req, "section is required")
+    model = _model(raw.get("model", {}))
+    dim = model["dimension"]
+    mats = raw["materials"]
+    if not isinstance(mats, dict) or not mats:
+        raise SceneError("materials", "give at least one material group, e.g. [materials.units]")
+    joints = raw.get("joints", {})
+    if not isinstance(joints, dict):
+        raise SceneError("joints", "expected a table of joint sets")
+    supports = raw.get("supports", [])
+    if not isinstance(supports, list):
+        raise SceneError("supports", "expected an array of tables [[supports]]")
+    sup = []
+    for i, s in enumerate(supports):
+        _check_keys(s, {"set", "components"}, f"supports[{i}]")
+        if "set" not in s:
+            raise SceneError(f"supports[{i}].set", "is required")
+        sup.append({"set": str(s["set"]), "components": _components(s.get("components", list(COMPONENT_NAMES[:dim])),
+                                                                      f"supports[{i}].components", dim)})
+    stages = raw["stages"]
+    if not isinstance(stages, list) or not stages:
+        raise SceneError("stages", "give at least one stage as [[stages]]")
+    st = []
+    for i, s in enumerate(stages):
+        key = f"stages[{i}]"
+        _check_keys(s, {"name", "type", "steps", "loads"}, key)
+        _choice(s.get("type", "static"), ("static",), f"{key}.type")
+        loads = s.get("loads", [])
+        if not isinstance(loads, list):
+            raise SceneError(f"{key}.loads", "expected an array of tables [[stages.loads]]")
+        st.append({"name": str(s.get("name", f"stage{i + 1}")), "type": "static",
+                   "steps": _int(s.get("steps", 1), f"{key}.steps", 1),
+                   "loads": [_load(ld, f"{key}.loads[{j}]", dim) for j, ld in enumerate(loads)]})
+    names = [s["name"] for s in st]
+    if len(set(names)) != len(names):
+        raise SceneError("stages", f"stage names must be unique, got {names}")
+    out_raw = raw.get("output", {})
+    _check_keys(out_raw, {"nodes", "joints"}, "output")
+    return {
+        "model": model,
+        "mesh": _mesh(raw["mesh"]),
+        "materials": {str(k): _material(k, v) for k, v in mats.items()},
+        "joints": {str(k): _joint(k, v) for k, v in joints.items()},
+        "supports": sup,
+        "stages": st,
+        "solver": _solver(raw.get("solver", {})),
+        "output": {"nodes": _selection(out_raw.get("nodes", "all"), "output.nodes"),
+                   "joints": _selection(out_raw.get("joints", "all"), "output.joints")},
+    }

@@ -1,0 +1,1 @@
+"""Solvers: sparse direct linear solvers, nonlinear static solution, mechanism diagnosis."""

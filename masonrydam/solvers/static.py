@@ -1,0 +1,268 @@
+"""Nonlinear static solution in stages.
+
+Each stage ramps its own loads with a load factor lambda from 0 to 1 on top of the loads reached at
+the end of the previous stages (load control). Prescribed displacements are ramped the same way
+as increments from the stage's start (displacement control); their reactions are the load.
+
+Per step: full Newton (consistent tangent) or modified Newton (the initial elastic stiffness,
+factorized once for the whole analysis), each with an optional line search (Crisfield 1991,
+Non-linear Finite Element Analysis of Solids and Structures, vol. 1, sec. 9.3). A step that does
+not converge is cut in half and retried, and the step length grows back after successes; a stage
+fails when a step would become shorter than ``1 / (steps * 2**max_step_cuts)``. Convergence needs both the force residual
+``||r|| <= force_tolerance * max(||f_ext||, ||f_int||)`` and the energy of the last correction
+``|du . r| <= energy_tolerance * |du_0 . r_0|``.
+
+A factorization is reused while the tangent is unchanged (same values): a scene whose joints stay
+linear is therefore solved with a single factorization.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+from ..errors import ConvergenceError, MechanismError, NumericalError
+from .diagnostics import find_free_parts
+from .linear import Factorization, SingularMatrix
+
+#: tangent factor of open joint points in ordinary Newton iterations: a tiny stiffness in the
+#: tangent only (tractions stay zero) so that a block resting on a single contact point does not make
+#: the tangent singular; the converged solution does not depend on it.
+OPEN_TANGENT_REGULAR = 1e-6
+#: tangent factor once the step's state pattern repeats (chatter guard, see _newton_iterations)
+OPEN_TANGENT_STABILIZED = 1.0
+
+
+@dataclass
+class SolverSettings:
+    """Settings of the static solver (all dimensionless)."""
+
+    method: str = "newton"  # "newton" | "modified_newton"
+    line_search: bool = True
+    max_iterations: int = 30
+    force_tolerance: float = 1e-6
+    energy_tolerance: float = 1e-10
+    max_step_cuts: int = 8
+    linear_solver: str = "auto"
+
+    def as_dict(self):
+        return asdict(self)
+
+
+@dataclass
+class StaticStage:
+    """A load stage.
+
+    name; steps: nominal number of increments; force: (n_dof,) N applied in full at lambda = 1;
+    prescribed: (n_dof,) bool DOFs driven in this stage; increment: (n_dof,) m displacement increment
+    of those DOFs over the stage; supports: (n_dof,) bool DOFs held at zero.
+    """
+
+    name: str
+    steps: int
+    force: np.ndarray
+    prescribed: np.ndarray
+    increment: np.ndarray
+    supports: np.ndarray
+
+
+@dataclass
+class SolveStats:
+    steps: int = 0
+    iterations: int = 0
+    factorizations: int = 0
+    step_cuts: int = 0
+    line_searches: int = 0
+    stabilized_steps: int = 0
+    wall_time_s: float = 0.0
+    per_stage: list = field(default_factory=list)
+
+
+class StaticSolver:
+    """Drives a :class:`~masonrydam.assembly.model.Model` through static stages.
+
+    ``on_step(stage_index, stage, load_factor, u, f_int, f_ext)`` is called after each converged
+    step (the recorder writes it to disk there, so a later failure never loses it).
+    """
+
+    def __init__(self, model, settings: SolverSettings, on_step=None, progress=None):
+        self.model, self.s = model, settings
+        self.on_step = on_step or (lambda *a: None)
+        self.progress = progress
+        self.stats = SolveStats()
+        self._fact = None
+        self._fact_data = None
+        self._initial = None  # modified Newton: initial stiffness factorization per constraint set
+        self._initial_dofmap = None
+
+    # -- linear algebra -------------------------------------------------------------------------
+    def _factorize(self, K):
+        if self._fact is not None and self._fact_data is not None and len(self._fact_data) == len(K.data) \
+                and self._fact.K.shape == K.shape and np.array_equal(self._fact_data, K.data):
+            return self._fact
+        self._fact = Factorization(K, self.s.linear_solver)
+        self._fact_data = K.data.copy()
+        self.stats.factorizations += 1
+        return self._fact
+
+    # -- one step ---------------------------------------------------------------------------------
+    def _newton(self, u, f_ext):
+        self.model.set_open_tangent(OPEN_TANGENT_REGULAR)
+        try:
+            return self._newton_iterations(u, f_ext)
+        finally:
+            self.model.set_open_tangent(OPEN_TANGENT_REGULAR)
+
+    def _newton_iterations(self, u, f_ext):
+        """Newton iterations of one step from the committed state.
+
+        Open/close chatter guard: when the joint state pattern of an iteration repeats one already
+        seen in this step (Newton cycling on the no-tension kink), open points get their initial
+        stiffness in the tangent for the rest of the step (``P_OPEN_TANGENT``); the residual is
+        unchanged, so the converged answer is the same, reached at a linear rate.
+        """
+        m, s = self.model, self.s
+        free = m.dofmap.free
+        energy0 = None
+        last_energy = None
+        seen = set()
+        stabilized = False
+        for it in range(s.max_iterations + 1):
+            want_K = s.method == "newton" or self._initial is None
+            f_int, K = m.evaluate(u, want_tangent=want_K)
+            m.latch_broken_bonds()
+            r_full = f_ext - f_int
+            if not np.isfinite(r_full).all():
+                raise NumericalError("NaN or infinity in the residual (check loads and stiffnesses)")
+            r = r_full[free]
+            ref = max(np.linalg.norm(f_ext), np.linalg.norm(f_int), 1e-30)
+            force_ok = np.linalg.norm(r) <= s.force_tolerance * ref
+            energy_ok = last_energy is None or energy0 == 0 or last_energy <= s.energy_tolerance * energy0
+            if force_ok and energy_ok:
+                return True, u, it, f_int
+            if it == s.max_iterations:
+                break
+            if not stabilized and m.nonlinear:
+                sig = m.state_signature()
+                if sig in seen:
+                    stabilized = True
+                    self.stats.stabilized_steps += 1
+                    m.set_open_tangent(OPEN_TANGENT_STABILIZED)
+                    f_int, K = m.evaluate(u, want_tangent=True)
+                seen.add(sig)
+            if s.method == "modified_newton":
+                if self._initial is None:
+                    self._initial = Factorization(K, s.linear_solver)
+                    self.stats.factorizations += 1
+                fact = self._initial
+            else:
+                fact = self._factorize(K)
+            du = fact.solve(r)
+            self.stats.iterations += 1
+            step = 1.0
+            if s.line_search:
+                step = self._line_search(u, du, r, f_ext)
+            u = u.copy()
+            u[free] += step * du
+            e = abs(step * float(du @ r))
+            if energy0 is None:
+                energy0 = e
+            last_energy = e
+        return False, u, s.max_iterations, None
+
+    def _line_search(self, u, du, r0, f_ext, max_tries=6):
+        """Secant line search on g(s) = du . r(u + s du) (Crisfield 1991, sec. 9.3.1)."""
+        m, free = self.model, self.model.dofmap.free
+        g0 = float(du @ r0)
+        if g0 <= 0:
+            return 1.0
+        s_prev, g_prev, s = 0.0, g0, 1.0
+        for k in range(max_tries):
+            trial = u.copy()
+            trial[free] += s * du
+            f_int, _ = m.evaluate(trial, want_tangent=False)
+            g = float(du @ (f_ext - f_int)[free])
+            if not np.isfinite(g):
+                return 0.5
+            if abs(g) <= 0.5 * abs(g0):
+                if k:
+                    self.stats.line_searches += 1
+                return s
+            if g == g_prev:
+                return s
+            s_new = s - g * (s - s_prev) / (g - g_prev)
+            s_prev, g_prev = s, g
+            s = float(np.clip(s_new, 0.1, 1.0))
+        self.stats.line_searches += 1
+        return s
+
+    # -- stages -----------------------------------------------------------------------------------
+    def run(self, stages: list[StaticStage], u0: np.ndarray | None = None):
+        m, s = self.model, self.s
+        t0 = time.perf_counter()
+        u = np.zeros(m.n_dof) if u0 is None else u0.copy()
+        f_base = np.zeros(m.n_dof)
+        for si, st in enumerate(stages):
+            constrained = st.supports | st.prescribed
+            m.set_constraints(constrained)
+            if self._initial_dofmap is not m.dofmap:  # modified Newton: initial stiffness of this constraint set
+                self._initial, self._initial_dofmap = None, m.dofmap
+            parts = find_free_parts(m, constrained, use_joint_state=True)
+            if parts:
+                raise MechanismError(f"stage '{st.name}': the model is a mechanism before solving", parts)
+            u_start = u.copy()
+            u[st.supports] = 0.0
+            lam, nominal = 0.0, 1.0 / st.steps
+            dlam = nominal
+            cuts = 0
+            stage_stats = {"stage": st.name, "steps": 0, "iterations": 0, "step_cuts": 0}
+            it_before = self.stats.iterations
+            while lam < 1.0 - 1e-12:
+                dl = min(dlam, 1.0 - lam)
+                target = lam + dl
+                trial = u.copy()
+                trial[st.prescribed] = u_start[st.prescribed] + target * st.increment[st.prescribed]
+                f_ext = f_base + target * st.force
+                singular = None
+                try:
+                    ok, u_new, iters, f_int = self._newton(trial, f_ext)
+                except SingularMatrix as exc:
+                    ok, singular = False, exc
+                if ok:
+                    u = u_new
+                    m.commit()
+                    lam = target
+                    self.stats.steps += 1
+                    stage_stats["steps"] += 1
+                    self.on_step(si, st, lam, u, f_int, f_ext)
+                    if self.progress is not None:
+                        self.progress(si, lam)
+                    dlam = min(nominal, 2.0 * dlam)
+                    cuts = 0
+                    continue
+                # failure: revert the trial state and latched bonds, and cut the step
+                m.revert()
+                self.stats.step_cuts += 1
+                stage_stats["step_cuts"] += 1
+                cuts += 1
+                if cuts > s.max_step_cuts or dl / 2.0 < nominal / 2.0 ** s.max_step_cuts:
+                    if singular is not None:
+                        parts = find_free_parts(m, constrained, use_joint_state=True)
+                        if parts:
+                            raise MechanismError(
+                                f"stage '{st.name}' at load factor {target:.4g}: the structure became a mechanism",
+                                parts)
+                        raise MechanismError(
+                            f"stage '{st.name}' at load factor {target:.4g}: singular stiffness ({singular}); "
+                            "a block may be rotating about a point contact or the load exceeds the collapse load")
+                    raise ConvergenceError(
+                        f"stage '{st.name}': no convergence at load factor {target:.6g} after "
+                        f"{s.max_step_cuts} step cuts (last increment {dl:.3g}); the structure may have reached "
+                        "its collapse load under load control — use prescribed displacements, or more steps")
+                dlam = dl / 2.0
+            stage_stats["iterations"] = self.stats.iterations - it_before
+            self.stats.per_stage.append(stage_stats)
+            f_base = f_base + st.force
+        self.stats.wall_time_s = time.perf_counter() - t0
+        return u

@@ -112,7 +112,9 @@ def _mesh(d):
         for k, v in params.items():
             kind = str(sig.parameters[k].annotation)
             pkey = f"mesh.parameters.{k}"
-            if kind == "float":  # generator lengths (m)
+            if kind == "float" and k.endswith("_deg"):
+                conv[k] = quantity(v, "angle", pkey)
+            elif kind == "float":  # generator lengths (m)
                 conv[k] = quantity(v, "length", pkey)
             elif kind == "int":
                 conv[k] = _int(v, pkey)

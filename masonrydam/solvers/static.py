@@ -9,7 +9,8 @@ factorized once for the whole analysis), each with an optional line search (Cris
 Non-linear Finite Element Analysis of Solids and Structures, vol. 1, sec. 9.3). A step that does
 not converge is cut in half and retried, and the step length grows back after successes; a stage
 fails when a step would become shorter than ``1 / (steps * 2**max_step_cuts)``. Convergence needs both the force residual
-``||r|| <= force_tolerance * max(||f_ext||, ||f_int||)`` and the energy of the last correction
+``||r|| <= force_tolerance * max(||f_ext||, ||f_int||, ||r_0||)`` (r_0: the step's first residual, so
+that a state with no force at all, such as an open joint, still has a scale) and the energy of the last correction
 ``|du . r| <= energy_tolerance * |du_0 . r_0|``.
 
 A factorization is reused while the tangent is unchanged (same values): a scene whose joints stay
@@ -117,10 +118,13 @@ class StaticSolver:
     def _newton_iterations(self, u, f_ext):
         """Newton iterations of one step from the committed state.
 
-        Open/close chatter guard: when the joint state pattern of an iteration repeats one already
-        seen in this step (Newton cycling on the no-tension kink), open points get their initial
-        stiffness in the tangent for the rest of the step (``P_OPEN_TANGENT``); the residual is
-        unchanged, so the converged answer is the same, reached at a linear rate.
+        Chatter guard: when the joint state pattern of an iteration repeats one already seen in this
+        step (Newton cycling), for the rest of the step (1) open points get their initial stiffness
+        in the tangent (``P_OPEN_TANGENT``; residual unchanged, linear convergence) and (2) bonds
+        that break stay broken (``latch_broken_bonds``): with cohesion the shear traction jumps from
+        up to c to 0 when a point opens, and letting iterations "un-break" a bond cycles across that
+        jump. Bonds are not latched before chatter is seen, so transient tension in early iterates
+        does not destroy cohesion.
         """
         m, s = self.model, self.s
         free = m.dofmap.free
@@ -131,12 +135,15 @@ class StaticSolver:
         for it in range(s.max_iterations + 1):
             want_K = s.method == "newton" or self._initial is None
             f_int, K = m.evaluate(u, want_tangent=want_K)
-            m.latch_broken_bonds()
+            if stabilized:
+                m.latch_broken_bonds()
             r_full = f_ext - f_int
             if not np.isfinite(r_full).all():
                 raise NumericalError("NaN or infinity in the residual (check loads and stiffnesses)")
             r = r_full[free]
-            ref = max(np.linalg.norm(f_ext), np.linalg.norm(f_int), 1e-30)
+            if it == 0:
+                r0_norm = float(np.linalg.norm(r))
+            ref = max(np.linalg.norm(f_ext), np.linalg.norm(f_int), r0_norm, 1e-30)
             force_ok = np.linalg.norm(r) <= s.force_tolerance * ref
             energy_ok = last_energy is None or energy0 == 0 or last_energy <= s.energy_tolerance * energy0
             if force_ok and energy_ok:
@@ -149,7 +156,9 @@ class StaticSolver:
                     stabilized = True
                     self.stats.stabilized_steps += 1
                     m.set_open_tangent(OPEN_TANGENT_STABILIZED)
+                    m.latch_broken_bonds()
                     f_int, K = m.evaluate(u, want_tangent=True)
+                    r = (f_ext - f_int)[free]
                 seen.add(sig)
             if s.method == "modified_newton":
                 if self._initial is None:

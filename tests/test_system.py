@@ -226,3 +226,24 @@ def test_linear_scene_uses_one_factorization():
     u = ds.displacement.values
     lf = ds.load_factor.values
     np.testing.assert_allclose(u / lf[:, None, None], np.broadcast_to(u[-1], u.shape), rtol=1e-9, atol=1e-18)
+
+
+@pytest.mark.parametrize("bad_corner, what", [((1.0, 1.0), "re-entrant"), ((0.0, 0.0), "collapsed"),
+                                              ((-0.5, 1.2), "inverted")])
+def test_bad_elements_rejected_before_solving(bad_corner, what):
+    """An inverted, collapsed or re-entrant quad is named (group and element) before any solve."""
+    from masonrydam.assembly.groups import ContinuumGroup
+    from masonrydam.assembly.dofmap import DofMap
+    from masonrydam.assembly.model import Model
+
+    # quad corners (0,0) (2,0) (2,2) and a moved fourth corner
+    coords = np.array([[0.0, 0.0], [2.0, 0.0], [2.0, 2.0], list(bad_corner)])
+    coords[3] = bad_corner if what != "re-entrant" else (1.0, 1.0)
+    conn = np.array([[0, 1, 2, 3]])
+    if what == "inverted":
+        conn = np.array([[0, 3, 2, 1]])
+        coords[3] = (0.0, 2.0)
+    g = ContinuumGroup("units", "quad4", conn, DofMap.node_dofs(conn, 2), np.eye(3)[None] * 1e9,
+                       np.zeros(1, dtype=np.int64), np.ones(1), np.ones(1))
+    with pytest.raises(masonrydam.MeshError, match=r"units.*element\(s\) 0"):
+        Model(coords, [g], [])

@@ -16,6 +16,30 @@ from .groups import ContinuumGroup, InterfaceGroup
 from .sparsity import build_pattern, scatter_matrix, scatter_vector
 
 
+def check_corners(coords: np.ndarray, group: ContinuumGroup, rtol: float = 1e-10) -> None:
+    """Reject inverted, collapsed or re-entrant 2D elements before any solving.
+
+    The kernels check the Jacobian at the Gauss points, which misses a quadrilateral with two
+    coincident corners or a slightly re-entrant corner (its Jacobian is still positive at the Gauss
+    points). Here every corner of every element must turn counter-clockwise: the cross product of
+    its two edges, relative to the element size squared, must exceed ``rtol``.
+    """
+    from ..elements.shapes import ELEMENT_TYPES
+
+    if coords.shape[1] != 2:
+        return
+    nc = ELEMENT_TYPES[group.type].corner_nodes
+    x = coords[group.conn[:, :nc]]  # (ne, nc, 2)
+    prev, nxt = np.roll(x, 1, axis=1), np.roll(x, -1, axis=1)
+    a, b = nxt - x, prev - x
+    cross = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+    size2 = (np.ptp(x, axis=1) ** 2).sum(axis=1)
+    bad = np.nonzero((cross <= rtol * size2[:, None]).any(axis=1))[0]
+    if len(bad):
+        raise MeshError("inverted, collapsed or re-entrant element (corners must be counter-clockwise and "
+                        "convex)", group.name, bad)
+
+
 class Model:
     """Finite element model.
 
@@ -34,6 +58,8 @@ class Model:
         if not used.all():
             bad = np.nonzero(~used)[0]
             raise MeshError(f"{len(bad)} node(s) belong to no element, e.g. node {bad[0]} at {self.coords[bad[0]].tolist()}")
+        for g in cgroups:
+            check_corners(self.coords, g)
         # full-DOF continuum stiffness (constant for linear elastic blocks)
         rows, cols, vals = [], [], []
         self._ke_cache = []

@@ -1,0 +1,71 @@
+"""A scene whose mesh comes from a gmsh file through meshio, with a joint inserted along a named
+physical line: a block sliding on a frictional joint (reference problem 2 with beta = 0: the
+horizontal force at sliding is mu W)."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import masonrydam
+
+gmsh = pytest.importorskip("gmsh")
+
+
+def _write_two_blocks(path):
+    gmsh.initialize(["-noenv"])
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.model.add("two_blocks")
+        occ = gmsh.model.occ
+        lower = occ.addRectangle(0, 0, 0, 2.0, 0.5)
+        upper = occ.addRectangle(0, 0.5, 0, 2.0, 0.5)
+        occ.fragment([(2, lower)], [(2, upper)])
+        occ.synchronize()
+        curves = gmsh.model.getEntities(1)
+
+        def curves_at(y):
+            out = []
+            for _, c in curves:
+                xmin, ymin, _, xmax, ymax, _ = gmsh.model.getBoundingBox(1, c)
+                if abs(ymin - y) < 1e-6 and abs(ymax - y) < 1e-6:
+                    out.append(c)
+            return out
+
+        gmsh.model.addPhysicalGroup(2, [lower], name="base")
+        gmsh.model.addPhysicalGroup(2, [upper], name="block")
+        gmsh.model.addPhysicalGroup(1, curves_at(0.5), name="joint")
+        gmsh.model.addPhysicalGroup(1, curves_at(0.0), name="bottom")
+        gmsh.model.addPhysicalGroup(1, curves_at(1.0), name="top")
+        gmsh.option.setNumber("Mesh.RecombineAll", 1)
+        gmsh.option.setNumber("Mesh.MeshSizeMax", 0.25)
+        gmsh.option.setNumber("Mesh.Algorithm", 8)
+        gmsh.model.mesh.generate(2)
+        gmsh.write(str(path))
+    finally:
+        gmsh.finalize()
+
+
+def test_block_from_gmsh_file_slides_at_mu_w(tmp_path):
+    msh = tmp_path / "two_blocks.msh"
+    _write_two_blocks(msh)
+    phi, rho = 30.0, 2000.0
+    scene = {
+        "model": {"name": "file_block", "thickness": 1.0},
+        "mesh": {"file": str(msh), "joints": ["joint"]},
+        "materials": {"base": {"youngs_modulus": 30e9, "poisson_ratio": 0.2, "density": rho},
+                      "block": {"youngs_modulus": 30e9, "poisson_ratio": 0.2, "density": rho}},
+        "joints": {"joint": {"normal_stiffness": 1e11, "shear_stiffness": 1e11, "friction_angle": phi}},
+        "supports": [{"set": "bottom", "components": ["x", "y"]}],
+        "stages": [{"name": "gravity", "loads": [{"type": "self_weight"}]},
+                   {"name": "push", "steps": 5,
+                    "loads": [{"type": "displacement", "set": "top", "components": ["x", "y"], "value": [1e-4, 0.0]}]}],
+    }
+    ds = masonrydam.run(scene)
+    W = rho * 9.80665 * 2.0 * 0.5
+    top = np.isclose(ds.y.values, 1.0)
+    H = ds.reaction.sel(component="x").values[-1][top].sum()
+    assert ds.sizes["joint_point"] > 0
+    assert (ds.joint_state.isel(step=-1).values == 1).all()
+    assert H == pytest.approx(math.tan(math.radians(phi)) * W, rel=1e-3)

@@ -44,6 +44,10 @@ def masonry_wall_2d(
         raise SceneError(f"{key}.unit_length", f"expanded unit {lu} x {hu} m is larger than the wall {length} x {height} m")
     if bond not in ("running", "stack"):
         raise SceneError(f"{key}.bond", f"unknown bond {bond!r} for the 2D wall; use 'running' or 'stack'")
+    if element not in ("quad", "quad9", "tri"):
+        raise SceneError(f"{key}.element", f"must be 'quad', 'quad9' or 'tri', got {element!r}")
+    if order not in (1, 2):
+        raise SceneError(f"{key}.order", f"must be 1 or 2, got {order!r}")
     if elements_per_unit < 1:
         raise SceneError(f"{key}.elements_per_unit", f"must be >= 1, got {elements_per_unit}")
     n_courses = int(round(height / hu))

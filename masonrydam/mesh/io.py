@@ -6,7 +6,9 @@ facet sets and node sets; the facet groups listed as joints get interfaces inser
 
 Writing (:func:`to_meshio`): continuum blocks and interfaces as separate cell blocks, so ParaView
 shows units and joints; a 2D interface is written as a degenerate (zero-area) quad
-``[b0, b1, t1, t0]`` (quadratic interfaces as two such quads).
+``[b0, b1, t1, t0]`` (quadratic interfaces as two such quads). Cell data ``group`` (index into the
+sorted group names, listed in ``field_data``) and ``is_joint`` tell the parts apart in single-list
+formats such as VTU.
 """
 from __future__ import annotations
 
@@ -103,4 +105,12 @@ def to_meshio(mesh: Mesh, point_data=None, cell_data=None):
             quads = np.vstack([c[:, [0, 2, 5, 3]], c[:, [2, 1, 4, 5]]])
         cells.append(("quad", quads))
     pts = mesh.points if mesh.dim == 3 else np.column_stack([mesh.points, np.zeros(mesh.n_nodes)])
-    return meshio.Mesh(pts, cells, point_data=point_data or {}, cell_data=cell_data or {})
+    # formats such as VTU keep one cell list: tag every cell with its group (continuum group or joint
+    # set) and whether it is a joint, so ParaView can threshold units, beams and joints apart
+    names = [b.name for b in mesh.blocks] + [j.name for j in mesh.joints]
+    unique = sorted(set(names))
+    cell_data = dict(cell_data or {})
+    cell_data["group"] = [np.full(len(c), unique.index(n), dtype=np.int32) for (_, c), n in zip(cells, names)]
+    cell_data["is_joint"] = [np.full(len(c), int(i >= len(mesh.blocks)), dtype=np.int32) for i, (_, c) in enumerate(cells)]
+    field_data = {n: np.array([k, 2]) for k, n in enumerate(unique)}
+    return meshio.Mesh(pts, cells, point_data=point_data or {}, cell_data=cell_data, field_data=field_data)

@@ -50,6 +50,8 @@ class ResultWriter:
             v = self._var(c, "f8", ("node",), "m", f"{c} coordinate of the node (undeformed)")
             v[:] = coords[nodes, k]
         jp = joint_points
+        self._var("joint_point", "i8", ("joint_point",), "1", "joint integration point index")[:] = \
+            np.arange(len(jp["element"]))
         v = self._var("joint_set", "i4", ("joint_point",), "1", "joint set index (see attribute set_names)")
         v[:] = jp["set"]
         v.set_names = json.dumps(jp["set_names"])

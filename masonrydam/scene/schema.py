@@ -146,7 +146,7 @@ def _material(name, d):
     if isinstance(nu, bool) or not isinstance(nu, (int, float)) or not (-1.0 < nu < 0.5):
         raise SceneError(f"{key}.poisson_ratio", f"must be in (-1, 0.5), got {nu!r}")
     rho = _positive(d.get("density", 0.0), "density", f"{key}.density", allow_zero=True)
-    if rho > 3e4:
+    if rho > 1.2e4:  # denser than lead (11 340 kg/m3): most likely a unit weight (N/m3) typed as density
         raise SceneError(f"{key}.density", f"{rho:g} kg/m3 is implausible; did you give a unit weight in N/m3?")
     return {"model": "linear_elastic", "youngs_modulus": E, "poisson_ratio": float(nu), "density": rho}
 

@@ -208,8 +208,14 @@ class StaticSolver:
 
     # -- stages -----------------------------------------------------------------------------------
     def run(self, stages: list[StaticStage], u0: np.ndarray | None = None):
-        m, s = self.model, self.s
         t0 = time.perf_counter()
+        try:
+            return self._run(stages, u0)
+        finally:
+            self.stats.wall_time_s = time.perf_counter() - t0
+
+    def _run(self, stages, u0):
+        m, s = self.model, self.s
         u = np.zeros(m.n_dof) if u0 is None else u0.copy()
         f_base = np.zeros(m.n_dof)
         for si, st in enumerate(stages):
@@ -250,18 +256,20 @@ class StaticSolver:
                     dlam = min(nominal, 2.0 * dlam)
                     cuts = 0
                     continue
-                # failure: revert the trial state and latched bonds, and cut the step
-                m.revert()
+                # failure: cut the step, after reverting the trial state and latched bonds
                 self.stats.step_cuts += 1
                 stage_stats["step_cuts"] += 1
                 cuts += 1
-                if cuts > s.max_step_cuts or dl / 2.0 < nominal / 2.0 ** s.max_step_cuts:
+                final = cuts > s.max_step_cuts or dl / 2.0 < nominal / 2.0 ** s.max_step_cuts
+                # a part that floats in the failed attempt (every joint around it open) is named
+                parts = find_free_parts(m, constrained, use_joint_state=True) if final else []
+                m.revert()
+                if final:
+                    if parts:
+                        raise MechanismError(
+                            f"stage '{st.name}' at load factor {target:.4g}: no equilibrium; in the last attempt "
+                            "a part lost every support", parts)
                     if singular is not None:
-                        parts = find_free_parts(m, constrained, use_joint_state=True)
-                        if parts:
-                            raise MechanismError(
-                                f"stage '{st.name}' at load factor {target:.4g}: the structure became a mechanism",
-                                parts)
                         raise MechanismError(
                             f"stage '{st.name}' at load factor {target:.4g}: singular stiffness ({singular}); "
                             "a block may be rotating about a point contact or the load exceeds the collapse load")
@@ -273,5 +281,4 @@ class StaticSolver:
             stage_stats["iterations"] = self.stats.iterations - it_before
             self.stats.per_stage.append(stage_stats)
             f_base = f_base + st.force
-        self.stats.wall_time_s = time.perf_counter() - t0
         return u

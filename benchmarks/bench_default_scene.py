@@ -127,16 +127,16 @@ def breakdown():
          static.StaticSolver._newton) = orig
     print("\nWhere the time goes (one warm run in this process, masonrydam.run wall "
           f"{total:.2f} s)")
-    print(f"{'part':<48} {'calls':>6} {'time s':>8} {'share':>6}")
-    print("-" * 71)
+    print(f"{'part':<54} {'calls':>6} {'time s':>8} {'share':>6}")
+    print("-" * 77)
     for key, label in (("factorize", "Factorization (linear.Factorization.__init__)"),
                        ("solve", "Factorization.solve (incl. residual check)"),
                        ("evaluate", "Model.evaluate (joints + assembly, incl. line search)")):
         t, n = acc[key]
-        print(f"{label:<48} {n:>6} {t:>8.3f} {t / total:>6.1%}")
+        print(f"{label:<54} {n:>6} {t:>8.3f} {t / total:>6.1%}")
     for ok, name in ((True, "converged step attempts"), (False, "failed step attempts (cut)")):
         sel = [a for a in attempts if a[0] == ok]
-        print(f"{name:<48} {len(sel):>6} {sum(a[2] for a in sel):>8.3f} "
+        print(f"{name:<54} {len(sel):>6} {sum(a[2] for a in sel):>8.3f} "
               f"{sum(a[2] for a in sel) / total:>6.1%}   {sum(a[1] for a in sel)} Newton iterations")
 
 

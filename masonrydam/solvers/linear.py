@@ -1,9 +1,11 @@
 """Sparse direct solvers behind one interface.
 
-Backends: ``"pardiso"`` (Intel MKL PARDISO through pypardiso, multithreaded supernodal LU) and
+Backends: ``"pardiso"`` (Intel MKL PARDISO through pypardiso, supernodal LU, pinned to one thread for
+reproducibility) and
 ``"superlu"`` (scipy's SuperLU). ``"auto"`` picks pardiso where it can be loaded: on the
-benchmark in ``benchmarks/bench_linear_solve.py`` it factorizes a 200 000-DOF jointed wall several
-times faster than SuperLU (figures in docs/performance.md). Tangents with sliding joints are
+benchmark in ``benchmarks/bench_linear_solve.py`` it factorizes a 197 000-DOF jointed wall in 1.3 s
+against 4.5 s for SuperLU with COLAMD ordering, and is the fastest at every size measured (no
+crossover; figures in docs/performance.md). Tangents with sliding joints are
 non-symmetric, so both backends are used as general (unsymmetric) LU solvers.
 
 Singularity is never silent: SuperLU raises on an exactly singular matrix and PARDISO reports
@@ -82,12 +84,11 @@ class Factorization:
             raise SingularMatrix("stiffness matrix contains NaN or infinity")
         if self.backend == "superlu":
             try:
-                self._lu = spla.splu(K.tocsc(), permc_spec="MMD_AT_PLUS_A")
+                self._lu = spla.splu(K.tocsc(), permc_spec="COLAMD")  # MMD_AT_PLUS_A took minutes at 40k DOF (docs/performance.md)
             except RuntimeError as exc:  # "Factor is exactly singular"
                 raise SingularMatrix(str(exc)) from None
         else:
             self._ps = _new_pardiso(mtype=11)
-            self._ps.set_iparm(10, 13)  # pivot perturbation 1e-13
             self._ps.set_statistical_info_off()
             self._Kcopy = K.copy()
             if not np.diff(K.indptr).all():

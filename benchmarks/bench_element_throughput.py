@@ -45,16 +45,7 @@ if str(ROOT) not in sys.path:
 TARGET_Q4_PER_S = 1.0e6
 
 
-def cpu_model() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    import platform
-
-    return platform.processor() or "unknown"
+from _common import cpu_model  # noqa: E402  (benchmarks/ is sys.path[0] when run as a script)
 
 
 def q4_grid(n: int, h: float = 0.01):

@@ -68,14 +68,7 @@ MAIN = (4.4, 2.48, 5)
 SWEEP = [(1.0, 0.62, 2), (2.2, 1.24, 2), (2.2, 1.24, 4), (4.4, 2.48, 3), MAIN]
 
 
-def cpu_model() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return "unknown"
+from _common import cpu_model  # noqa: E402  (benchmarks/ is sys.path[0] when run as a script)
 
 
 def peak_rss_mib() -> float:

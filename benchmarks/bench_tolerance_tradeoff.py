@@ -47,14 +47,7 @@ if str(ROOT) not in sys.path:
 SCENE = ROOT / "masonrydam" / "scenes" / "wall_push.toml"
 
 
-def cpu_model() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return "unknown"
+from _common import cpu_model  # noqa: E402  (benchmarks/ is sys.path[0] when run as a script)
 
 
 def top_lateral_force(ds) -> float:

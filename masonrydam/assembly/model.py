@@ -62,7 +62,6 @@ class Model:
             check_corners(self.coords, g)
         # full-DOF continuum stiffness (constant for linear elastic blocks)
         rows, cols, vals = [], [], []
-        self._ke_cache = []
         for g in cgroups:
             ke = g.stiffness(self.coords)
             nd = g.n_edof

@@ -1,5 +1,5 @@
-"""2D block models from rectangles, optionally rotated: blocks on joints for reference problems
-(block on an incline, direct shear, sliding and rocking blocks)."""
+"""Block models from rectangles (2D) or boxes (3D), optionally rotated: blocks on joints for
+reference problems (block on an incline, direct shear, sliding and rocking blocks)."""
 from __future__ import annotations
 
 import math
@@ -9,6 +9,7 @@ import numpy as np
 from masonrydam.errors import SceneError
 
 from .grid import Rect, rectangles_to_mesh
+from .grid3d import Box, boxes_to_mesh, rotation_matrix
 
 
 def blocks_2d(
@@ -50,5 +51,51 @@ def blocks_2d(
     if rotation_deg:
         a = math.radians(rotation_deg)
         R = np.array([[math.cos(a), -math.sin(a)], [math.sin(a), math.cos(a)]])
+        mesh.points = np.ascontiguousarray(mesh.points @ R.T)
+    return mesh
+
+
+_BOX_KEYS = ("x0", "y0", "z0", "x1", "y1", "z1", "group")
+
+
+def blocks_3d(
+    blocks: list,
+    element_size: float,
+    order: int = 1,
+    rotation_deg: list = None,
+    joint_name: str = "joints",
+    key: str = "mesh.parameters",
+):
+    """Axis-aligned boxes meshed conformally with hexahedra (hex8, or hex20 for ``order = 2``),
+    8-node (16-node) surface interfaces between different boxes.
+
+    blocks: list of ``{x0, y0, z0, x1, y1, z1, group}`` tables (m); each box is its own body.
+    rotation_deg: ``[about_x, about_y, about_z]`` rotations (degrees, applied in that order about
+    the origin) of the whole model; node and facet sets keep their unrotated meaning ('base',
+    'top', ..., '<group>_nodes'). All joints go to ``joint_name``.
+    """
+    if not isinstance(blocks, list) or not blocks:
+        raise SceneError(f"{key}.blocks", "give a list of boxes {x0, y0, z0, x1, y1, z1, group}")
+    boxes = []
+    for i, b in enumerate(blocks):
+        if not isinstance(b, dict):
+            raise SceneError(f"{key}.blocks[{i}]", f"expected a table, got {b!r}")
+        for k in b:
+            if k not in _BOX_KEYS:
+                raise SceneError(f"{key}.blocks[{i}].{k}", f"unknown key (use {', '.join(_BOX_KEYS)})")
+        try:
+            box = Box(*(float(b[k]) for k in _BOX_KEYS[:6]), str(b.get("group", "blocks")), f"b{i}")
+        except KeyError as exc:
+            raise SceneError(f"{key}.blocks[{i}].{exc.args[0]}", "is required") from None
+        if not all(h > lo for lo, h in zip(box.lo(), box.hi())):
+            raise SceneError(f"{key}.blocks[{i}]", f"needs x1 > x0, y1 > y0 and z1 > z0, got {b}")
+        boxes.append(box)
+    if not element_size > 0:
+        raise SceneError(f"{key}.element_size", f"must be > 0, got {element_size}")
+    mesh = boxes_to_mesh(boxes, element_size, order=order, classify_joint=lambda a, b, axis: joint_name)
+    if rotation_deg is not None:
+        if not isinstance(rotation_deg, (list, tuple)) or len(rotation_deg) != 3:
+            raise SceneError(f"{key}.rotation_deg", f"expected [about_x, about_y, about_z] in degrees, got {rotation_deg!r}")
+        R = rotation_matrix(rotation_deg)
         mesh.points = np.ascontiguousarray(mesh.points @ R.T)
     return mesh

@@ -15,6 +15,7 @@ from ..elements import interface as ik
 from ..elements.shapes import ELEMENT_TYPES, shape_functions
 from ..errors import STATUS_BAD_GEOMETRY, STATUS_BAD_JACOBIAN, STATUS_NAN, MeshError, NumericalError
 from ..materials import mohr_coulomb as mc
+from ..mesh.model import INTERFACE_FACE_TYPE
 from .dofmap import DofMap
 
 
@@ -102,7 +103,7 @@ class InterfaceGroup:
         self.name, self.type, self.law, self.scheme = name, type_, law, scheme
         self.conn = np.ascontiguousarray(conn, dtype=np.int64)
         self.dofs = DofMap.node_dofs(self.conn, dim)
-        face = {"interface_line2": "line2", "interface_line3": "line3"}[type_]
+        face = INTERFACE_FACE_TYPE[type_]
         pts, self.weights = ik.interface_rule(face, scheme, n_points)
         self.N, self.dN = shape_functions(face, pts)
         self.weights = np.ascontiguousarray(self.weights, dtype=np.float64)

@@ -3,8 +3,9 @@
 - self-weight: consistent body forces ``rho * g`` of every continuum group (kernel in
   :mod:`masonrydam.elements.continuum`);
 - nodal forces on a node set (N per node);
-- edge tractions on a facet set (Pa), given as a vector or as a normal pressure (positive pushes
-  into the body), integrated consistently with the edge's shape functions and the thickness.
+- tractions on a facet set (edges in 2D, faces in 3D; Pa), given as a vector or as a normal pressure
+  (positive pushes into the body), integrated consistently with the facet's shape functions (and
+  the thickness in 2D).
 """
 from __future__ import annotations
 
@@ -33,34 +34,61 @@ def nodal_force(model, nodes: np.ndarray, force) -> np.ndarray:
     return f
 
 
-def edge_traction(model, facet_type: str, facets: np.ndarray, thickness: float, traction=None,
-                  pressure: float | None = None, owner_centroids: np.ndarray | None = None) -> np.ndarray:
-    """Consistent nodal forces (n_dof,) of a traction on 2D edges.
+def _facet_rule(facet_type: str):
+    """Gauss rule on the reference facet, exact for the products of shape functions and a linear
+    Jacobian: line 3 points, quadrilateral 3x3, triangle 6 points."""
+    from ..elements.quadrature import tensor_rule, triangle_rule
 
-    facets: (n, 2|3) node lists (line2 / line3 order); thickness: m; traction: (2,) Pa, or
-    pressure: Pa along the inward normal. The inward side is taken from ``owner_centroids``
-    (n, 2) when given, else the normal is the edge tangent rotated -90 degrees (outward for
-    counter-clockwise boundaries).
+    if facet_type in ("line2", "line3"):
+        xg, wg = gauss_legendre_1d(3)
+        return xg[:, None], wg
+    if facet_type in ("quad4", "quad8", "quad9"):
+        return tensor_rule("gauss", 3, 2)
+    if facet_type in ("tri3", "tri6"):
+        return triangle_rule(6)
+    raise ValueError(f"no traction rule for facet type '{facet_type}'")
+
+
+def facet_traction(model, facet_type: str, facets: np.ndarray, thickness: float = 1.0, traction=None,
+                   pressure: float | None = None, owner_centroids: np.ndarray | None = None) -> np.ndarray:
+    """Consistent nodal forces (n_dof,) of a traction on boundary facets: edges in 2D, faces in 3D.
+
+    facets: (n, nfn) node lists in the facet type's order (line2/line3 in 2D; quad4/quad8/tri3/tri6
+    in 3D); thickness: m (2D only); traction: (dim,) Pa, or pressure: Pa along the inward normal.
+    The inward side is taken from ``owner_centroids`` (n, dim) when given; otherwise the facet's
+    own normal is taken as outward (2D: tangent turned -90 degrees, i.e. counter-clockwise
+    boundaries; 3D: right-hand rule).
     """
-    if model.dim != 2:
-        raise NotImplementedError("edge tractions are 2D; 3D face tractions come with 3D elements")
-    xg, wg = gauss_legendre_1d(3)
-    N, dN = shape_functions(facet_type, xg[:, None])
+    dim = model.dim
+    pts, wg = _facet_rule(facet_type)
+    N, dN = shape_functions(facet_type, pts)
     f = np.zeros(model.n_dof)
-    X = model.coords[facets]  # (n, nfn, 2)
+    facets = np.asarray(facets, dtype=np.int64)
+    X = model.coords[facets]  # (n, nfn, dim)
+    scale = thickness if dim == 2 else 1.0
     for q in range(len(wg)):
-        x_xi = np.einsum("j,njk->nk", dN[q, 0], X)
-        jac = np.linalg.norm(x_xi, axis=1)
+        a1 = np.einsum("j,njk->nk", dN[q, 0], X)
+        if dim == 2:
+            normal = np.stack([a1[:, 1], -a1[:, 0]], axis=1)
+        else:
+            normal = np.cross(a1, np.einsum("j,njk->nk", dN[q, 1], X))
+        jac = np.linalg.norm(normal, axis=1)
         if pressure is not None:
-            outward = np.stack([x_xi[:, 1], -x_xi[:, 0]], axis=1) / jac[:, None]
+            outward = normal / jac[:, None]
             if owner_centroids is not None:
                 mid = np.einsum("j,njk->nk", N[q], X)
                 flip = np.einsum("nk,nk->n", owner_centroids - mid, outward) > 0
                 outward[flip] *= -1
             t = -pressure * outward
         else:
-            t = np.broadcast_to(np.asarray(traction, dtype=np.float64), (len(facets), 2))
+            t = np.broadcast_to(np.asarray(traction, dtype=np.float64), (len(facets), dim))
         for a in range(facets.shape[1]):
-            for k in range(2):
-                np.add.at(f, facets[:, a] * 2 + k, N[q, a] * t[:, k] * jac * wg[q] * thickness)
+            for k in range(dim):
+                np.add.at(f, facets[:, a] * dim + k, N[q, a] * t[:, k] * jac * wg[q] * scale)
     return f
+
+
+def edge_traction(model, facet_type: str, facets: np.ndarray, thickness: float, traction=None,
+                  pressure: float | None = None, owner_centroids: np.ndarray | None = None) -> np.ndarray:
+    """2D name of :func:`facet_traction` (kept for existing callers)."""
+    return facet_traction(model, facet_type, facets, thickness, traction, pressure, owner_centroids)

@@ -1,16 +1,27 @@
-"""Insertion of zero-thickness interface elements along named joints of a conformal mesh.
+"""Insertion of zero-thickness interface elements along named joints of a conformal mesh (2D and 3D).
 
-Given a conformal mesh (neighbouring blocks share nodes) and the facets that are joints, every node
-on a joint is duplicated once per *side region* around it: the elements containing the node are
-grouped by adjacency through facets that contain the node and are not joints; each group gets its
-own copy. This is exact at T and cross junctions (masonry head joints meeting bed joints, lift
-joints meeting contraction joints) and at quadratic mid-side nodes, in 2D and 3D alike.
-Each joint facet then becomes one interface element whose bottom face carries the copies of the
-element on the ``-n`` side and whose top face the copies of the element on the ``+n`` side.
+Given a conformal mesh (neighbouring blocks share nodes) and the facets that are joints (edges in
+2D, faces in 3D), every node on a joint is duplicated once per *side region* around it: the
+elements containing the node are grouped by adjacency through facets that contain the node and are
+not joints; each group gets its own copy. This is exact at T and cross junctions (masonry head
+joints meeting bed joints, lift joints meeting contraction joints, collar joints meeting both) and
+at quadratic mid-side nodes. Each joint facet then becomes one interface element whose bottom face
+carries the copies of the element on the ``-n`` side and whose top face the copies of the element
+on the ``+n`` side.
 
-Orientation rule (documented in docs/architecture.md): the facet is ordered so that its normal
-(2D: tangent rotated +90 degrees) points up (+y), or +x for a vertical joint; "top" is the
-element on the +n side. Slip is then positive when the top block moves along +x.
+Orientation rule (docs/architecture.md): the interface normal points "up": along the last axis
+(+y in 2D, +z in 3D) when it has a component along it, else along the next axis down (+x in 2D;
++y, then +x in 3D). "Top" is the element on the +n side, so an opening is positive and, in 2D,
+slip is positive when the top block moves along +x (along +y for a vertical joint... see below).
+The local frame of the element kernels (masonrydam.elements.interface) is built from the face's
+node order: in 2D the tangent runs from face node 0 to node 1 and the normal is the tangent turned
++90 degrees; in 3D the first tangent follows the face's xi direction (node 0 to node 1) and the
+normal is the right-hand-rule normal of the face. In 3D the face's corners are also rotated
+cyclically so that the first tangent is as close as possible to global +x (or to +z when the
+joint is normal to x), so the first shear component of a bed joint is its x-slip.
+
+The algorithm is vectorised with numpy (no per-facet Python loops), which matters for 3D walls of
+thousands of units.
 """
 from __future__ import annotations
 
@@ -20,96 +31,216 @@ from scipy.sparse.csgraph import connected_components
 
 from ..elements.shapes import ELEMENT_TYPES
 from ..errors import MeshError
-from .model import CellBlock, FacetSet, Mesh
+from .model import INTERFACE_OF_FACE, CellBlock, FacetSet, Mesh
 
-_INTERFACE_OF_FACE = {"line2": "interface_line2", "line3": "interface_line3"}
+#: number of corner nodes of each facet type
+_FACET_CORNERS = {"line2": 2, "line3": 2, "tri3": 3, "tri6": 3, "quad4": 4, "quad8": 4}
+#: cyclic rotation by one corner of each 3D facet type (new position k takes old node perm[k])
+_ROTATE_ONE = {
+    "quad4": [1, 2, 3, 0],
+    "quad8": [1, 2, 3, 0, 5, 6, 7, 4],
+    "tri3": [1, 2, 0],
+    "tri6": [1, 2, 0, 4, 5, 3],
+}
 
 
-def _element_facets(mesh: Mesh):
-    """All facets of all continuum elements.
+def element_facets(element_type: str) -> tuple:
+    """``((facet_type, local_nodes), ...)`` of an element type: edges in 2D, faces in 3D.
 
-    Returns (facet_nodes list per facet type, element id, local facet id, block index, facet type),
-    flattened: nodes (n_f, nfn) for a single facet type (mixed-order meshes are rejected).
+    Facets are ordered so that their outward normal follows the right-hand rule (3D) or is the
+    edge tangent turned -90 degrees (2D, counter-clockwise elements).
     """
-    nodes, elem, local, ftype = [], [], [], None
-    offset = 0
-    for b in mesh.blocks:
-        et = ELEMENT_TYPES[b.type]
-        if et.dim != mesh.dim:
-            raise MeshError(f"element type '{b.type}' is {et.dim}D in a {mesh.dim}D mesh", group=b.name)
-        this = "line2" if len(et.edges[0]) == 2 else "line3"
-        if ftype is None:
-            ftype = this
-        elif ftype != this:
-            raise MeshError("mixing linear and quadratic elements in one mesh is not supported", group=b.name)
-        for k, edge in enumerate(et.edges):
-            nodes.append(b.cells[:, list(edge)])
-            elem.append(offset + np.arange(len(b.cells)))
-            local.append(np.full(len(b.cells), k))
-        offset += len(b.cells)
-    return np.vstack(nodes), np.concatenate(elem), np.concatenate(local), ftype
+    et = ELEMENT_TYPES[element_type]
+    facets = getattr(et, "facets", None)
+    if facets:
+        return tuple(facets)
+    ftype = "line2" if len(et.edges[0]) == 2 else "line3"
+    return tuple((ftype, tuple(e)) for e in et.edges)
 
 
-def _orient_up(points: np.ndarray, facet: np.ndarray) -> np.ndarray:
-    """Order a 2D facet (line2/line3) so that its normal points +y (or +x when vertical)."""
-    a, b = points[facet[0]], points[facet[1]]
-    t = b - a
-    normal = np.array([-t[1], t[0]])
-    flip = normal[1] < -1e-12 * np.abs(t).max() or (abs(normal[1]) <= 1e-12 * np.abs(t).max() and normal[0] < 0)
-    if flip:
-        facet = facet.copy()
-        facet[0], facet[1] = facet[1], facet[0]
-    return facet
+class _FacetTable:
+    """All facets of all continuum elements, padded to a common width with -1.
+
+    nodes (n_f, w); type_index (n_f,) into ``types``; elem (n_f,) global element index;
+    key (n_f, 4) sorted corner nodes padded with -1; inverse (n_f,) unique-facet index;
+    count (n_unique,) how many elements share each unique facet.
+    """
+
+    def __init__(self, mesh: Mesh):
+        self.types: list[str] = []
+        nodes, tidx, elem = [], [], []
+        offset = 0
+        width = 0
+        for b in mesh.blocks:
+            et = ELEMENT_TYPES[b.type]
+            if et.dim != mesh.dim:
+                raise MeshError(f"element type '{b.type}' is {et.dim}D in a {mesh.dim}D mesh", group=b.name)
+            for ftype, local in element_facets(b.type):
+                if ftype not in self.types:
+                    self.types.append(ftype)
+                nodes.append(b.cells[:, list(local)])
+                tidx.append(np.full(len(b.cells), self.types.index(ftype)))
+                elem.append(offset + np.arange(len(b.cells)))
+                width = max(width, len(local))
+            offset += len(b.cells)
+        linear = {t for t in self.types if t in ("line2", "tri3", "quad4")}
+        quadratic = set(self.types) - linear
+        if linear and quadratic:
+            raise MeshError("mixing linear and quadratic elements in one mesh is not supported "
+                            f"(facet types {sorted(self.types)})")
+        self.width = width
+        self.nodes = np.vstack([np.pad(n, ((0, 0), (0, width - n.shape[1])), constant_values=-1) for n in nodes])
+        self.type_index = np.concatenate(tidx)
+        self.elem = np.concatenate(elem)
+        self.n_elements = offset
+        self.corners = np.array([_FACET_CORNERS[t] for t in self.types])[self.type_index]
+        self.key = self.keys(self.nodes, self.corners)
+        uniq, inverse = np.unique(self.key, axis=0, return_inverse=True)
+        self.unique_keys = uniq
+        self.inverse = inverse.ravel()
+        self.count = np.bincount(self.inverse, minlength=len(uniq))
+        # first and second occurrence of each unique facet
+        order = np.argsort(self.inverse, kind="stable")
+        starts = np.searchsorted(self.inverse[order], np.arange(len(uniq)))
+        self.first = order[starts]
+        second = np.minimum(starts + 1, len(order) - 1)
+        self.second = np.where(self.count >= 2, order[second], -1)
+
+    @staticmethod
+    def keys(nodes: np.ndarray, corners: np.ndarray) -> np.ndarray:
+        """Sorted corner nodes padded with -1 to 4 columns: (n, 4) int64."""
+        k = np.full((len(nodes), 4), -1, dtype=np.int64)
+        for nc in np.unique(corners):
+            sel = corners == nc
+            k[sel, :nc] = np.sort(nodes[sel, :nc], axis=1)
+        return k
+
+    def lookup(self, keys: np.ndarray) -> np.ndarray:
+        """Unique-facet index of each key row, -1 where the key is not a facet of the mesh."""
+        uk = self.unique_keys
+        # lexicographic search through a structured view
+        view = np.ascontiguousarray(uk).view([("", np.int64)] * 4).ravel()
+        q = np.ascontiguousarray(keys, dtype=np.int64).view([("", np.int64)] * 4).ravel()
+        pos = np.searchsorted(view, q)
+        pos = np.minimum(pos, len(view) - 1)
+        found = view[pos] == q
+        return np.where(found, pos, -1)
+
+
+def _facet_normals(points: np.ndarray, nodes: np.ndarray, corners: np.ndarray) -> np.ndarray:
+    """Normal of each facet (not normalised): 2D edge tangent turned -90 degrees (outward for a
+    counter-clockwise element); 3D Newell normal of the corner polygon (right-hand rule)."""
+    dim = points.shape[1]
+    if dim == 2:
+        t = points[nodes[:, 1]] - points[nodes[:, 0]]
+        return np.stack([t[:, 1], -t[:, 0]], axis=1)
+    n = np.zeros((len(nodes), 3))
+    for nc in np.unique(corners):
+        sel = np.nonzero(corners == nc)[0]
+        x = points[nodes[sel, :nc]]  # (k, nc, 3)
+        xn = np.roll(x, -1, axis=1)
+        n[sel] = np.cross(x, xn).sum(axis=1) * 0.5
+    return n
+
+
+def _up_score(normal: np.ndarray, size: np.ndarray) -> np.ndarray:
+    """Signed "upness" of each normal: its last component if not negligible, else the one before."""
+    dim = normal.shape[1]
+    tol = 1e-9 * size
+    score = np.zeros(len(normal))
+    decided = np.zeros(len(normal), dtype=bool)
+    for k in range(dim - 1, -1, -1):
+        use = ~decided & (np.abs(normal[:, k]) > tol)
+        score[use] = normal[use, k]
+        decided |= use
+    return score
+
+
+def _align_first_tangent(points, faces, types, type_index):
+    """Rotate 3D face node lists cyclically so that edge 0->1 is closest to +x (or +z when the face
+    is normal to x). faces: (n, w) padded; returns a new array."""
+    out = faces.copy()
+    for ti, ftype in enumerate(types):
+        sel = np.nonzero(type_index == ti)[0]
+        if not len(sel):
+            continue
+        nc = _FACET_CORNERS[ftype]
+        nn = len(_ROTATE_ONE[ftype])
+        f = out[sel, :nn]
+        x = points[f[:, :nc]]
+        normal = np.cross(x[:, 1] - x[:, 0], x[:, nc - 1] - x[:, 0])
+        normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+        ref = np.zeros_like(normal)
+        ref[:, 0] = 1.0
+        proj = ref - (ref * normal).sum(1, keepdims=True) * normal
+        weak = np.linalg.norm(proj, axis=1) < 0.5
+        ref2 = np.zeros_like(normal)
+        ref2[:, 2] = 1.0
+        proj[weak] = ref2[weak] - (ref2[weak] * normal[weak]).sum(1, keepdims=True) * normal[weak]
+        best = np.full(len(sel), -np.inf)
+        best_f = f.copy()
+        cur = f.copy()
+        for _ in range(nc):
+            e = points[cur[:, 1]] - points[cur[:, 0]]
+            score = (e * proj).sum(1) / np.linalg.norm(e, axis=1)
+            better = score > best + 1e-12
+            best[better] = score[better]
+            best_f[better] = cur[better]
+            cur = cur[:, _ROTATE_ONE[ftype]]
+        out[sel, :nn] = best_f
+    return out
 
 
 def insert_interfaces(mesh: Mesh, joint_facets: dict[str, np.ndarray]) -> Mesh:
-    """Return a new mesh with interfaces inserted along ``joint_facets``.
+    """Return a new mesh with interfaces inserted along ``joint_facets`` (2D or 3D).
 
-    joint_facets: joint set name -> (n, nfn) facet node lists of the conformal mesh (corner nodes
-    at least; order irrelevant). Node sets are mapped so that a set containing a split node
-    contains all of its copies; facet sets follow the element that owns each boundary facet.
+    joint_facets: joint set name -> (n, nfn) facet node lists of the conformal mesh (all nodes of
+    the facet, or at least its corners; order irrelevant): edges in 2D, faces (3 or 4 corners) in
+    3D. Node sets are mapped so that a set containing a split node contains all of its copies;
+    facet sets follow the element that owns each boundary facet.
     """
-    if mesh.dim != 2:
-        raise MeshError("interface insertion is implemented for 2D meshes (3D comes with hexahedral blocks)")
     mesh.check()
-    facet_nodes, facet_elem, facet_local, ftype = _element_facets(mesh)
-    n_corner = 2
-    keys = np.sort(facet_nodes[:, :n_corner], axis=1)
-    uniq, inverse = np.unique(keys, axis=0, return_inverse=True)
-    inverse = inverse.ravel()
-    n_unique = len(uniq)
-    count = np.bincount(inverse, minlength=n_unique)
-    key_index = {tuple(k): i for i, k in enumerate(map(tuple, uniq))}
+    dim = mesh.dim
+    ft = _FacetTable(mesh)
+    n_unique = len(ft.unique_keys)
 
     # mark joint facets
     joint_of = np.full(n_unique, -1, dtype=np.int64)
     set_names = list(joint_facets)
     for s, name in enumerate(set_names):
         arr = np.asarray(joint_facets[name], dtype=np.int64)
-        if arr.ndim != 2 or arr.shape[1] < n_corner:
-            raise MeshError(f"joint set '{name}': facets must be an (n, >=2) array of node indices")
-        for f in arr:
-            k = key_index.get(tuple(sorted(f[:n_corner])))
-            if k is None:
-                raise MeshError(f"joint set '{name}': facet with nodes {list(f)} is not an edge of any element")
-            if count[k] != 2:
-                raise MeshError(
-                    f"joint set '{name}': facet with nodes {list(f)} lies on the model boundary "
-                    "(a joint needs an element on each side)"
-                )
-            if joint_of[k] >= 0 and joint_of[k] != s:
-                raise MeshError(f"facet {list(f)} belongs to joint sets '{set_names[joint_of[k]]}' and '{name}'")
-            joint_of[k] = s
-    is_joint_facet = joint_of[inverse] >= 0
+        if arr.ndim != 2 or (dim == 2 and arr.shape[1] < 2) or (dim == 3 and arr.shape[1] < 3):
+            raise MeshError(f"joint set '{name}': facets must be an (n, >={dim}) array of node indices")
+        if dim == 2:
+            nc = 2
+        else:
+            nc = {3: 3, 6: 3, 4: 4, 8: 4}.get(arr.shape[1])
+            if nc is None:
+                raise MeshError(f"joint set '{name}': a 3D facet has 3, 4, 6 or 8 nodes, got {arr.shape[1]}")
+        k = ft.lookup(_FacetTable.keys(arr, np.full(len(arr), nc)))
+        if (k < 0).any():
+            f = arr[np.nonzero(k < 0)[0][0]]
+            what = "an edge" if dim == 2 else "a face"
+            raise MeshError(f"joint set '{name}': facet with nodes {f.tolist()} is not {what} of any element")
+        boundary = ft.count[k] != 2
+        if boundary.any():
+            f = arr[np.nonzero(boundary)[0][0]]
+            raise MeshError(f"joint set '{name}': facet with nodes {f.tolist()} lies on the model boundary "
+                            "(a joint needs an element on each side)")
+        clash = (joint_of[k] >= 0) & (joint_of[k] != s)
+        if clash.any():
+            i = np.nonzero(clash)[0][0]
+            raise MeshError(f"facet {arr[i].tolist()} belongs to joint sets '{set_names[joint_of[k[i]]]}' and '{name}'")
+        joint_of[k] = s
+    is_joint_facet = joint_of[ft.inverse] >= 0
 
-    # elements' node lists in one flat table (element-major) to address incidences
+    # incidences (element, node) of joint nodes, addressed by the key element*n_nodes + node
     conn_list = [b.cells for b in mesh.blocks]
     elem_offsets = np.cumsum([0] + [len(c) for c in conn_list])
-    joint_nodes = np.unique(facet_nodes[is_joint_facet])
+    jn = ft.nodes[is_joint_facet]
+    joint_nodes = np.unique(jn[jn >= 0])
     on_joint = np.zeros(mesh.n_nodes, dtype=bool)
     on_joint[joint_nodes] = True
-
-    # incidences (element, node) for joint nodes
     inc_e, inc_n, inc_blk, inc_col = [], [], [], []
     for bi, c in enumerate(conn_list):
         e, col = np.nonzero(on_joint[c])
@@ -122,103 +253,109 @@ def insert_interfaces(mesh: Mesh, joint_facets: dict[str, np.ndarray]) -> Mesh:
     inc_blk = np.concatenate(inc_blk)
     inc_col = np.concatenate(inc_col)
     n_inc = len(inc_e)
-    inc_key = {(int(e), int(n)): i for i, (e, n) in enumerate(zip(inc_e, inc_n))}
+    nn = np.int64(mesh.n_nodes)
+    inc_code = inc_e * nn + inc_n
+    inc_sort = np.argsort(inc_code)
+    inc_code_sorted = inc_code[inc_sort]
+
+    def incidence(e, n):
+        return inc_sort[np.searchsorted(inc_code_sorted, e * nn + n)]
 
     # union incidences across non-joint facets shared by two elements
+    shared = np.nonzero((ft.count == 2) & (joint_of < 0))[0]
+    i0, i1 = ft.first[shared], ft.second[shared]
     rows, cols = [], []
-    order = np.argsort(inverse, kind="stable")
-    starts = np.searchsorted(inverse[order], np.arange(n_unique))
-    for k in np.nonzero((count == 2) & (joint_of < 0))[0]:
-        i0, i1 = order[starts[k]], order[starts[k] + 1]
-        e0, e1 = facet_elem[i0], facet_elem[i1]
-        for n in facet_nodes[i0]:
-            if on_joint[n]:
-                rows.append(inc_key[(int(e0), int(n))])
-                cols.append(inc_key[(int(e1), int(n))])
+    for c in range(ft.width):
+        n = ft.nodes[i0, c]
+        ok = n >= 0
+        ok[ok] = on_joint[n[ok]]
+        rows.append(incidence(ft.elem[i0[ok]], n[ok]))
+        cols.append(incidence(ft.elem[i1[ok]], n[ok]))
+    rows = np.concatenate(rows) if rows else np.zeros(0, dtype=np.int64)
+    cols = np.concatenate(cols) if cols else np.zeros(0, dtype=np.int64)
     graph = coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(n_inc, n_inc))
     n_comp, comp = connected_components(graph, directed=False)
 
-    # one copy per component; the first component of each node keeps the original index
-    new_points = [mesh.points]
-    copy_of_comp = np.empty(n_comp, dtype=np.int64)
-    seen_node = {}
-    next_id = mesh.n_nodes
-    copies: dict[int, list[int]] = {}
+    # one copy per component; per node, the component met first keeps the original index
     comp_node = np.empty(n_comp, dtype=np.int64)
     comp_node[comp] = inc_n
-    for c in np.argsort(comp_node, kind="stable"):
-        n = int(comp_node[c])
-        if n not in seen_node:
-            seen_node[n] = True
-            copy_of_comp[c] = n
-            copies[n] = [n]
-        else:
-            copy_of_comp[c] = next_id
-            copies[n].append(next_id)
-            new_points.append(mesh.points[n][None, :])
-            next_id += 1
-    points = np.vstack(new_points)
+    by_node = np.lexsort((np.arange(n_comp), comp_node))
+    first_of_node = np.ones(n_comp, dtype=bool)
+    first_of_node[1:] = comp_node[by_node][1:] != comp_node[by_node][:-1]
+    copy_of_comp = np.empty(n_comp, dtype=np.int64)
+    extra = by_node[~first_of_node]
+    copy_of_comp[by_node[first_of_node]] = comp_node[by_node[first_of_node]]
+    copy_of_comp[extra] = mesh.n_nodes + np.arange(len(extra))
+    points = np.vstack([mesh.points, mesh.points[comp_node[extra]]])
+    inc_copy = copy_of_comp[comp]  # new node index of each incidence
 
     new_blocks = [CellBlock(b.type, b.cells.copy(), b.name) for b in mesh.blocks]
-    for i in range(n_inc):
-        new_blocks[inc_blk[i]].cells[inc_e[i] - elem_offsets[inc_blk[i]], inc_col[i]] = copy_of_comp[comp[i]]
+    for bi in range(len(new_blocks)):
+        sel = inc_blk == bi
+        new_blocks[bi].cells[inc_e[sel] - elem_offsets[bi], inc_col[sel]] = inc_copy[sel]
 
-    def elem_cells(e):
-        bi = np.searchsorted(elem_offsets, e, side="right") - 1
-        return new_blocks[bi].cells[e - elem_offsets[bi]], bi
-
-    def elem_centroid(e):
-        c, _ = elem_cells(e)
-        return points[c].mean(axis=0)
-
-    # interface elements
-    joint_cells: dict[str, list] = {name: [] for name in set_names}
-    for k in np.nonzero(joint_of >= 0)[0]:
-        i0, i1 = order[starts[k]], order[starts[k] + 1]
-        e0, e1 = facet_elem[i0], facet_elem[i1]
-        f = _orient_up(mesh.points, facet_nodes[i0])
-        a, b = mesh.points[f[0]], mesh.points[f[1]]
-        t = b - a
-        normal = np.array([-t[1], t[0]])
-        mid = 0.5 * (a + b)
-        if np.dot(elem_centroid(e0) - mid, normal) > 0:
-            e_bot, e_top = e1, e0
-        else:
-            e_bot, e_top = e0, e1
-        bot = [int(copy_of_comp[comp[inc_key[(int(e_bot), int(n))]]]) for n in f]
-        top = [int(copy_of_comp[comp[inc_key[(int(e_top), int(n))]]]) for n in f]
-        joint_cells[set_names[joint_of[k]]].append(bot + top)
-    itype = _INTERFACE_OF_FACE[ftype]
-    joints = list(mesh.joints) + [
-        CellBlock(itype, np.array(cells, dtype=np.int64).reshape(-1, 2 * facet_nodes.shape[1]), name)
-        for name, cells in joint_cells.items()
-    ]
+    # interface elements: bottom = element whose outward facet normal points up
+    jf = np.nonzero(joint_of >= 0)[0]
+    a, b = ft.first[jf], ft.second[jf]
+    normal_a = _facet_normals(mesh.points, ft.nodes[a], ft.corners[a])
+    size = np.abs(normal_a).max(axis=1)
+    a_is_bottom = _up_score(normal_a, size) > 0
+    bottom_f = np.where(a_is_bottom, a, b)
+    top_f = np.where(a_is_bottom, b, a)
+    # 3D: the bottom element's face order has its right-hand normal pointing into the top element;
+    # 2D: the top element's edge order has its tangent turned +90 degrees pointing up
+    face = ft.nodes[bottom_f] if dim == 3 else ft.nodes[top_f]
+    tindex = ft.type_index[bottom_f]
+    if dim == 3:
+        face = _align_first_tangent(mesh.points, face, ft.types, tindex)
+    joints = list(mesh.joints)
+    for s, name in enumerate(set_names):
+        in_set = joint_of[jf] == s
+        present = np.unique(tindex[in_set]) if in_set.any() else np.array([0])
+        for ti in present:
+            ftype = ft.types[ti]
+            if ftype not in INTERFACE_OF_FACE:
+                raise MeshError(f"joint set '{name}': no interface element for facets of type '{ftype}' "
+                                f"(supported: {sorted(INTERFACE_OF_FACE)})")
+            nfn = ELEMENT_TYPES[ftype].n_nodes
+            sel = np.nonzero(in_set & (tindex == ti))[0]
+            f = face[sel, :nfn]
+            eb = np.broadcast_to(ft.elem[bottom_f[sel]][:, None], f.shape)
+            etop = np.broadcast_to(ft.elem[top_f[sel]][:, None], f.shape)
+            bot = inc_copy[incidence(eb, f)] if len(sel) else np.zeros((0, nfn), dtype=np.int64)
+            top = inc_copy[incidence(etop, f)] if len(sel) else np.zeros((0, nfn), dtype=np.int64)
+            joints.append(CellBlock(INTERFACE_OF_FACE[ftype], np.hstack([bot, top]).reshape(-1, 2 * nfn), name))
 
     node_sets = {}
+    split = comp_node[extra]  # original node of each extra copy
     for name, ids in mesh.node_sets.items():
-        ids = [c for n in ids for c in copies.get(int(n), [int(n)])]
-        node_sets[name] = np.unique(np.array(ids, dtype=np.int64))
+        ids = np.asarray(ids, dtype=np.int64)
+        add = (mesh.n_nodes + np.arange(len(extra)))[np.isin(split, ids)]
+        node_sets[name] = np.unique(np.concatenate([ids, add]))
 
     # facet sets: boundary facets follow their single owning element
     facet_sets = {}
-    owner = {}
-    for k in np.nonzero(count == 1)[0]:
-        owner[k] = facet_elem[order[starts[k]]]
+    all_cells = [nb.cells for nb in new_blocks]
+    old_cells = conn_list
     for name, fs in mesh.facet_sets.items():
-        out = []
-        for f in fs.facets:
-            k = key_index.get(tuple(sorted(f[:n_corner])))
-            if k is None or k not in owner:
-                out.append([int(copies.get(int(n), [int(n)])[0]) for n in f])
+        arr = fs.facets
+        nc = _FACET_CORNERS.get(fs.type, dim)
+        k = ft.lookup(_FacetTable.keys(arr, np.full(len(arr), nc)))
+        owner = np.where((k >= 0), ft.elem[ft.first[np.maximum(k, 0)]], -1)
+        owner[(k >= 0) & (ft.count[np.maximum(k, 0)] != 1)] = -1
+        out = arr.copy()
+        for bi in range(len(new_blocks)):
+            sel = np.nonzero((owner >= elem_offsets[bi]) & (owner < elem_offsets[bi + 1]))[0]
+            if not len(sel):
                 continue
-            cells, _ = elem_cells(owner[k])
-            cellset = set(cells.tolist())
-            mapped = []
-            for n in f:
-                cand = [c for c in copies.get(int(n), [int(n)]) if c in cellset]
-                mapped.append(cand[0] if cand else int(n))
-            out.append(mapped)
-        facet_sets[name] = FacetSet(fs.type, np.array(out, dtype=np.int64).reshape(-1, fs.facets.shape[1]))
+            old = old_cells[bi][owner[sel] - elem_offsets[bi]]  # (k, nen)
+            new = all_cells[bi][owner[sel] - elem_offsets[bi]]
+            for c in range(arr.shape[1]):
+                match = old == arr[sel, c][:, None]
+                has = match.any(axis=1)
+                col = match.argmax(axis=1)
+                out[sel[has], c] = new[has, col[has]]
+        facet_sets[name] = FacetSet(fs.type, out)
 
     out_mesh = Mesh(points, new_blocks, joints, node_sets, facet_sets)
     out_mesh.check()

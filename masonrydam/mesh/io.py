@@ -6,7 +6,8 @@ facet sets and node sets; the facet groups listed as joints get interfaces inser
 
 Writing (:func:`to_meshio`): continuum blocks and interfaces as separate cell blocks, so ParaView
 shows units and joints; a 2D interface is written as a degenerate (zero-area) quad
-``[b0, b1, t1, t0]`` (quadratic interfaces as two such quads). Cell data ``group`` (index into the
+``[b0, b1, t1, t0]`` (quadratic interfaces as two such quads), a 3D interface as a zero-volume
+hexahedron or wedge (the 16-node interface through its corners). Cell data ``group`` (index into the
 sorted group names, listed in ``field_data``) and ``is_joint`` tell the parts apart in single-list
 formats such as VTU.
 """
@@ -16,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..elements.shapes import MESHIO_TO_TYPE
+from ..elements.shapes import ELEMENT_TYPES, MESHIO_TO_TYPE
 from ..errors import MeshError, SceneError
 from .interfaces import insert_interfaces
 from .model import CellBlock, FacetSet, Mesh
@@ -44,33 +45,37 @@ def read_mesh(path: str | Path, joints: list[str], dim: int = 2, key: str = "mes
     node_sets: dict[str, list] = {}
     for bi, cb in enumerate(m.cells):
         tags = phys[bi] if phys is not None else np.zeros(len(cb.data), dtype=int)
+        ctype = MESHIO_TO_TYPE.get(cb.type)
+        cdim = ELEMENT_TYPES[ctype].dim if ctype else (0 if cb.type == "vertex" else -1)
         for tag in np.unique(tags):
             sel = cb.data[tags == tag]
             name = tag_name.get(int(tag), f"group{int(tag)}")
-            if cb.type in ("vertex",):
+            if cdim == 0:
                 node_sets.setdefault(name, []).extend(sel.ravel().tolist())
-            elif cb.type in ("line", "line3"):
-                facet_groups.setdefault(name, []).append((cb.type, sel))
+            elif cdim == dim - 1:  # facets: edges in 2D, faces in 3D
+                facet_groups.setdefault(name, []).append((ctype, sel))
                 node_sets.setdefault(name, []).extend(sel.ravel().tolist())
-            elif cb.type in MESHIO_TO_TYPE:
-                groups.setdefault((MESHIO_TO_TYPE[cb.type], name), []).append(sel)
-            else:
+            elif cdim == dim:
+                groups.setdefault((ctype, name), []).append(sel)
+            elif cdim == -1:
                 raise MeshError(f"'{path}': unsupported cell type '{cb.type}' in group '{name}'")
+            # lower-dimensional groups (e.g. curves of a 3D mesh) carry no load or joint here
     for name, ids in (m.point_sets or {}).items():
         node_sets.setdefault(name, []).extend(np.asarray(ids).ravel().tolist())
     blocks = [CellBlock(t, np.vstack(v), name) for (t, name), v in sorted(groups.items())]
     if not blocks:
-        raise MeshError(f"'{path}' contains no 2D continuum cells")
+        raise MeshError(f"'{path}' contains no {dim}D continuum cells")
     facet_sets = {}
     for name, lst in facet_groups.items():
         types = {t for t, _ in lst}
         if len(types) > 1:
-            raise MeshError(f"'{path}': facet group '{name}' mixes line and line3 cells")
-        facet_sets[name] = FacetSet("line2" if types.pop() == "line" else "line3", np.vstack([a for _, a in lst]))
+            raise MeshError(f"'{path}': facet group '{name}' mixes cell types {sorted(types)}")
+        facet_sets[name] = FacetSet(types.pop(), np.vstack([a for _, a in lst]))
+    what = "line" if dim == 2 else "surface"
     for j in joints:
         if j not in facet_sets:
-            raise SceneError("mesh.joints", f"joint group '{j}' is not a line group of '{path}' "
-                                            f"(line groups: {sorted(facet_sets)})")
+            raise SceneError("mesh.joints", f"joint group '{j}' is not a {what} group of '{path}' "
+                                            f"({what} groups: {sorted(facet_sets)})")
     mesh = Mesh(points, blocks, [], {k: np.array(v) for k, v in node_sets.items()},
                 {k: v for k, v in facet_sets.items() if k not in joints})
     # drop points not used by any cell (gmsh geometry points)
@@ -100,10 +105,15 @@ def to_meshio(mesh: Mesh, point_data=None, cell_data=None):
     for j in mesh.joints:
         c = j.cells
         if j.type == "interface_line2":
-            quads = c[:, [0, 1, 3, 2]]
-        else:
-            quads = np.vstack([c[:, [0, 2, 5, 3]], c[:, [2, 1, 4, 5]]])
-        cells.append(("quad", quads))
+            cells.append(("quad", c[:, [0, 1, 3, 2]]))
+        elif j.type == "interface_line3":
+            cells.append(("quad", np.vstack([c[:, [0, 2, 5, 3]], c[:, [2, 1, 4, 5]]])))
+        elif j.type == "interface_quad4":
+            cells.append(("hexahedron", c))  # zero-volume hexahedron: bottom face, then top face
+        elif j.type == "interface_tri3":
+            cells.append(("wedge", c))
+        else:  # interface_quad8: drawn through its corners
+            cells.append(("hexahedron", c[:, [0, 1, 2, 3, 8, 9, 10, 11]]))
     pts = mesh.points if mesh.dim == 3 else np.column_stack([mesh.points, np.zeros(mesh.n_nodes)])
     # formats such as VTU keep one cell list: tag every cell with its group (continuum group or joint
     # set) and whether it is a joint, so ParaView can threshold units, beams and joints apart
@@ -112,5 +122,5 @@ def to_meshio(mesh: Mesh, point_data=None, cell_data=None):
     cell_data = dict(cell_data or {})
     cell_data["group"] = [np.full(len(c), unique.index(n), dtype=np.int32) for (_, c), n in zip(cells, names)]
     cell_data["is_joint"] = [np.full(len(c), int(i >= len(mesh.blocks)), dtype=np.int32) for i, (_, c) in enumerate(cells)]
-    field_data = {n: np.array([k, 2]) for k, n in enumerate(unique)}
+    field_data = {n: np.array([k, mesh.dim]) for k, n in enumerate(unique)}
     return meshio.Mesh(pts, cells, point_data=point_data or {}, cell_data=cell_data, field_data=field_data)

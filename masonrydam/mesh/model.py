@@ -14,8 +14,18 @@ import numpy as np
 from ..elements.shapes import ELEMENT_TYPES
 from ..errors import MeshError
 
-#: interface element type -> face type of each side
-INTERFACE_FACE_TYPE = {"interface_line2": "line2", "interface_line3": "line3"}
+#: interface element type -> face type of each side. 2D: 2+2 and 3+3 node line interfaces;
+#: 3D: the seed's 8-node (4+4) surface interface, its 16-node (8+8) quadratic form for 20-node
+#: hexahedra, and the 6-node (3+3) triangular interface for tetrahedral meshes.
+INTERFACE_FACE_TYPE = {
+    "interface_line2": "line2",
+    "interface_line3": "line3",
+    "interface_quad4": "quad4",
+    "interface_quad8": "quad8",
+    "interface_tri3": "tri3",
+}
+#: face type -> interface element type
+INTERFACE_OF_FACE = {face: itype for itype, face in INTERFACE_FACE_TYPE.items()}
 
 
 @dataclass
@@ -43,7 +53,8 @@ class CellBlock:
 
 @dataclass
 class FacetSet:
-    """Named set of facets (edges in 2D): ``type`` is the facet type (line2/line3), ``facets`` (n, nfn)."""
+    """Named set of facets (edges in 2D, faces in 3D): ``type`` is the facet type (line2/line3 in
+    2D; quad4/quad8/tri3/tri6 in 3D), ``facets`` (n, nfn) node lists in that type's order."""
 
     type: str
     facets: np.ndarray

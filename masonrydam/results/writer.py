@@ -23,7 +23,7 @@ class ResultWriter:
 
     nodes: (n_out,) node indices recorded; coords: (n_nodes, dim);
     joint_points: dict with 'x' (n_jp, dim), 'set' (n_jp,) int, 'set_names', 'element' (n_jp,),
-    'point' (n_jp,), 'normal' (n_jp, dim), 'weight' (n_jp,) (tributary length*thickness or area, m2).
+    'point' (n_jp,), 'normal' (n_jp, dim), 'shear_axes' (n_jp, dim-1, dim), 'weight' (n_jp,) (tributary length*thickness or area, m2).
     """
 
     def __init__(self, path, coords, nodes, joint_points, dim, attrs: dict):
@@ -60,6 +60,9 @@ class ResultWriter:
         for k, c in enumerate(comps):
             self._var(f"joint_{c}", "f8", ("joint_point",), "m", f"{c} coordinate of the joint integration point")[:] = jp["x"][:, k]
             self._var(f"joint_normal_{c}", "f8", ("joint_point",), "1", f"{c} component of the joint unit normal (bottom to top)")[:] = jp["normal"][:, k]
+        v = self._var("joint_shear_axis", "f8", ("joint_point", "shear_direction", "component"), "1",
+                      "unit vector of each shear direction of the joint (global components)")
+        v[:] = jp["shear_axes"]
         self._var("joint_weight", "f8", ("joint_point",), "m2",
                   "joint area represented by the integration point (length x thickness in 2D)")[:] = jp["weight"]
         self._var("displacement", "f8", ("step", "node", "component"), "m", "nodal displacement")

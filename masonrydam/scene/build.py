@@ -77,9 +77,12 @@ def build_model(scene: dict, mesh: Mesh) -> Model:
     igroups = []
     for j in mesh.joints:
         spec = joint_specs[j.name]
+        scheme = spec["integration"]
+        if j.type == "interface_quad8" and scheme == "lumped" and not spec.get("integration_given", True):
+            scheme = "lobatto"  # 3x3 Newton-Cotes: the lumped corner weights of quad8 are negative
         try:
             igroups.append(InterfaceGroup(j.name, j.type, j.cells, mesh.points, dim, joint_param_vector(spec),
-                                          np.full(len(j.cells), t), spec["law"], spec["integration"], spec.get("points")))
+                                          np.full(len(j.cells), t), spec["law"], scheme, spec.get("points")))
         except ValueError as exc:
             raise SceneError(f"joints.{j.name}.integration", str(exc)) from None
     return Model(mesh.points, cgroups, igroups)
@@ -95,20 +98,19 @@ def _node_set(mesh: Mesh, name: str, key: str) -> np.ndarray:
 
 
 def _owner_centroids(mesh: Mesh, facets: np.ndarray) -> np.ndarray:
-    """Centroid of the element owning each boundary facet (to orient pressures inward)."""
-    node_to_elem = {}
-    cents = []
-    for b in mesh.blocks:
-        c = mesh.points[b.cells].mean(axis=1)
-        for e, cell in enumerate(b.cells):
-            for n in cell:
-                node_to_elem.setdefault(int(n), []).append((c[e], set(cell.tolist())))
+    """Centroid of the element owning each boundary facet (to orient pressures inward), (n, dim).
+
+    Facets that belong to no element keep the origin as "centroid" (their own normal is used)."""
+    from ..mesh.interfaces import _FacetTable
+
+    facets = np.asarray(facets, dtype=np.int64)
+    table = _FacetTable(mesh)
+    nc = 2 if mesh.dim == 2 else {3: 3, 6: 3, 4: 4, 8: 4}[facets.shape[1]]
+    k = table.lookup(_FacetTable.keys(facets, np.full(len(facets), nc)))
+    cents = np.vstack([mesh.points[b.cells].mean(axis=1) for b in mesh.blocks])
     out = np.zeros((len(facets), mesh.dim))
-    for i, f in enumerate(facets):
-        for cent, cellset in node_to_elem.get(int(f[0]), []):
-            if all(int(n) in cellset for n in f):
-                out[i] = cent
-                break
+    ok = k >= 0
+    out[ok] = cents[table.elem[table.first[k[ok]]]]
     return out
 
 
@@ -135,16 +137,17 @@ def build_stages(scene: dict, mesh: Mesh, model: Model) -> list[StaticStage]:
                 force += ld["factor"] * weight
             elif ld["type"] == "nodal":
                 force += L.nodal_force(model, _node_set(mesh, ld["set"], f"{key}.set"), ld["force"])
-            elif ld["type"] in ("edge_traction", "edge_pressure"):
+            elif ld["type"] in ("traction", "pressure"):
                 if ld["set"] not in mesh.facet_sets:
-                    raise SceneError(f"{key}.set", f"no facet (edge) set '{ld['set']}' in the mesh "
+                    what = "edge" if dim == 2 else "face"
+                    raise SceneError(f"{key}.set", f"no facet ({what}) set '{ld['set']}' in the mesh "
                                                    f"(facet sets: {sorted(mesh.facet_sets)})")
                 fs = mesh.facet_sets[ld["set"]]
-                if ld["type"] == "edge_traction":
-                    force += L.edge_traction(model, fs.type, fs.facets, scene["model"]["thickness"], traction=ld["traction"])
+                if ld["type"] == "traction":
+                    force += L.facet_traction(model, fs.type, fs.facets, scene["model"]["thickness"], traction=ld["traction"])
                 else:
-                    force += L.edge_traction(model, fs.type, fs.facets, scene["model"]["thickness"],
-                                             pressure=ld["pressure"], owner_centroids=_owner_centroids(mesh, fs.facets))
+                    force += L.facet_traction(model, fs.type, fs.facets, scene["model"]["thickness"],
+                                              pressure=ld["pressure"], owner_centroids=_owner_centroids(mesh, fs.facets))
             else:  # displacement
                 nodes = _node_set(mesh, ld["set"], f"{key}.set")
                 for c, v in zip(ld["components"], ld["value"]):
@@ -160,8 +163,11 @@ def build_stages(scene: dict, mesh: Mesh, model: Model) -> list[StaticStage]:
 def effects(scene: dict, model: Model) -> list[str]:
     """Human-readable list of what the run simulates."""
     m = scene["model"]
-    out = [f"{m['hypothesis'].replace('_', ' ')} linear elastic continuum "
-           f"({', '.join(sorted({g.name for g in model.cgroups}))}; thickness {m['thickness']:g} m)"]
+    groups = ', '.join(sorted({g.name for g in model.cgroups}))
+    if model.dim == 2:
+        out = [f"{m['hypothesis'].replace('_', ' ')} linear elastic continuum ({groups}; thickness {m['thickness']:g} m)"]
+    else:
+        out = [f"3D linear elastic continuum ({groups})"]
     mc_sets = [g.name for g in model.igroups if g.law == "mohr_coulomb"]
     lin_sets = [g.name for g in model.igroups if g.law == "linear"]
     if mc_sets:
@@ -169,8 +175,9 @@ def effects(scene: dict, model: Model) -> list[str]:
     if lin_sets:
         out.append("linear elastic joints: " + ", ".join(sorted(set(lin_sets))))
     kinds = {ld["type"] for st in scene["stages"] for ld in st["loads"]}
-    names = {"self_weight": "self-weight", "nodal": "nodal forces", "edge_traction": "edge tractions",
-             "edge_pressure": "edge pressures", "displacement": "prescribed displacements (displacement control)"}
+    facet = "edge" if model.dim == 2 else "face"
+    names = {"self_weight": "self-weight", "nodal": "nodal forces", "traction": f"{facet} tractions",
+             "pressure": f"{facet} pressures", "displacement": "prescribed displacements (displacement control)"}
     out += [names[k] for k in sorted(kinds)]
     out.append("static analysis (no inertia, no damping)")
     return out

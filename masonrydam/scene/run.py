@@ -41,7 +41,7 @@ def _output_selection(scene, mesh, model):
 
 
 def _joint_points(groups, set_names, dim):
-    xs, sets, elems, pts, normals, weights = [], [], [], [], [], []
+    xs, sets, elems, pts, normals, axes, weights = [], [], [], [], [], [], []
     for g in groups:
         ne, nip = g.n_elem, g.nip
         xs.append(g.points.reshape(-1, dim))
@@ -49,13 +49,15 @@ def _joint_points(groups, set_names, dim):
         elems.append(np.repeat(np.arange(ne), nip))
         pts.append(np.tile(np.arange(nip), ne))
         normals.append(g.frame[:, :, dim - 1, :].reshape(-1, dim))
+        axes.append(g.frame[:, :, : dim - 1, :].reshape(-1, dim - 1, dim))
         weights.append((g.jw * g.thickness[:, None]).ravel())
     if not groups:
         z = np.zeros((0, dim))
         return {"x": z, "set": np.zeros(0, int), "set_names": set_names, "element": np.zeros(0, int),
-                "point": np.zeros(0, int), "normal": z, "weight": np.zeros(0)}
+                "point": np.zeros(0, int), "normal": z, "shear_axes": np.zeros((0, dim - 1, dim)), "weight": np.zeros(0)}
     return {"x": np.vstack(xs), "set": np.concatenate(sets), "set_names": set_names, "element": np.concatenate(elems),
-            "point": np.concatenate(pts), "normal": np.vstack(normals), "weight": np.concatenate(weights)}
+            "point": np.concatenate(pts), "normal": np.vstack(normals), "shear_axes": np.concatenate(axes),
+            "weight": np.concatenate(weights)}
 
 
 def _joint_results(groups, dim):

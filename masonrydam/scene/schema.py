@@ -17,8 +17,11 @@ from .units import quantity
 
 COMPONENT_NAMES = ("x", "y", "z")
 JOINT_LAWS = ("mohr_coulomb", "linear")
-LOAD_TYPES = ("self_weight", "nodal", "edge_traction", "edge_pressure", "displacement")
+LOAD_TYPES = ("self_weight", "nodal", "traction", "pressure", "edge_traction", "edge_pressure", "displacement")
+#: 2D names of the facet loads (kept as aliases; the facets are edges in 2D and faces in 3D)
+LOAD_ALIASES = {"edge_traction": "traction", "edge_pressure": "pressure"}
 HYPOTHESES = ("plane_stress", "plane_strain")
+G_STANDARD = 9.80665
 
 
 def _check_keys(d: dict, allowed, where: str):
@@ -80,15 +83,21 @@ def _components(value, key, dim):
 def _model(d):
     _check_keys(d, {"name", "dimension", "hypothesis", "thickness", "gravity"}, "model")
     dim = _int(d.get("dimension", 2), "model.dimension")
-    if dim != 2:
-        raise SceneError("model.dimension", f"only 2D scenes are supported in this version, got {dim}")
-    out = {
-        "name": str(d.get("name", "scene")),
-        "dimension": dim,
-        "hypothesis": _choice(d.get("hypothesis", "plane_stress"), HYPOTHESES, "model.hypothesis"),
-        "thickness": _positive(d.get("thickness", 1.0), "length", "model.thickness"),
-    }
-    out["gravity"] = _vector(d.get("gravity", [0.0, -9.80665]), "acceleration", "model.gravity", dim)
+    if dim not in (2, 3):
+        raise SceneError("model.dimension", f"must be 2 or 3, got {dim}")
+    out = {"name": str(d.get("name", "scene")), "dimension": dim}
+    if dim == 2:
+        out["hypothesis"] = _choice(d.get("hypothesis", "plane_stress"), HYPOTHESES, "model.hypothesis")
+        out["thickness"] = _positive(d.get("thickness", 1.0), "length", "model.thickness")
+        gravity = [0.0, -G_STANDARD]
+    else:
+        for k in ("hypothesis", "thickness"):
+            if k in d and not (k == "hypothesis" and d[k] == "3d"):
+                raise SceneError(f"model.{k}", "applies to 2D models only; a 3D model is a solid (remove it)")
+        out["hypothesis"] = "3d"
+        out["thickness"] = 1.0
+        gravity = [0.0, 0.0, -G_STANDARD]
+    out["gravity"] = _vector(d.get("gravity", gravity), "acceleration", "model.gravity", dim)
     return out
 
 
@@ -179,6 +188,9 @@ def _joint(name, d):
         for k in ("cohesion", "friction_angle", "tensile_strength", "residual_shear_stiffness"):
             if k in d:
                 raise SceneError(f"{key}.{k}", "has no meaning for a linear joint (law = 'linear')")
+    # default: nodal ("lumped") integration (Schellekens & de Borst 1993); the build step switches
+    # 16-node (quad8) interfaces to 3x3 Newton-Cotes, whose lumped corner weights would be negative
+    out["integration_given"] = "integration" in d
     out["integration"] = _choice(d.get("integration", "lumped"), QUADRATURE_SCHEMES, f"{key}.integration")
     if "points" in d:
         out["points"] = _int(d["points"], f"{key}.points", 1)
@@ -190,7 +202,7 @@ def _joint(name, d):
 def _load(d, key, dim):
     if not isinstance(d, dict) or "type" not in d:
         raise SceneError(f"{key}.type", "every load needs a 'type'")
-    t = _choice(d["type"], LOAD_TYPES, f"{key}.type")
+    t = LOAD_ALIASES.get(_choice(d["type"], LOAD_TYPES, f"{key}.type"), d["type"])
     if t == "self_weight":
         _check_keys(d, {"type", "factor"}, key)
         f = d.get("factor", 1.0)
@@ -202,10 +214,10 @@ def _load(d, key, dim):
     if t == "nodal":
         _check_keys(d, {"type", "set", "force"}, key)
         return {"type": t, "set": str(d["set"]), "force": _vector(d.get("force"), "force", f"{key}.force", dim)}
-    if t == "edge_traction":
+    if t == "traction":
         _check_keys(d, {"type", "set", "traction"}, key)
         return {"type": t, "set": str(d["set"]), "traction": _vector(d.get("traction"), "stress", f"{key}.traction", dim)}
-    if t == "edge_pressure":
+    if t == "pressure":
         _check_keys(d, {"type", "set", "pressure"}, key)
         if "pressure" not in d:
             raise SceneError(f"{key}.pressure", "is required (Pa, positive pushes into the body)")

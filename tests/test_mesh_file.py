@@ -69,3 +69,74 @@ def test_block_from_gmsh_file_slides_at_mu_w(tmp_path):
     assert ds.sizes["joint_point"] > 0
     assert (ds.joint_state.isel(step=-1).values == 1).all()
     assert H == pytest.approx(math.tan(math.radians(phi)) * W, rel=1e-3)
+
+
+def _write_two_boxes_tet(path, order=1):
+    """Two stacked boxes meshed with unstructured tetrahedra by gmsh, the shared face a joint."""
+    gmsh.initialize(["-noenv"])
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.model.add("two_boxes")
+        occ = gmsh.model.occ
+        lower = occ.addBox(0, 0, 0, 1.0, 1.0, 0.4)
+        upper = occ.addBox(0, 0, 0.4, 1.0, 1.0, 0.3)
+        occ.fragment([(3, lower)], [(3, upper)])
+        occ.synchronize()
+
+        def faces_at(z):
+            out = []
+            for _, s in gmsh.model.getEntities(2):
+                _, _, zmin, _, _, zmax = gmsh.model.getBoundingBox(2, s)
+                if abs(zmin - z) < 1e-6 and abs(zmax - z) < 1e-6:
+                    out.append(s)
+            return out
+
+        gmsh.model.addPhysicalGroup(3, [lower], name="base")
+        gmsh.model.addPhysicalGroup(3, [upper], name="block")
+        gmsh.model.addPhysicalGroup(2, faces_at(0.4), name="joint")
+        gmsh.model.addPhysicalGroup(2, faces_at(0.0), name="bottom")
+        gmsh.model.addPhysicalGroup(2, faces_at(0.7), name="top")
+        gmsh.option.setNumber("Mesh.MeshSizeMax", 0.3)
+        gmsh.model.mesh.generate(3)
+        if order == 2:
+            gmsh.model.mesh.setOrder(2)
+        gmsh.write(str(path))
+    finally:
+        gmsh.finalize()
+
+
+def test_tetrahedral_gmsh_file_with_triangular_interfaces_slides_at_mu_w(tmp_path):
+    """3D: a gmsh tetrahedral mesh read through meshio gets 6-node (3 + 3) triangular interfaces on
+    the joint surface; a block pushed horizontally (oblique, in x and y) slides at mu W along the
+    push (reference problem 2, beta = 0)."""
+    msh = tmp_path / "two_boxes.msh"
+    _write_two_boxes_tet(msh)
+    phi, rho = 30.0, 2000.0
+    c, s = math.cos(math.radians(30.0)), math.sin(math.radians(30.0))
+    d = 1e-4
+    scene = {
+        "model": {"name": "file_tets", "dimension": 3},
+        "mesh": {"file": str(msh), "joints": ["joint"]},
+        "materials": {g: {"youngs_modulus": 30e9, "poisson_ratio": 0.2, "density": rho} for g in ("base", "block")},
+        "joints": {"joint": {"normal_stiffness": 1e11, "shear_stiffness": 1e11, "friction_angle": phi}},
+        "supports": [{"set": "bottom"}],
+        "stages": [{"name": "gravity", "loads": [{"type": "self_weight"}]},
+                   {"name": "push", "steps": 4,
+                    "loads": [{"type": "displacement", "set": "top", "components": ["x", "y", "z"],
+                               "value": [d * c, d * s, 0.0]}]}],
+    }
+    from masonrydam.scene.build import build_mesh
+    from masonrydam.scene.scene import Scene
+
+    mesh = build_mesh(Scene(scene).normalized, tmp_path)
+    assert {j.type for j in mesh.joints} == {"interface_tri3"}
+    assert {b.type for b in mesh.blocks} == {"tet4"}
+    ds = masonrydam.run(scene)
+    W = rho * 9.80665 * 1.0 * 1.0 * 0.3
+    top = np.isclose(ds.z.values, 0.7)
+    R = ds.reaction.isel(step=-1).values[top].sum(axis=0)
+    assert (ds.joint_state.isel(step=-1).values == 1).all()
+    mu = math.tan(math.radians(phi))
+    assert math.hypot(R[0], R[1]) == pytest.approx(mu * W, rel=2e-3)
+    assert math.atan2(R[1], R[0]) == pytest.approx(math.radians(30.0), abs=1e-3)
+    assert float(ds.joint_weight.sum()) == pytest.approx(1.0, rel=1e-12)

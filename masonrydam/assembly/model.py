@@ -17,27 +17,65 @@ from .sparsity import build_pattern, scatter_matrix, scatter_vector
 
 
 def check_corners(coords: np.ndarray, group: ContinuumGroup, rtol: float = 1e-10) -> None:
-    """Reject inverted, collapsed or re-entrant 2D elements before any solving.
+    """Reject inverted, collapsed, re-entrant or badly distorted elements before any solving.
 
-    The kernels check the Jacobian at the Gauss points, which misses a quadrilateral with two
-    coincident corners or a slightly re-entrant corner (its Jacobian is still positive at the Gauss
-    points). Here every corner of every element must turn counter-clockwise: the cross product of
-    its two edges, relative to the element size squared, must exceed ``rtol``.
+    The kernels check the Jacobian at the integration points, which misses e.g. a quadrilateral with
+    two coincident corners or a slightly re-entrant corner (its Jacobian is still positive at the Gauss
+    points). Only the corner nodes are looked at (mid-side nodes of quadratic elements are not).
+
+    - 2D: every corner of every element must turn counter-clockwise: the cross product of its two
+      edges, relative to the element size squared, must exceed ``rtol``.
+    - hex8 / hex20: the Jacobian determinant of the trilinear map of the 8 corners, evaluated at each
+      corner, must exceed ``rtol * size**3``. At a corner it is 1/8 of the triple product of the three
+      edges leaving that corner in the +xi, +eta, +zeta directions; all 8 positive is the usual
+      corner-Jacobian test of hexahedral mesh quality (P.M. Knupp, "Achieving finite element mesh
+      quality via optimization of the Jacobian matrix norm and associated quantities. Part II",
+      Int. J. Numer. Methods Eng. 48 (2000) 1165-1185).
+    - tet4 / tet10: the signed volume of the 4 corners, ``det[x1 - x0, x2 - x0, x3 - x0] / 6``, must
+      exceed ``rtol * size**3``.
+
+    ``size`` is the diagonal of the element's axis-aligned bounding box, m.
+
+    Raises
+    ------
+    MeshError
+        Naming ``group.name`` and the indices (rows of ``group.conn``) of all failing elements.
     """
-    from ..elements.shapes import ELEMENT_TYPES
+    from ..elements.shapes import ELEMENT_TYPES, reference_nodes, shape_functions
 
-    if coords.shape[1] != 2:
+    et = ELEMENT_TYPES[group.type]
+    nc = et.corner_nodes
+    x = coords[group.conn[:, :nc]]  # (ne, nc, dim)
+    size2 = (np.ptp(x, axis=1) ** 2).sum(axis=1)  # (ne,) squared bounding-box diagonal
+    if coords.shape[1] == 2:
+        prev, nxt = np.roll(x, 1, axis=1), np.roll(x, -1, axis=1)
+        a, b = nxt - x, prev - x
+        cross = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+        bad = np.nonzero((cross <= rtol * size2[:, None]).any(axis=1))[0]
+        if len(bad):
+            raise MeshError("inverted, collapsed or re-entrant element (corners must be counter-clockwise and "
+                            "convex)", group.name, bad)
         return
-    nc = ELEMENT_TYPES[group.type].corner_nodes
-    x = coords[group.conn[:, :nc]]  # (ne, nc, 2)
-    prev, nxt = np.roll(x, 1, axis=1), np.roll(x, -1, axis=1)
-    a, b = nxt - x, prev - x
-    cross = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
-    size2 = (np.ptp(x, axis=1) ** 2).sum(axis=1)
-    bad = np.nonzero((cross <= rtol * size2[:, None]).any(axis=1))[0]
+    if coords.shape[1] != 3:
+        return
+    size3 = size2**1.5
+    if et.family == "hex":
+        # J[e, p, i, j] = sum_a dN_a/dxi_i (corner p) x_aj for the trilinear corner map
+        _, dN = shape_functions("hex8", reference_nodes("hex8"))  # (8 points, 3, 8 nodes)
+        J = np.einsum("pia,eaj->epij", dN, x)
+        det = np.linalg.det(J)  # (ne, 8)
+        bad = np.nonzero((det <= rtol * size3[:, None]).any(axis=1))[0]
+        what = ("inverted, collapsed or badly distorted hexahedron (the Jacobian determinant of the corner "
+                "map must be positive at all 8 corners)")
+    elif et.family == "tet":
+        e = x[:, 1:, :] - x[:, :1, :]
+        vol = np.einsum("ei,ei->e", e[:, 0], np.cross(e[:, 1], e[:, 2])) / 6.0
+        bad = np.nonzero(vol <= rtol * size3)[0]
+        what = "inverted or collapsed tetrahedron (the signed volume of the corners must be positive)"
+    else:
+        return
     if len(bad):
-        raise MeshError("inverted, collapsed or re-entrant element (corners must be counter-clockwise and "
-                        "convex)", group.name, bad)
+        raise MeshError(what, group.name, bad)
 
 
 class Model:

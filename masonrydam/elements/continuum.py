@@ -65,12 +65,14 @@ def element_tables(type_name: str, n_gauss: int | None = None) -> tuple[np.ndarr
     Parameters
     ----------
     type_name : str
-        A key of ``shapes.ELEMENT_TYPES`` (e.g. ``"quad4"``, ``"tri6"``).
+        A key of ``shapes.ELEMENT_TYPES`` (e.g. ``"quad4"``, ``"tri6"``, ``"hex20"``, ``"tet10"``).
     n_gauss : int, optional
-        Points per direction (quadrilaterals) or in total (triangles: 1, 3 or 6); default is the
-        type's full-integration rule (``shapes.integration_rule``). For consistent mass matrices use
-        a rule exact for ``N_a N_b``: tri3 -> 3, tri6 -> 6; the quadrilateral defaults are exact
-        on parallelograms.
+        Points per direction (quadrilaterals, hexahedra) or in total (triangles: 1, 3 or 6;
+        tetrahedra: 1, 4 or 14); default is the type's full-integration rule
+        (``shapes.integration_rule``: hex8 2x2x2, hex20 3x3x3, tet4 1, tet10 4). For consistent mass
+        matrices use a rule exact for ``N_a N_b``: tri3 -> 3, tri6 -> 6, tet4 -> 4, tet10 -> 14; the
+        quadrilateral and hexahedron defaults (hex8 2x2x2, hex20 3x3x3) are exact on parallelograms
+        and parallelepipeds.
 
     Returns
     -------
@@ -79,7 +81,8 @@ def element_tables(type_name: str, n_gauss: int | None = None) -> tuple[np.ndarr
     dN_ref : (n_gp, dim, nen) float64
         Derivatives with respect to the natural coordinates.
     weights : (n_gp,) float64
-        Integration weights on the reference element (sum 4 for quads, 1/2 for triangles).
+        Integration weights on the reference element (sum 4 for quads, 1/2 for triangles, 8 for
+        hexahedra, 1/6 for tetrahedra).
     """
     points, weights = shapes.integration_rule(type_name, n_gauss)
     N, dN = shapes.shape_functions(type_name, points)

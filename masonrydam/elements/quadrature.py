@@ -4,7 +4,8 @@ All rules return ``(points, weights)`` with ``points`` of shape ``(n_points, dim
 and ``weights`` of shape ``(n_points,)`` in the element's natural coordinates.
 
 Reference domains: line and quadrilateral/hexahedron on ``[-1, 1]^d``; triangle on the unit
-simplex ``{xi >= 0, eta >= 0, xi + eta <= 1}`` (area 1/2).
+simplex ``{xi >= 0, eta >= 0, xi + eta <= 1}`` (area 1/2); tetrahedron on the unit simplex
+``{xi, eta, zeta >= 0, xi + eta + zeta <= 1}`` (volume 1/6).
 
 Schemes for interfaces (Schellekens & de Borst 1993, IJNME 36, 43-66):
 
@@ -85,3 +86,50 @@ def triangle_rule(n_points: int) -> tuple[np.ndarray, np.ndarray]:
         p = np.array([[a, a], [1 - 2 * a, a], [a, 1 - 2 * a], [b, b], [1 - 2 * b, b], [b, 1 - 2 * b]])
         return p, np.array([wa, wa, wa, wb, wb, wb])
     raise ValueError(f"no triangle rule with {n_points} points (use 1, 3 or 6)")
+
+
+def _tet_orbit_31(a: float) -> np.ndarray:
+    """The 4 points with volume coordinates (a, a, a, 1 - 3a) and permutations: (4, 3)."""
+    L = np.full((4, 4), a)
+    L[np.arange(4), np.arange(4)] = 1.0 - 3.0 * a
+    return L[:, 1:]
+
+
+def _tet_orbit_22(b: float) -> np.ndarray:
+    """The 6 points with volume coordinates (b, b, 1/2 - b, 1/2 - b) and permutations: (6, 3)."""
+    pairs = ((0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3))
+    L = np.full((6, 4), b)
+    for r, (i, j) in enumerate(pairs):
+        L[r, [i, j]] = 0.5 - b
+    return L[:, 1:]
+
+
+def tetrahedron_rule(n_points: int) -> tuple[np.ndarray, np.ndarray]:
+    """Symmetric rules on the unit tetrahedron (weights sum to 1/6), all weights positive.
+
+    - 1 point (degree 1): the centroid.
+    - 4 points (degree 2): volume coordinates (a, a, a, 1 - 3a), ``a = (5 - sqrt 5) / 20``, weights
+      1/24 (Zienkiewicz, Taylor & Zhu 2013, ch. 6, table of tetrahedron rules; Keast 1986).
+    - 14 points (degree 5): two (a, a, a, 1 - 3a) orbits and one (b, b, 1/2 - b, 1/2 - b) orbit
+      (N. Walkington, "Quadrature on simplices of arbitrary dimension", CNA report, Carnegie Mellon
+      Univ. 2000; A. Jaskowiec & N. Sukumar, "High-order cubature rules for tetrahedra", Int. J.
+      Numer. Methods Eng. 121 (2020) 2418-2436). The digits below solve the six symmetric moment
+      equations of degree <= 5 to machine precision (checked in tests/test_solid3d.py against
+      ``int xi^a eta^b zeta^c = a! b! c! / (a + b + c + 3)!``). Exact for ``N_a N_b`` of tet10 (degree 4),
+      so it is the rule for the consistent tet10 mass matrix.
+
+    Returns ``points`` (n, 3) and ``weights`` (n,).
+    """
+    if n_points == 1:
+        return np.array([[0.25, 0.25, 0.25]]), np.array([1.0 / 6.0])
+    if n_points == 4:
+        a = (5.0 - np.sqrt(5.0)) / 20.0
+        return _tet_orbit_31(a), np.full(4, 1.0 / 24.0)
+    if n_points == 14:
+        a1, w1 = 0.0927352503108912, 0.01224884051939366
+        a2, w2 = 0.3108859192633006, 0.01878132095300264
+        b, w3 = 0.0455037041256496, 0.00709100346284691
+        pts = np.vstack([_tet_orbit_31(a1), _tet_orbit_31(a2), _tet_orbit_22(b)])
+        w = np.concatenate([np.full(4, w1), np.full(4, w2), np.full(6, w3)])
+        return np.ascontiguousarray(pts), w
+    raise ValueError(f"no tetrahedron rule with {n_points} points (use 1, 4 or 14)")

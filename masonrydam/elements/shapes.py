@@ -1,15 +1,50 @@
 """Element types and their shape functions on the reference element.
 
-Node orderings follow gmsh / meshio / VTK so that meshes read through meshio need no reordering:
+Node orderings follow meshio / VTK, so that meshes read through meshio need no reordering. For the
+types below gmsh uses the same order except for hex20 and tet10 (meshio permutes those on read; see
+:data:`GMSH_TO_MESHIO_ORDER` for meshes taken from the gmsh API directly):
 
 - ``line2``: ends at xi = -1, +1;  ``line3``: ends, then the middle node (xi = 0);
 - ``tri3``: (0,0), (1,0), (0,1);  ``tri6``: corners then mid-edges 0-1, 1-2, 2-0;
 - ``quad4``: (-1,-1), (1,-1), (1,1), (-1,1) counter-clockwise;
-- ``quad8``: corners then mid-edges 0-1, 1-2, 2-3, 3-0 (serendipity);  ``quad9``: quad8 plus centre.
+- ``quad8``: corners then mid-edges 0-1, 1-2, 2-3, 3-0 (serendipity);  ``quad9``: quad8 plus centre;
+- ``hex8`` (VTK_HEXAHEDRON, meshio ``hexahedron``): on [-1, 1]^3, bottom face zeta = -1
+  counter-clockwise seen from +zeta, then the top face: (-1,-1,-1), (1,-1,-1), (1,1,-1), (-1,1,-1),
+  (-1,-1,1), (1,-1,1), (1,1,1), (-1,1,1);
+- ``hex20`` (VTK_QUADRATIC_HEXAHEDRON, meshio ``hexahedron20``, serendipity): the 8 corners, then
+  the mid-edge nodes 8..19 of the edges 0-1, 1-2, 2-3, 3-0 (bottom), 4-5, 5-6, 6-7, 7-4 (top),
+  0-4, 1-5, 2-6, 3-7 (vertical);
+- ``tet4`` (VTK_TETRA, meshio ``tetra``): (0,0,0), (1,0,0), (0,1,0), (0,0,1) on the unit
+  tetrahedron (volume 1/6); the node order has positive volume (node 3 on the side of +normal of
+  the face 0-1-2 by the right-hand rule);
+- ``tet10`` (VTK_QUADRATIC_TETRA, meshio ``tetra10``): the 4 corners, then the mid-edge nodes
+  4..9 of the edges 0-1, 1-2, 2-0, 0-3, 1-3, 2-3.
+
+``edges``: local nodes of every element edge (line2 / line3 order: ends, then middle node); for the
+3D types in the orders listed above (edge ``k`` of hex20 / tet10 has mid-node ``8 + k`` / ``4 + k``).
+
+``facets``: ``(facet_type, local_nodes)`` of every facet (the element boundary: edges in 2D, faces in
+3D). 2D facets are the ``edges``, which run counter-clockwise around the element (outward normal on
+the right). 3D faces are ordered (VTK face order) so that the right-hand-rule normal points OUT of
+the element, corners first and, for quad8 / tri6 faces, the mid-edge nodes in quad8 / tri6 order:
+
+- hex8 ``quad4``: x-: (0,4,7,3), x+: (1,2,6,5), y-: (0,1,5,4), y+: (3,7,6,2), z-: (0,3,2,1),
+  z+: (4,5,6,7);  hex20 ``quad8``: the same corners plus (16,15,19,11), (9,18,13,17), (8,17,12,16),
+  (19,14,18,10), (11,10,9,8), (12,13,14,15);
+- tet4 ``tri3``: (0,1,3), (1,2,3), (2,0,3), (0,2,1);  tet10 ``tri6``: the same corners plus
+  (4,8,7), (5,9,8), (6,7,9), (6,5,4).
 
 ``shape_functions(name, points)`` returns ``N`` of shape ``(n_points, n_nodes)`` and
 ``dN`` of shape ``(n_points, dim_ref, n_nodes)`` (derivatives with respect to the natural coordinates).
 These tables are evaluated once in Python and passed to the numba kernels.
+
+Shape functions (Zienkiewicz, Taylor & Zhu, *The Finite Element Method: Its Basis and
+Fundamentals*, 7th ed. 2013, ch. 6; Hughes, *The Finite Element Method*, Dover 2000, sec. 3.5):
+trilinear hex8 ``N_a = (1 + xi xi_a)(1 + eta eta_a)(1 + zeta zeta_a) / 8``; serendipity hex20, corners
+``N_a = (1 + xi_0)(1 + eta_0)(1 + zeta_0)(xi_0 + eta_0 + zeta_0 - 2) / 8`` (``xi_0 = xi xi_a`` ...),
+mid-edge nodes with ``xi_a = 0``: ``N_a = (1 - xi^2)(1 + eta_0)(1 + zeta_0) / 4`` (and permutations);
+tetrahedra in volume coordinates ``L = (1 - xi - eta - zeta, xi, eta, zeta)``: tet4 ``N_a = L_a``,
+tet10 corners ``L_a (2 L_a - 1)``, mid-edge nodes ``4 L_i L_j``.
 """
 from __future__ import annotations
 
@@ -17,7 +52,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .quadrature import tensor_rule, triangle_rule
+from .quadrature import tensor_rule, tetrahedron_rule, triangle_rule
 
 
 @dataclass(frozen=True)
@@ -25,10 +60,12 @@ class ElementType:
     """Static description of an element topology.
 
     name: our name; meshio_name: the meshio cell type; dim: reference dimension;
-    n_nodes: nodes per element; order: polynomial order; family: 'line', 'tri', 'quad';
-    corner_nodes: number of vertex nodes; edges: local node lists of each edge (for facets),
-    in the line2 / line3 ordering; default_gauss: points per direction (tensor families) or
-    total points (triangles) of the full integration rule.
+    n_nodes: nodes per element; order: polynomial order; family: 'line', 'tri', 'quad', 'hex', 'tet';
+    corner_nodes: number of vertex nodes; edges: local node lists of each edge, in the line2 / line3
+    ordering (in 2D these are also the facets); default_gauss: points per direction (tensor families)
+    or total points (triangles, tetrahedra) of the full integration rule; facets: ``(facet_type,
+    local_nodes)`` of each facet (2D: the edges as line2 / line3; 3D: the faces as quad4 / quad8 /
+    tri3 / tri6 with outward right-hand-rule normals; line types: the two end points as ``"vertex"``).
     """
 
     name: str
@@ -40,25 +77,87 @@ class ElementType:
     corner_nodes: int
     edges: tuple
     default_gauss: int
+    facets: tuple = ()
+
+
+_TRI_EDGES = ((0, 1, 3), (1, 2, 4), (2, 0, 5))
+_QUAD_EDGES = ((0, 1, 4), (1, 2, 5), (2, 3, 6), (3, 0, 7))
+#: hex edges in VTK order; edge k of hex20 has the mid-node 8 + k
+_HEX_EDGES = (
+    (0, 1, 8), (1, 2, 9), (2, 3, 10), (3, 0, 11), (4, 5, 12), (5, 6, 13), (6, 7, 14), (7, 4, 15),
+    (0, 4, 16), (1, 5, 17), (2, 6, 18), (3, 7, 19),
+)
+#: tet edges in VTK order; edge k of tet10 has the mid-node 4 + k
+_TET_EDGES = ((0, 1, 4), (1, 2, 5), (2, 0, 6), (0, 3, 7), (1, 3, 8), (2, 3, 9))
+#: hex faces (VTK order x-, x+, y-, y+, z-, z+), outward normals; corners then quad8 mid-edge nodes
+_HEX_FACES = (
+    (0, 4, 7, 3, 16, 15, 19, 11),
+    (1, 2, 6, 5, 9, 18, 13, 17),
+    (0, 1, 5, 4, 8, 17, 12, 16),
+    (3, 7, 6, 2, 19, 14, 18, 10),
+    (0, 3, 2, 1, 11, 10, 9, 8),
+    (4, 5, 6, 7, 12, 13, 14, 15),
+)
+#: tet faces (VTK order), outward normals; corners then tri6 mid-edge nodes
+_TET_FACES = ((0, 1, 3, 4, 8, 7), (1, 2, 3, 5, 9, 8), (2, 0, 3, 6, 7, 9), (0, 2, 1, 6, 5, 4))
+
+
+def _facets(kind: str, lists, n: int) -> tuple:
+    return tuple((kind, tuple(f[:n])) for f in lists)
 
 
 ELEMENT_TYPES: dict[str, ElementType] = {
-    "line2": ElementType("line2", "line", 1, 2, 1, "line", 2, ((0, 1),), 2),
-    "line3": ElementType("line3", "line3", 1, 3, 2, "line", 2, ((0, 1, 2),), 3),
-    "tri3": ElementType("tri3", "triangle", 2, 3, 1, "tri", 3, ((0, 1), (1, 2), (2, 0)), 1),
-    "tri6": ElementType("tri6", "triangle6", 2, 6, 2, "tri", 3, ((0, 1, 3), (1, 2, 4), (2, 0, 5)), 3),
-    "quad4": ElementType("quad4", "quad", 2, 4, 1, "quad", 4, ((0, 1), (1, 2), (2, 3), (3, 0)), 2),
-    "quad8": ElementType(
-        "quad8", "quad8", 2, 8, 2, "quad", 4, ((0, 1, 4), (1, 2, 5), (2, 3, 6), (3, 0, 7)), 3
+    "line2": ElementType("line2", "line", 1, 2, 1, "line", 2, ((0, 1),), 2, (("vertex", (0,)), ("vertex", (1,)))),
+    "line3": ElementType(
+        "line3", "line3", 1, 3, 2, "line", 2, ((0, 1, 2),), 3, (("vertex", (0,)), ("vertex", (1,)))
     ),
-    "quad9": ElementType(
-        "quad9", "quad9", 2, 9, 2, "quad", 4, ((0, 1, 4), (1, 2, 5), (2, 3, 6), (3, 0, 7)), 3
+    "tri3": ElementType(
+        "tri3", "triangle", 2, 3, 1, "tri", 3, ((0, 1), (1, 2), (2, 0)), 1, _facets("line2", _TRI_EDGES, 2)
     ),
+    "tri6": ElementType("tri6", "triangle6", 2, 6, 2, "tri", 3, _TRI_EDGES, 3, _facets("line3", _TRI_EDGES, 3)),
+    "quad4": ElementType(
+        "quad4", "quad", 2, 4, 1, "quad", 4, ((0, 1), (1, 2), (2, 3), (3, 0)), 2, _facets("line2", _QUAD_EDGES, 2)
+    ),
+    "quad8": ElementType("quad8", "quad8", 2, 8, 2, "quad", 4, _QUAD_EDGES, 3, _facets("line3", _QUAD_EDGES, 3)),
+    "quad9": ElementType("quad9", "quad9", 2, 9, 2, "quad", 4, _QUAD_EDGES, 3, _facets("line3", _QUAD_EDGES, 3)),
+    "hex8": ElementType(
+        "hex8", "hexahedron", 3, 8, 1, "hex", 8, tuple(e[:2] for e in _HEX_EDGES), 2, _facets("quad4", _HEX_FACES, 4)
+    ),
+    "hex20": ElementType("hex20", "hexahedron20", 3, 20, 2, "hex", 8, _HEX_EDGES, 3, _facets("quad8", _HEX_FACES, 8)),
+    "tet4": ElementType(
+        "tet4", "tetra", 3, 4, 1, "tet", 4, tuple(e[:2] for e in _TET_EDGES), 1, _facets("tri3", _TET_FACES, 3)
+    ),
+    "tet10": ElementType("tet10", "tetra10", 3, 10, 2, "tet", 4, _TET_EDGES, 4, _facets("tri6", _TET_FACES, 6)),
 }
 MESHIO_TO_TYPE = {t.meshio_name: t.name for t in ELEMENT_TYPES.values()}
 CONTINUUM_TYPES_2D = ("tri3", "tri6", "quad4", "quad8", "quad9")
+CONTINUUM_TYPES_3D = ("hex8", "hex20", "tet4", "tet10")
+
+#: Permutation from the gmsh node order (as returned by the gmsh API, e.g.
+#: ``gmsh.model.mesh.getElementsByType``) to ours (= meshio / VTK): ``ours = gmsh_nodes[..., perm]``.
+#: Identity for all other types. Gmsh numbers the hex20 edges 0-1, 0-3, 0-4, 1-2, 1-5, 2-3, 2-6, 3-7,
+#: 4-5, 4-7, 5-6, 6-7 and the tet10 edges 0-1, 1-2, 2-0, 3-0, 3-2, 3-1 (gmsh reference manual,
+#: "Node ordering"); checked against the gmsh API in tests/test_solid3d.py.
+GMSH_TO_MESHIO_ORDER: dict[str, list[int]] = {
+    "line2": [0, 1],
+    "line3": [0, 1, 2],
+    "tri3": [0, 1, 2],
+    "tri6": [0, 1, 2, 3, 4, 5],
+    "quad4": [0, 1, 2, 3],
+    "quad8": [0, 1, 2, 3, 4, 5, 6, 7],
+    "quad9": [0, 1, 2, 3, 4, 5, 6, 7, 8],
+    "hex8": [0, 1, 2, 3, 4, 5, 6, 7],
+    "hex20": [0, 1, 2, 3, 4, 5, 6, 7, 8, 11, 13, 9, 16, 18, 19, 17, 10, 12, 14, 15],
+    "tet4": [0, 1, 2, 3],
+    "tet10": [0, 1, 2, 3, 4, 5, 6, 7, 9, 8],
+}
 
 _QUAD_CORNERS = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]], dtype=np.float64)
+_HEX_CORNERS = np.array(
+    [[-1, -1, -1], [1, -1, -1], [1, 1, -1], [-1, 1, -1], [-1, -1, 1], [1, -1, 1], [1, 1, 1], [-1, 1, 1]],
+    dtype=np.float64,
+)
+_TET_CORNERS = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=np.float64)
 
 
 def _line(points: np.ndarray, n_nodes: int):
@@ -127,6 +226,62 @@ def _quad(points: np.ndarray, n_nodes: int):
     return N, np.stack([dx, dy], axis=1)
 
 
+def _hex(points: np.ndarray, n_nodes: int):
+    """hex8 (trilinear) or hex20 (serendipity), ZTZ 2013 ch. 6; derivatives by the product rule."""
+    n = len(points)
+    N = np.zeros((n, n_nodes))
+    dN = np.zeros((n, 3, n_nodes))
+    c = _HEX_CORNERS
+    # linear factors f_i = 1 + xi_i xi_ai at every corner: (n, 8, 3)
+    f = 1.0 + points[:, None, :] * c[None, :, :]
+    if n_nodes == 8:
+        N[:] = 0.125 * f.prod(axis=2)
+        for i in range(3):
+            j, k = [m for m in range(3) if m != i]
+            dN[:, i, :] = 0.125 * c[None, :, i] * f[:, :, j] * f[:, :, k]
+        return N, dN
+    # corners: N = f0 f1 f2 (xi0 + eta0 + zeta0 - 2) / 8 with xi0 = xi xi_a, ...
+    g = (points[:, None, :] * c[None, :, :]).sum(axis=2) - 2.0  # (n, 8)
+    prod = f.prod(axis=2)
+    N[:, :8] = 0.125 * prod * g
+    for i in range(3):
+        j, k = [m for m in range(3) if m != i]
+        dN[:, i, :8] = 0.125 * c[None, :, i] * (f[:, :, j] * f[:, :, k] * g + prod)
+    # mid-edge nodes: the coordinate along the edge is 0, the other two are +-1
+    mids = reference_nodes("hex20")[8:]
+    for m, xm in enumerate(mids):
+        a = 8 + m
+        i = int(np.flatnonzero(xm == 0)[0])  # direction along the edge
+        j, k = [q for q in range(3) if q != i]
+        bubble = 1.0 - points[:, i] ** 2
+        fj = 1.0 + points[:, j] * xm[j]
+        fk = 1.0 + points[:, k] * xm[k]
+        N[:, a] = 0.25 * bubble * fj * fk
+        dN[:, i, a] = -0.5 * points[:, i] * fj * fk
+        dN[:, j, a] = 0.25 * bubble * xm[j] * fk
+        dN[:, k, a] = 0.25 * bubble * fj * xm[k]
+    return N, dN
+
+
+# d L_a / d xi_i of the volume coordinates L = (1 - xi - eta - zeta, xi, eta, zeta): (3, 4)
+_DL_TET = np.array([[-1.0, 1.0, 0.0, 0.0], [-1.0, 0.0, 1.0, 0.0], [-1.0, 0.0, 0.0, 1.0]])
+
+
+def _tet(points: np.ndarray, n_nodes: int):
+    """tet4 / tet10 in volume coordinates (ZTZ 2013 ch. 6; Hughes 2000 sec. 3.5)."""
+    L = np.column_stack([1.0 - points.sum(axis=1), points])  # (n, 4)
+    if n_nodes == 4:
+        return L, np.broadcast_to(_DL_TET, (len(points), 3, 4)).copy()
+    N = np.empty((len(points), 10))
+    dN = np.empty((len(points), 3, 10))
+    N[:, :4] = L * (2.0 * L - 1.0)
+    dN[:, :, :4] = (4.0 * L - 1.0)[:, None, :] * _DL_TET[None]
+    for k, (i, j, _) in enumerate(_TET_EDGES):
+        N[:, 4 + k] = 4.0 * L[:, i] * L[:, j]
+        dN[:, :, 4 + k] = 4.0 * (L[:, j, None] * _DL_TET[None, :, i] + L[:, i, None] * _DL_TET[None, :, j])
+    return N, dN
+
+
 def shape_functions(name: str, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Shape functions of element type ``name`` at natural ``points`` (n, dim_ref).
 
@@ -136,7 +291,7 @@ def shape_functions(name: str, points: np.ndarray) -> tuple[np.ndarray, np.ndarr
     points = np.atleast_2d(np.asarray(points, dtype=np.float64))
     if points.shape[1] != et.dim:
         raise ValueError(f"{name}: points must have {et.dim} natural coordinates, got {points.shape[1]}")
-    fn = {"line": _line, "tri": _tri, "quad": _quad}[et.family]
+    fn = {"line": _line, "tri": _tri, "quad": _quad, "hex": _hex, "tet": _tet}[et.family]
     N, dN = fn(points, et.n_nodes)
     return np.ascontiguousarray(N, dtype=np.float64), np.ascontiguousarray(dN, dtype=np.float64)
 
@@ -158,14 +313,31 @@ def reference_nodes(name: str) -> np.ndarray:
         return np.vstack([_QUAD_CORNERS, mids])
     if name == "quad9":
         return np.vstack([_QUAD_CORNERS, mids, [[0.0, 0.0]]])
+    if name == "hex8":
+        return _HEX_CORNERS.copy()
+    if name == "hex20":
+        c = _HEX_CORNERS
+        return np.vstack([c, [(c[i] + c[j]) / 2 for i, j, _ in _HEX_EDGES]])
+    if name == "tet4":
+        return _TET_CORNERS.copy()
+    if name == "tet10":
+        c = _TET_CORNERS
+        return np.vstack([c, [(c[i] + c[j]) / 2 for i, j, _ in _TET_EDGES]])
     raise KeyError(name)
 
 
 def integration_rule(name: str, n: int | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Gauss rule for continuum element ``name``: ``n`` points per direction (tensor families)
-    or ``n`` points in total (triangles); default: full integration."""
+    """Integration rule for continuum element ``name``: ``n`` Gauss points per direction (line, quad,
+    hex) or ``n`` points in total (triangles: 1, 3, 6; tetrahedra: 1, 4, 14); default: full
+    integration (hex8 2x2x2, hex20 3x3x3, tet4 1 point, tet10 4 points).
+
+    Returns ``points`` (n_points, dim_ref) and ``weights`` (n_points,) on the reference element
+    (weights sum to 2, 4, 8 on [-1, 1]^d, 1/2 on the unit triangle, 1/6 on the unit tetrahedron).
+    """
     et = ELEMENT_TYPES[name]
     n = et.default_gauss if n is None else n
     if et.family == "tri":
         return triangle_rule(n)
+    if et.family == "tet":
+        return tetrahedron_rule(n)
     return tensor_rule("gauss", n, et.dim)

@@ -90,7 +90,7 @@ def main():
     n_dof = mesh.n_nodes * 3
     dm = DofMap(mesh.n_nodes, 3, np.zeros(n_dof, dtype=bool))
     t0 = time.perf_counter()
-    indptr, indices, scat = build_pattern([cg.dofs] + [g.dofs for g in igroups["lumped"]], dm.eq_of_dof, dm.n_eq)
+    indptr, indices, scat = build_pattern([cg.dofs] + [g.dofs for g in igroups["lumped"]], dm.eq_of_dof, dm.n_eq, dim=3)
     t_pattern = time.perf_counter() - t0
     cg.scatter = scat[0]
     for scheme in igroups:

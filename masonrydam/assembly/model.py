@@ -122,7 +122,7 @@ class Model:
             return
         self.dofmap = dm = DofMap(self.n_nodes, self.dim, constrained)
         groups = list(self.cgroups) + list(self.igroups)
-        self.indptr, self.indices, scatters = build_pattern([g.dofs for g in groups], dm.eq_of_dof, dm.n_eq)
+        self.indptr, self.indices, scatters = build_pattern([g.dofs for g in groups], dm.eq_of_dof, dm.n_eq, dim=self.dim)
         for g, s in zip(groups, scatters):
             g.scatter = s
         self.K_linear_data = np.zeros(len(self.indices))

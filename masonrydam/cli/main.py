@@ -4,6 +4,8 @@
     masonrydam run --default -o OUT.nc       run the bundled default scene
     masonrydam check SCENE.toml              validate a scene and build its model, without solving
     masonrydam export-mesh SCENE.toml -o M.vtu   write the scene's mesh (units and joints) for ParaView
+    masonrydam records list                  the bundled ground-motion records
+    masonrydam records show NAME [-o PNG]    a record's measures (PGA, PGV, PGD, Arias, D5-95, CAV) and plot
 """
 from __future__ import annotations
 
@@ -61,6 +63,44 @@ def _cmd_export(args):
     return 0
 
 
+def _cmd_records(args):
+    from .. import records as rec
+
+    if args.records_command == "list":
+        rows = []
+        for e in rec.list_records():
+            peak, unit = rec.catalog.peak_value(e)
+            pga = f"{peak:.4f}" if unit == "g" else f"- (displacement, PGD {peak:.2f} cm)"
+            rows.append((e["name"], e["event"], e["station"], str(e["component"]), str(e["npts"]),
+                         f"{e['dt']:g}", pga))
+        head = ("name", "event", "station", "comp.", "npts", "dt [s]", "PGA [g]")
+        widths = [max(len(r[k]) for r in rows + [head]) for k in range(len(head))]
+        for r in [head] + rows:
+            print("  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip())
+        return 0
+    from ..records.plotting import plot_record
+
+    name = args.name
+    if name in rec.record_names() or not Path(name).is_file():
+        tr = rec.load_record(name)
+    else:
+        tr = rec.read_trace(name)
+    m = rec.summary(tr)
+    meta = tr.stats.masonrydam
+    print(f"{name}: {meta.get('event', '?')}, {meta.get('station', '?')}, component {meta.get('component', '?')}")
+    print(f"  npts {m['npts']}, dt {m['dt']:g} s, duration {m['duration']:.2f} s")
+    print(f"  PGA    {m['pga']:.4g} m/s2 ({m['pga'] / rec.G:.4f} g)")
+    print(f"  PGV    {m['pgv']:.4g} m/s")
+    print(f"  PGD    {m['pgd']:.4g} m  (velocity/displacement: trapezoidal integration of the record as given)")
+    print(f"  Arias  {m['arias_intensity']:.4g} m/s")
+    print(f"  D5-95  {m['d5_95']:.3f} s  ({m['t5']:.2f} s to {m['t95']:.2f} s)")
+    print(f"  CAV    {m['cav']:.4g} m/s")
+    out = args.output or f"{Path(name).stem}.png"
+    plot_record(tr, out, damping=args.damping, title=f"{name} ({100 * args.damping:g} % damping)")
+    print(f"wrote {out}")
+    return 0
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(prog="masonrydam", description="Nonlinear analysis of jointed masonry and block dams")
     sub = p.add_subparsers(dest="command", required=True)
@@ -79,6 +119,14 @@ def main(argv=None) -> int:
     e.add_argument("--default", action="store_true")
     e.add_argument("-o", "--output", required=True)
     e.set_defaults(func=_cmd_export)
+    rc = sub.add_parser("records", help="the bundled ground-motion records: list them, show one")
+    rsub = rc.add_subparsers(dest="records_command", required=True)
+    rsub.add_parser("list", help="table of the bundled records")
+    rs = rsub.add_parser("show", help="print a record's measures and plot it to PNG")
+    rs.add_argument("name", help="record name from `masonrydam records list` (or a PEER AT2 file)")
+    rs.add_argument("-o", "--output", help="PNG file (default: NAME.png in the current folder)")
+    rs.add_argument("--damping", type=float, default=0.05, help="damping ratio of the spectrum (default 0.05)")
+    rc.set_defaults(func=_cmd_records)
     args = p.parse_args(argv)
     try:
         return args.func(args)

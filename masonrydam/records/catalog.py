@@ -11,10 +11,7 @@ import functools
 from importlib import resources
 from pathlib import Path
 
-try:
-    import tomllib
-except ModuleNotFoundError:  # Python 3.10
-    import tomli as tomllib
+import tomllib  # Python >= 3.11 (pyproject requires-python)
 
 from .errors import RecordError
 from .readers import read_trace

@@ -4,18 +4,21 @@
 - :mod:`generators.walls`: 2D masonry walls (running or stack bond) with optional beams;
 - :mod:`generators.grid3d`: the same for axis-aligned boxes with hexahedra (3D);
 - :mod:`generators.blocks`: named rectangular blocks or boxes, optionally rotated (reference problems);
-- :mod:`generators.extrude`: a 2D jointed model extruded into a 3D slab.
+- :mod:`generators.extrude`: a 2D jointed model extruded into a 3D slab;
+- :mod:`generators.dams`: gravity dam sections (2D; Koyna preset) and dams of monoliths across a
+  valley (3D), with lift, base and contraction joints, meshed with gmsh.
 
 Every generator returns a :class:`masonrydam.mesh.Mesh` with interfaces already inserted on the joints.
 """
 from .blocks import blocks_2d, blocks_3d
+from .dams import gravity_dam_2d, gravity_dam_3d
 from .extrude import extrude_2d, extruded
 from .grid import Rect, rectangles_to_mesh
 from .grid3d import Box, boxes_to_mesh
 from .walls import masonry_wall_2d
 
 GENERATORS = {"masonry_wall_2d": masonry_wall_2d, "blocks_2d": blocks_2d, "blocks_3d": blocks_3d,
-              "extruded": extruded}
+              "extruded": extruded, "gravity_dam_2d": gravity_dam_2d, "gravity_dam_3d": gravity_dam_3d}
 
 __all__ = ["Rect", "rectangles_to_mesh", "Box", "boxes_to_mesh", "masonry_wall_2d", "blocks_2d", "blocks_3d",
-           "extrude_2d", "extruded", "GENERATORS"]
+           "extrude_2d", "extruded", "gravity_dam_2d", "gravity_dam_3d", "GENERATORS"]

@@ -52,13 +52,13 @@ def _cmd_check(args):
 
 
 def _cmd_export(args):
-    from ..mesh.io import to_meshio
+    from ..mesh.io import write_mesh
     from ..scene.build import build_mesh
     from ..scene.scene import Scene
 
     sc = Scene.from_toml(_scene_arg(args))
     mesh = build_mesh(sc.normalized, sc.base_dir)
-    to_meshio(mesh).write(args.output)
+    write_mesh(mesh, args.output)
     print(f"wrote {args.output}: {mesh.n_elements()} elements, {mesh.n_interfaces()} interfaces")
     return 0
 

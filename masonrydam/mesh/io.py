@@ -122,5 +122,24 @@ def to_meshio(mesh: Mesh, point_data=None, cell_data=None):
     cell_data = dict(cell_data or {})
     cell_data["group"] = [np.full(len(c), unique.index(n), dtype=np.int32) for (_, c), n in zip(cells, names)]
     cell_data["is_joint"] = [np.full(len(c), int(i >= len(mesh.blocks)), dtype=np.int32) for i, (_, c) in enumerate(cells)]
-    field_data = {n: np.array([k, mesh.dim]) for k, n in enumerate(unique)}
+    # gmsh physical groups (tags from 1), so a .msh file keeps every group and joint set apart
+    cell_data["gmsh:physical"] = [g + 1 for g in cell_data["group"]]
+    cell_data["gmsh:geometrical"] = [g + 1 for g in cell_data["group"]]
+    field_data = {n: np.array([k + 1, mesh.dim]) for k, n in enumerate(unique)}
     return meshio.Mesh(pts, cells, point_data=point_data or {}, cell_data=cell_data, field_data=field_data)
+
+
+def write_mesh(mesh: Mesh, path: str | Path, point_data=None, cell_data=None) -> None:
+    """Write ``mesh`` with meshio, the format from the suffix: ``.vtu`` (ParaView), ``.msh`` (gmsh 2.2
+    ASCII with one physical group per element group and joint set), ``.xdmf`` (XDMF + HDF5)."""
+    path = Path(path)
+    m = to_meshio(mesh, point_data, cell_data)
+    if path.suffix == ".msh":
+        # physical groups carry the grouping; other cell data as ElementData is not read back by meshio
+        m.cell_data = {k: v for k, v in m.cell_data.items() if k.startswith("gmsh:")}
+        m.write(path, file_format="gmsh22", binary=False)
+        return
+    # only gmsh understands the gmsh:* cell data
+    m.cell_data.pop("gmsh:physical")
+    m.cell_data.pop("gmsh:geometrical")
+    m.write(path)

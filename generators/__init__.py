@@ -1,7 +1,8 @@
 """Parametric model generators for masonrydam.
 
 - :mod:`generators.grid`: conformal structured meshes of axis-aligned rectangular blocks (fast, no gmsh);
-- :mod:`generators.walls`: 2D masonry walls (running or stack bond) with optional beams;
+- :mod:`generators.walls`, :mod:`generators.walls3d`: masonry walls in 2D and 3D (stretcher, stack,
+  header, English and Flemish bonds; openings with lintels; beams; Lourenço's unit cracks);
 - :mod:`generators.grid3d`: the same for axis-aligned boxes with hexahedra (3D);
 - :mod:`generators.blocks`: named rectangular blocks or boxes, optionally rotated (reference problems);
 - :mod:`generators.extrude`: a 2D jointed model extruded into a 3D slab;
@@ -16,9 +17,10 @@ from .extrude import extrude_2d, extruded
 from .grid import Rect, rectangles_to_mesh
 from .grid3d import Box, boxes_to_mesh
 from .walls import masonry_wall_2d
+from .walls3d import masonry_wall_3d
 
-GENERATORS = {"masonry_wall_2d": masonry_wall_2d, "blocks_2d": blocks_2d, "blocks_3d": blocks_3d,
+GENERATORS = {"masonry_wall_2d": masonry_wall_2d, "masonry_wall_3d": masonry_wall_3d, "blocks_2d": blocks_2d, "blocks_3d": blocks_3d,
               "extruded": extruded, "gravity_dam_2d": gravity_dam_2d, "gravity_dam_3d": gravity_dam_3d}
 
-__all__ = ["Rect", "rectangles_to_mesh", "Box", "boxes_to_mesh", "masonry_wall_2d", "blocks_2d", "blocks_3d",
+__all__ = ["Rect", "rectangles_to_mesh", "Box", "boxes_to_mesh", "masonry_wall_2d", "masonry_wall_3d", "blocks_2d", "blocks_3d",
            "extrude_2d", "extruded", "gravity_dam_2d", "gravity_dam_3d", "GENERATORS"]

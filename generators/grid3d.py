@@ -144,10 +144,12 @@ def boxes_to_mesh(
         faces = np.stack(quad, axis=1)
         pairs, inv = np.unique(np.stack([pa, pb], axis=1), axis=0, return_inverse=True)
         inv = inv.ravel()
-        for p, (ka, kb) in enumerate(pairs):
-            name = classify_joint(boxes[ka], boxes[kb], AXES[axis])
-            if name:
-                joint_facets.setdefault(name, []).append(faces[inv == p])
+        # classify each pair of boxes once, then select the faces of each joint set with one mask
+        names = [classify_joint(boxes[ka], boxes[kb], AXES[axis]) for ka, kb in pairs]
+        labels = sorted({n for n in names if n})
+        code = np.array([labels.index(n) if n else -1 for n in names], dtype=np.int64)[inv]
+        for k, name in enumerate(labels):
+            joint_facets.setdefault(name, []).append(faces[code == k])
 
     # compact unused nodes
     used = np.zeros(len(points), dtype=bool)

@@ -339,7 +339,7 @@ def test_required_sections(tmp_path, no_solve, section):
 
 @pytest.mark.parametrize("edits,key", [
     ({"mesh__parameters__height": 0.25}, "mesh.parameters.height"),
-    ({"mesh__parameters__bond": "flemish"}, "mesh.parameters.bond"),
+    ({"mesh__parameters__bond": "gothic"}, "mesh.parameters.bond"),
     ({"mesh__parameters__elements_per_unit": 1.5}, "mesh.parameters.elements_per_unit"),
     ({"mesh__parameters__elements_per_unit": 0}, "mesh.parameters.elements_per_unit"),
     ({"mesh__parameters__joint_thickness": -0.01}, "mesh.parameters.joint_thickness"),

@@ -6,6 +6,7 @@
     masonrydam export-mesh SCENE.toml -o M.vtu   write the scene's mesh (units and joints) for ParaView
     masonrydam records list                  the bundled ground-motion records
     masonrydam records show NAME [-o PNG]    a record's measures (PGA, PGV, PGD, Arias, D5-95, CAV) and plot
+    masonrydam plot OUT.nc [--nodes N ..] [--joints J ..] -o PNG   histories from a result file
 """
 from __future__ import annotations
 
@@ -101,6 +102,83 @@ def _cmd_records(args):
     return 0
 
 
+def _cmd_plot(args):
+    """Time histories (dynamic results) or step histories (static results) of a result file, as PNG:
+    ground acceleration, relative displacement of the chosen nodes, slip and opening of the chosen
+    joint points, and the energy balance."""
+    import numpy as np
+    import xarray as xr
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    path = Path(args.result)
+    if not path.is_file():
+        raise MasonrydamError(f"result file '{path}' does not exist")
+    ds = xr.load_dataset(path)
+    comp = args.component
+    if comp not in ds.component.values:
+        raise MasonrydamError(f"--component must be one of {list(ds.component.values)}, got {comp!r}")
+    dynamic = "time" in ds.variables and np.isfinite(ds.time.values).any()
+    if dynamic:
+        ds = ds.isel(step=np.nonzero(np.isfinite(ds.time.values))[0])
+        x, xlabel = ds.time.values, "time [s]"
+    else:
+        x, xlabel = np.arange(ds.sizes["step"]), "step"
+    u = ds.displacement.sel(component=comp)
+    if args.nodes:
+        pos = []
+        for n in args.nodes:
+            hit = np.nonzero(ds.node.values == n)[0]
+            if not len(hit):
+                raise MasonrydamError(f"--nodes: node {n} is not in the file (recorded nodes: "
+                                                 f"{ds.node.values[:10].tolist()}{' ...' if ds.sizes['node'] > 10 else ''})")
+            pos.append(int(hit[0]))
+    else:
+        pos = [int(np.argmax(np.abs(u.values).max(axis=0)))] if ds.sizes["node"] else []
+    njp = ds.sizes.get("joint_point", 0)
+    if args.joints:
+        bad = [j for j in args.joints if not 0 <= j < njp]
+        if bad:
+            raise MasonrydamError(f"--joints: joint point(s) {bad} not in the file (0 to {njp - 1})")
+        jpos = list(args.joints)
+    elif njp:
+        jpos = [int(np.argmax(np.abs(ds.joint_slip.values).max(axis=(0, 2))))]
+    else:
+        jpos = []
+    panels = (["ground"] if dynamic else []) + ["disp"] + (["joint"] if jpos else []) + (["energy"] if dynamic else [])
+    fig = Figure(figsize=(8.0, 2.6 * len(panels)), layout="constrained")
+    FigureCanvasAgg(fig)
+    axs = fig.subplots(len(panels), 1, squeeze=False)[:, 0]
+    for ax, kind in zip(axs, panels):
+        if kind == "ground":
+            for c in ds.component.values:
+                ax.plot(x, ds.ground_acceleration.sel(component=c).values, lw=0.8, label=f"a_g,{c}")
+            ax.set_ylabel("ground acc. [m/s2]")
+        elif kind == "disp":
+            for p in pos:
+                ax.plot(x, u.values[:, p], lw=0.8, label=f"node {int(ds.node.values[p])}")
+            ax.set_ylabel(f"u_{comp} [m]" + (" (relative)" if dynamic else ""))
+        elif kind == "joint":
+            for j in jpos:
+                ax.plot(x, ds.joint_slip.values[:, j, 0], lw=0.8, label=f"slip, point {j}")
+                ax.plot(x, ds.joint_opening.values[:, j], lw=0.8, ls="--", label=f"opening, point {j}")
+            ax.set_ylabel("joint [m]")
+        else:
+            for name in ("input", "external", "kinetic", "strain", "damping", "joint", "error"):
+                v = ds.get(f"energy_{name}")
+                if v is not None and np.abs(v.values).max() > 0:
+                    ax.plot(x, v.values, lw=0.8, label=name)
+            ax.set_ylabel("energy [J]")
+        ax.set_xlabel(xlabel)
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7, loc="best")
+    fig.suptitle(f"{path.name}: {ds.attrs.get('scene_name', '')} (completed = {ds.attrs.get('completed', '?')})")
+    out = args.output or f"{path.stem}.png"
+    fig.savefig(out, dpi=110)
+    print(f"wrote {out}")
+    return 0
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(prog="masonrydam", description="Nonlinear analysis of jointed masonry and block dams")
     sub = p.add_subparsers(dest="command", required=True)
@@ -127,6 +205,13 @@ def main(argv=None) -> int:
     rs.add_argument("-o", "--output", help="PNG file (default: NAME.png in the current folder)")
     rs.add_argument("--damping", type=float, default=0.05, help="damping ratio of the spectrum (default 0.05)")
     rc.set_defaults(func=_cmd_records)
+    pl = sub.add_parser("plot", help="plot histories from a result file (netCDF) to PNG")
+    pl.add_argument("result", help="result file written by `masonrydam run`")
+    pl.add_argument("--nodes", type=int, nargs="+", help="node indices (default: the node that moves most)")
+    pl.add_argument("--joints", type=int, nargs="+", help="joint point indices (default: the one that slips most)")
+    pl.add_argument("--component", default="x", help="displacement component (default x)")
+    pl.add_argument("-o", "--output", help="PNG file (default: RESULT.png in the current folder)")
+    pl.set_defaults(func=_cmd_plot)
     args = p.parse_args(argv)
     try:
         return args.func(args)

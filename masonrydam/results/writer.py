@@ -4,6 +4,19 @@ The file is created before the first step with an unlimited ``step`` dimension; 
 step is appended and flushed (``sync``), so a run that stops (non-convergence, a mechanism, a kill)
 leaves a readable file with every finished step, marked ``completed = "false"`` with the reason.
 ``xarray.open_dataset`` reads it; every variable carries ``units`` and ``long_name``.
+
+Time histories (scenes with a dynamic stage, ``dynamic=True``): the same unlimited ``step``
+dimension carries static and dynamic steps; ``time`` (s, on ``step``) is the time since the start
+of the first dynamic stage, NaN for static steps, and is listed as an auxiliary coordinate of every
+step variable (``coordinates = "time"``), so that ``ds.where(ds.stage == k, drop=True)
+.swap_dims(step="time")`` gives a stage's history with time as its index. One dimension for all
+steps keeps the static state and the dynamic history in one file with one set of variables, and
+appending is the same for both. Dynamic variables (NaN for static steps): ``velocity`` and
+``acceleration`` relative to the ground, ``acceleration_absolute`` (relative plus ground),
+``ground_acceleration`` (step, component) and the energies ``energy_*`` (J, cumulative since the
+start of the first dynamic stage). Only recorded steps (every ``stride``-th step of a dynamic stage,
+its first and last, and the last converged state before a failure) are written; memory does not
+grow with the record length.
 """
 from __future__ import annotations
 
@@ -16,6 +29,19 @@ import numpy as np
 from .._version import __version__
 
 STATE_FLAGS = {"flag_values": np.array([0, 1, 2], dtype=np.int8), "flag_meanings": "stick slip open"}
+#: energies of a dynamic analysis (J, cumulative since the start of the first dynamic stage)
+ENERGY_VARIABLES = {
+    "input": "work of the ground motion (effective earthquake forces -M iota a_g) on the relative displacements",
+    "external": "work of the constant loads of the static stages (gravity) during the dynamic stages",
+    "kinetic": "change of kinetic energy (relative velocities)",
+    "strain": "change of elastic strain energy of the continuum",
+    "damping": "energy dissipated by viscous (Rayleigh) damping",
+    "joint": "work done on the joints (elastic energy stored plus energy dissipated by slip and opening)",
+    "joint_stored": "change of elastic energy stored in the joints",
+    "joint_dissipated": "energy dissipated in the joints (joint work minus the stored part)",
+    "error": "energy balance error: input + external - (kinetic + strain + damping + joint); numerical "
+             "dissipation of the integrator and the Newton tolerance",
+}
 
 
 class ResultWriter:
@@ -26,9 +52,10 @@ class ResultWriter:
     'point' (n_jp,), 'normal' (n_jp, dim), 'shear_axes' (n_jp, dim-1, dim), 'weight' (n_jp,) (tributary length*thickness or area, m2).
     """
 
-    def __init__(self, path, coords, nodes, joint_points, dim, attrs: dict):
+    def __init__(self, path, coords, nodes, joint_points, dim, attrs: dict, dynamic: bool = False):
         self.path = str(path)
         self.dim = dim
+        self.dynamic = bool(dynamic)
         self.nc = nc = netCDF4.Dataset(self.path, "w", format="NETCDF4")
         comps = ["x", "y", "z"][:dim]
         shear = ["t"] if dim == 2 else ["t1", "t2"]
@@ -81,6 +108,8 @@ class ResultWriter:
         v = self._var("joint_state", "i1", ("step", "joint_point"), "1", "joint state: 0 stick, 1 slip, 2 open")
         v.flag_values = STATE_FLAGS["flag_values"]
         v.flag_meanings = STATE_FLAGS["flag_meanings"]
+        if self.dynamic:
+            self._dynamic_variables()
         nc.Conventions = "CF-1.8"
         nc.title = attrs.get("title", "masonrydam analysis")
         nc.source = f"masonrydam {__version__}"
@@ -95,6 +124,28 @@ class ResultWriter:
         nc.sync()
         self.n = 0
 
+    def _dynamic_variables(self):
+        nc = self.nc
+        v = self._var("time", "f8", ("step",), "s", "time since the start of the first dynamic stage "
+                                                      "(NaN for static steps)", fill_value=np.nan)
+        v.standard_name = "time"
+        v.axis = "T"
+        self._var("velocity", "f8", ("step", "node", "component"), "m/s",
+                  "nodal velocity relative to the ground (supports)", fill_value=np.nan)
+        self._var("acceleration", "f8", ("step", "node", "component"), "m/s2",
+                  "nodal acceleration relative to the ground (supports)", fill_value=np.nan)
+        self._var("acceleration_absolute", "f8", ("step", "node", "component"), "m/s2",
+                  "absolute nodal acceleration (relative acceleration plus ground acceleration)",
+                  fill_value=np.nan)
+        self._var("ground_acceleration", "f8", ("step", "component"), "m/s2",
+                  "ground (support) acceleration of the uniform base excitation", fill_value=np.nan)
+        for name, text in ENERGY_VARIABLES.items():
+            self._var(f"energy_{name}", "f8", ("step",), "J", text, fill_value=np.nan)
+        for name in nc.variables:
+            var = nc[name]
+            if var.dimensions and var.dimensions[0] == "step" and name not in ("step", "time"):
+                var.coordinates = "time"
+
     def _string_coord(self, name, dims, values, long_name):
         v = self.nc.createVariable(name, str, dims)
         for i, s in enumerate(values):
@@ -102,17 +153,32 @@ class ResultWriter:
         v.long_name = long_name
         v.units = "1"
 
-    def _var(self, name, dtype, dims, units, long_name):
-        v = self.nc.createVariable(name, dtype, dims, zlib=False)
+    def _var(self, name, dtype, dims, units, long_name, fill_value=None):
+        v = self.nc.createVariable(name, dtype, dims, zlib=False, fill_value=fill_value)
         v.units = units
         v.long_name = long_name
         return v
 
-    def write_step(self, stage, load_factor, iterations, displacement, reaction, joints):
+    def write_step(self, stage, load_factor, iterations, displacement, reaction, joints, dynamic=None):
         """Append one converged step. displacement, reaction: (n_out, dim);
-        joints: dict opening (n_jp,), slip (n_jp, dim-1), plastic_slip, t_normal, t_shear, state."""
+        joints: dict opening (n_jp,), slip (n_jp, dim-1), plastic_slip, t_normal, t_shear, state;
+        dynamic (time-history files, dynamic steps): dict time (s), velocity, acceleration,
+        acceleration_absolute (n_out, dim), ground_acceleration (dim,), energy (dict name -> J)."""
         k = self.n
         nc = self.nc
+        if self.dynamic:
+            if dynamic is None:
+                nc["time"][k] = np.nan
+            else:
+                nc["time"][k] = dynamic["time"]
+                nc["velocity"][k] = dynamic["velocity"]
+                nc["acceleration"][k] = dynamic["acceleration"]
+                nc["acceleration_absolute"][k] = dynamic["acceleration_absolute"]
+                nc["ground_acceleration"][k] = dynamic["ground_acceleration"]
+                for name in ENERGY_VARIABLES:
+                    nc[f"energy_{name}"][k] = dynamic["energy"][name]
+        elif dynamic is not None:
+            raise ValueError("this writer was created without dynamic=True")
         nc["step"][k] = k
         nc["load_factor"][k] = load_factor
         nc["stage"][k] = stage

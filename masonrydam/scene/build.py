@@ -6,6 +6,7 @@ lists what is simulated; it goes into the run summary and the dataset attributes
 """
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -114,8 +115,118 @@ def _owner_centroids(mesh: Mesh, facets: np.ndarray) -> np.ndarray:
     return out
 
 
-def build_stages(scene: dict, mesh: Mesh, model: Model) -> list[StaticStage]:
+def _synthetic_trace(values, dt, source: str, parameters: dict):
+    """An obspy Trace (m/s2) for a ground motion given in the scene (values or a pulse), with provenance."""
+    import obspy
+    from obspy.core.util import AttribDict
+
+    tr = obspy.Trace(data=np.ascontiguousarray(values, dtype=np.float64))
+    tr.stats.delta = dt
+    tr.stats.masonrydam = AttribDict(quantity="acceleration", units="m/s2", source_file=source,
+                                     format="scene", provenance=[{"step": "define", "parameters": parameters,
+                                                                  "function": "masonrydam.scene.build", "library": "masonrydam"}])
+    return tr
+
+
+def pulse_samples(shape: str, amplitude: float, duration: float, dt: float) -> np.ndarray:
+    """Samples every ``dt`` of a pulse followed by one zero sample.
+
+    rectangular: a zero sample at t = 0 (the structure starts at rest), then ``amplitude`` for
+    ``floor(duration / dt)`` samples and one sample with the remainder, so that the trapezoidal
+    integral of the samples is the impulse ``amplitude * duration``. The linear interpolation of the
+    samples is the pulse from t = dt/2 to dt/2 + duration with its two jumps spread over one dt each
+    (same impulse; the time shift does not change the response). half_sine: ``amplitude sin(pi t / duration)`` for
+    0 <= t <= duration, zero after.
+    """
+    if shape == "rectangular":
+        n = int(math.floor(duration / dt + 1e-9))
+        frac = max(duration / dt - n, 0.0)  # in [0, 1)
+        if n == 0:
+            raise SceneError("ground_motion.pulse.duration", f"the pulse ({duration:g} s) is shorter than dt ({dt:g} s)")
+        # 0, n x amplitude, [frac x amplitude], 0: trapezoidal integral = amplitude (n + frac) dt
+        vals = [0.0] + [amplitude] * n + ([amplitude * frac] if frac > 1e-9 else []) + [0.0]
+        return np.array(vals)
+    n = int(math.ceil(duration / dt - 1e-9))
+    t = np.arange(n + 2) * dt
+    vals = np.where(t <= duration * (1 + 1e-12), amplitude * np.sin(np.pi * np.minimum(t, duration) / duration), 0.0)
+    vals[-1] = 0.0
+    return vals
+
+
+def build_ground_motion(spec: dict, component: int, key: str, stage_dt: float, base_dir: Path | None = None):
+    """A :class:`GroundMotion` from a normalised ground-motion component (record, file, values or pulse),
+    scaled as asked; its ``attrs`` hold the record's provenance (``records.provenance_attrs``)."""
+    from .. import records as rec
+    from ..records import RecordError
+    from ..solvers.dynamic import GroundMotion
+
+    try:
+        src = spec["source"]
+        if src == "record":
+            tr = rec.load_record(spec["record"])
+            name = spec["record"]
+        elif src == "file":
+            path = Path(spec["file"])
+            if not path.is_absolute() and base_dir is not None:
+                path = Path(base_dir) / path
+            st = rec.read_record(path, format=spec["format"], units=spec["units"], dt=spec["dt"])
+            tr = st[0]
+            name = str(spec["file"])
+        elif src == "values":
+            q, unit, factor = rec.parse_units(spec["units"], f"{key}.units")
+            if q != "acceleration":
+                raise SceneError(f"{key}.units", f"must be an acceleration unit (g, m/s2, cm/s2, ...), got {spec['units']!r}")
+            tr = _synthetic_trace(np.asarray(spec["values"]) * factor, spec["dt"], "scene values",
+                                  {"units": spec["units"], "npts": len(spec["values"]), "dt": spec["dt"]})
+            name = "values"
+        else:
+            p = spec["pulse"]
+            dt = spec["dt"] or stage_dt
+            tr = _synthetic_trace(pulse_samples(p["shape"], p["amplitude"], p["duration"], dt), dt,
+                                  f"{p['shape']} pulse", dict(p, dt=dt))
+            name = f"{p['shape']}_pulse"
+        if spec["scale"] is not None:
+            tr = rec.scale(tr, spec["scale"], reason="scene")
+        elif spec["scale_to_pga"] is not None:
+            tr = rec.scale_to_pga(tr, spec["scale_to_pga"], units="m/s2")
+    except RecordError as exc:
+        raise SceneError(key, str(exc)) from None
+    attrs = rec.provenance_attrs(tr, prefix="")
+    return GroundMotion(component, np.asarray(tr.data, dtype=np.float64), float(tr.stats.delta), name, attrs)
+
+
+def dynamic_settings(st: dict, index: int, linear_solver: str = "auto"):
+    """DynamicSettings of a normalised dynamic stage; ``linear_solver``: the scene's ``solver.linear_solver``
+    (an iterative choice applies to the static stages; dynamic stages use a direct solver)."""
+    from ..solvers.dynamic import DynamicSettings
+    from ..solvers.linear import DIRECT_SOLVERS
+    from ..solvers.modal import RayleighDamping
+
+    if linear_solver not in DIRECT_SOLVERS:
+        linear_solver = "auto"
+
+    d = st["damping"]
+    damping = None
+    if d is not None:
+        if "ratio" in d:
+            damping = RayleighDamping.from_frequencies(d["frequencies"][0], d["frequencies"][1], d["ratio"],
+                                                       d["exclude_joints"])
+        else:
+            damping = RayleighDamping(d["alpha"], d["beta"], d["exclude_joints"])
+    return DynamicSettings(integrator=st["integrator"], dt=st["dt"], alpha=st["alpha"], rho_inf=st["rho_inf"],
+                           max_iterations=st["max_iterations"], force_tolerance=st["force_tolerance"],
+                           energy_tolerance=st["energy_tolerance"], max_substeps=st["max_substeps"], mass=st["mass"],
+                           damping=damping, linear_solver=linear_solver, low_rank_max=st["low_rank_max"],
+                           key=f"stages[{index}].")
+
+
+def build_stages(scene: dict, mesh: Mesh, model: Model, base_dir: Path | None = None) -> list:
+    """Stage objects in scene order: :class:`StaticStage` and :class:`~masonrydam.solvers.dynamic.DynamicStage`.
+
+    A dynamic stage keeps the supports and holds the DOFs prescribed by the last static stage at their
+    values (they move with the ground); its ground motion is read and scaled here."""
     from .. import loads as L
+    from ..solvers.dynamic import DynamicStage
 
     dim = mesh.dim
     supports = np.zeros(model.n_dof, dtype=bool)
@@ -125,7 +236,20 @@ def build_stages(scene: dict, mesh: Mesh, model: Model) -> list[StaticStage]:
             supports[nodes * dim + "xyz".index(c)] = True
     stages = []
     weight = None
+    held = np.zeros(model.n_dof, dtype=bool)
     for i, st in enumerate(scene["stages"]):
+        if st["type"] == "dynamic":
+            settings = dynamic_settings(st, i, scene["solver"]["linear_solver"])
+            gms = [build_ground_motion(spec, "xyz".index(c), f"stages[{i}].ground_motion.{c}", st["dt"], base_dir)
+                   for c, spec in st["ground_motion"].items()]
+            if st["steps"] is not None:
+                duration = st["steps"] * st["dt"]
+            elif st["duration"] is not None:
+                duration = st["duration"]
+            else:
+                duration = max(g.duration for g in gms)
+            stages.append(DynamicStage(st["name"], duration, supports | held, gms, settings, st["output"]["stride"]))
+            continue
         force = np.zeros(model.n_dof)
         presc = np.zeros(model.n_dof, dtype=bool)
         incr = np.zeros(model.n_dof)
@@ -157,6 +281,7 @@ def build_stages(scene: dict, mesh: Mesh, model: Model) -> list[StaticStage]:
                     presc[d] = True
                     incr[d] = v
         stages.append(StaticStage(st["name"], st["steps"], force, presc, incr, supports.copy()))
+        held = presc.copy()
     return stages
 
 
@@ -174,10 +299,38 @@ def effects(scene: dict, model: Model) -> list[str]:
         out.append("Mohr-Coulomb joints with slip, opening and re-contact (seed sec. 3.4): " + ", ".join(sorted(set(mc_sets))))
     if lin_sets:
         out.append("linear elastic joints: " + ", ".join(sorted(set(lin_sets))))
-    kinds = {ld["type"] for st in scene["stages"] for ld in st["loads"]}
+    kinds = {ld["type"] for st in scene["stages"] if st["type"] == "static" for ld in st["loads"]}
     facet = "edge" if model.dim == 2 else "face"
     names = {"self_weight": "self-weight", "nodal": "nodal forces", "traction": f"{facet} tractions",
              "pressure": f"{facet} pressures", "displacement": "prescribed displacements (displacement control)"}
     out += [names[k] for k in sorted(kinds)]
-    out.append("static analysis (no inertia, no damping)")
+    dyn = [st for st in scene["stages"] if st["type"] == "dynamic"]
+    if not dyn:
+        out.append("static analysis (no inertia, no damping)")
+        return out
+    integ = {"newmark_average": "Newmark average acceleration", "newmark_linear": "Newmark linear acceleration",
+             "hht": "HHT-alpha", "generalized_alpha": "generalized-alpha", "central_difference": "central difference"}
+    for st in dyn:
+        what = integ[st["integrator"]]
+        if st["integrator"] == "hht":
+            what += f" (alpha {st['alpha']:g})"
+        elif st["integrator"] == "generalized_alpha":
+            what += f" (rho_inf {st['rho_inf']:g})"
+        out.append(f"dynamic stage '{st['name']}': {st['mass']} mass inertia, {what}, dt {st['dt']:g} s")
+        d = st["damping"]
+        if d is None:
+            out.append(f"dynamic stage '{st['name']}': no viscous damping")
+        else:
+            which = "continuum stiffness only (joints excluded)" if d["exclude_joints"] else "continuum and joint stiffness"
+            if "ratio" in d:
+                out.append(f"dynamic stage '{st['name']}': Rayleigh damping {100 * d['ratio']:g} % at "
+                           f"{d['frequencies'][0]:g} and {d['frequencies'][1]:g} Hz, stiffness part on the {which}")
+            else:
+                out.append(f"dynamic stage '{st['name']}': Rayleigh damping alpha {d['alpha']:g} 1/s, beta {d['beta']:g} s, "
+                           f"stiffness part on the {which}")
+        comps = []
+        for c, g in st["ground_motion"].items():
+            src = g.get("record") or g.get("file") or (f"{g['pulse']['shape']} pulse" if "pulse" in g else "values")
+            comps.append(f"{c}: {src}")
+        out.append(f"dynamic stage '{st['name']}': uniform base excitation, relative formulation ({'; '.join(comps)})")
     return out

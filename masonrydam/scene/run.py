@@ -15,12 +15,21 @@ from ..errors import MasonrydamError
 from ..materials import mohr_coulomb as mc
 from ..results.writer import ResultWriter
 from ..solvers.linear import resolve_backend
+from ..solvers.dynamic import DynamicStage
 from ..solvers.static import SolverSettings, StaticSolver
 from .build import build_mesh, build_model, build_stages, effects
 from .scene import as_scene
 
 
 def _output_selection(scene, mesh, model):
+    """Recorded nodes and joint groups: the ``[output]`` section, or the ``output`` of a dynamic stage
+    (which then applies to the whole file)."""
+    scene = dict(scene, output=dict(scene["output"]))
+    for st in scene["stages"]:
+        if st["type"] == "dynamic":
+            for k in ("nodes", "joints"):
+                if st["output"][k] is not None:
+                    scene["output"][k] = st["output"][k]
     sel = scene["output"]["nodes"]
     if sel == "all":
         nodes = np.arange(model.n_nodes)
@@ -105,7 +114,9 @@ def run(scene, output: str | os.PathLike | None = None, progress: bool = False, 
     s = sc.normalized
     mesh = build_mesh(s, sc.base_dir)
     model = build_model(s, mesh)
-    stages = build_stages(s, mesh, model)
+    stages = build_stages(s, mesh, model, sc.base_dir)
+    static_stages = [st for st in stages if not isinstance(st, DynamicStage)]
+    dyn_stages = [st for st in stages if isinstance(st, DynamicStage)]
     settings = SolverSettings(**s["solver"])
     backend = resolve_backend(settings.linear_solver)
     eff = effects(s, model)
@@ -133,7 +144,10 @@ def run(scene, output: str | os.PathLike | None = None, progress: bool = False, 
         "sign_conventions": "joint opening and normal traction positive in tension; slip = top minus bottom along "
                             "the joint tangent (normal rotated -90 deg)",
     }
-    writer = ResultWriter(path, mesh.points, nodes, _joint_points(jgroups, set_names, dim), dim, attrs)
+    if dyn_stages:
+        attrs.update(_dynamic_attrs(stages))
+    writer = ResultWriter(path, mesh.points, nodes, _joint_points(jgroups, set_names, dim), dim, attrs,
+                          dynamic=bool(dyn_stages))
     bar = _Progress(len(stages), progress)
     last_iters = {"n": 0}
 
@@ -145,35 +159,118 @@ def run(scene, output: str | os.PathLike | None = None, progress: bool = False, 
         writer.write_step(si, lam, iters, u.reshape(-1, dim)[nodes], r.reshape(-1, dim)[nodes], _joint_results(jgroups, dim))
 
     solver = StaticSolver(model, settings, on_step=on_step, progress=bar)
+    dyn_solvers = []
     try:
-        solver.run(stages)
+        u = solver.run(static_stages) if static_stages else np.zeros(model.n_dof)
+        if dyn_stages:
+            _run_dynamic(model, static_stages, dyn_stages, stages, u, writer, nodes, jgroups, dim, bar, dyn_solvers)
     except (MasonrydamError, KeyboardInterrupt) as exc:
         bar.close()
-        writer.close(False, f"stopped: {type(exc).__name__}: {exc}", _stats_attrs(solver, t_start))
+        writer.close(False, f"stopped: {type(exc).__name__}: {exc}", _stats_attrs(solver, t_start, dyn_solvers))
         if tmp is not None:
             os.unlink(tmp)
         else:
             exc.add_note(f"results of {writer.n} converged step(s) were kept in {path} (completed = false)")
         raise
     bar.close()
-    stats = _stats_attrs(solver, t_start)
+    stats = _stats_attrs(solver, t_start, dyn_solvers)
     writer.close(True, "completed", stats)
     ds = xr.load_dataset(path)
     if tmp is not None:
         os.unlink(tmp)
     if summary:
-        print_summary(sc, mesh, model, eff, solver, stats, path if tmp is None else None, ds)
+        print_summary(sc, mesh, model, eff, solver, stats, path if tmp is None else None, ds, dyn_solvers=dyn_solvers)
     return ds
 
 
-def _stats_attrs(solver, t_start):
+def _dynamic_attrs(stages) -> dict:
+    """Ground-motion provenance and integrator settings of the dynamic stages, as netCDF attributes."""
+    out = {}
+    for i, st in enumerate(stages):
+        if not isinstance(st, DynamicStage):
+            continue
+        out[f"stage{i}_dynamic_settings"] = json.dumps(st.settings.as_dict(), sort_keys=True)
+        out[f"stage{i}_duration_s"] = float(st.duration)
+        out[f"stage{i}_output_stride"] = int(st.output_stride)
+        for g in st.ground_motion:
+            c = "xyz"[g.component]
+            prefix = f"stage{i}_ground_motion_{c}_"
+            out[prefix + "name"] = g.name
+            out[prefix + "pga_m_s2"] = float(np.max(np.abs(g.values)))
+            for k, v in g.attrs.items():
+                out[prefix + k] = v
+    out["time_history_conventions"] = ("displacement, velocity and acceleration are relative to the ground "
+                                       "(supports); acceleration_absolute = acceleration + ground_acceleration; "
+                                       "time is NaN for static steps")
+    return out
+
+
+def _run_dynamic(model, static_stages, dyn_stages, stages, u, writer, nodes, jgroups, dim, bar, dyn_solvers):
+    """Run the dynamic stages from the static state ``u`` (and the joint state committed in the model)."""
+    from ..solvers.dynamic import DynamicSolver
+    from ..solvers.modal import MassMatrix
+
+    f_static = np.zeros(model.n_dof)
+    for st in static_stages:
+        f_static += st.force
+    masses = {}
+    v = a = energy = None
+    t = 0.0
+    for k, st in enumerate(dyn_stages):
+        si = stages.index(st)
+        lumped = st.settings.mass == "lumped"
+        if lumped not in masses:
+            masses[lumped] = MassMatrix(model, lumped)
+
+        def prog(fraction, si=si):
+            bar(si, fraction)
+
+        ds = DynamicSolver(model, st.settings, mass=masses[lumped], progress=prog)
+        dyn_solvers.append(ds)
+
+        def on_step(rec, si=si):
+            writer.write_step(si, rec["stage_fraction"], rec["iterations"], rec["u"].reshape(-1, dim)[nodes],
+                              rec["reaction"].reshape(-1, dim)[nodes], _joint_results(jgroups, dim),
+                              dynamic={"time": rec["t"], "velocity": rec["v"].reshape(-1, dim)[nodes],
+                                       "acceleration": rec["a"].reshape(-1, dim)[nodes],
+                                       "acceleration_absolute": rec["a_abs"].reshape(-1, dim)[nodes],
+                                       "ground_acceleration": rec["ag"], "energy": rec["energy"]})
+
+        state = ds.run(st, u0=u, v0=v, a0=None, f_static=f_static, equilibrate=(k == 0), t0=t, energy0=energy,
+                       on_step=on_step, record_initial=(k == 0))
+        u, v, t, energy = state.u, state.v, state.t, state.energy
+
+
+def _stats_attrs(solver, t_start, dyn_solvers=()):
     st = solver.stats
-    return {"steps": st.steps, "newton_iterations": st.iterations, "factorizations": st.factorizations,
-            "step_cuts": st.step_cuts, "solve_wall_time_s": round(st.wall_time_s, 4),
-            "total_wall_time_s": round(time.perf_counter() - t_start, 4), "per_stage": json.dumps(st.per_stage)}
+    out = {"steps": st.steps, "newton_iterations": st.iterations, "factorizations": st.factorizations,
+           "step_cuts": st.step_cuts, "solve_wall_time_s": round(st.wall_time_s, 4),
+           "total_wall_time_s": round(time.perf_counter() - t_start, 4), "per_stage": json.dumps(st.per_stage)}
+    if dyn_solvers:
+        d = [x.stats for x in dyn_solvers]
+        steps = sum(x.steps for x in d)
+        wall = sum(x.wall_time_s - x.output_time_s for x in d)
+        out.update({
+            "dynamic_steps": steps, "dynamic_substeps": sum(x.substeps for x in d),
+            "dynamic_newton_iterations": sum(x.iterations for x in d),
+            "dynamic_factorizations": sum(x.factorizations for x in d),
+            "dynamic_exact_reuse_solves": sum(x.exact_solves for x in d),
+            "dynamic_low_rank_solves": sum(x.low_rank_solves for x in d),
+            "dynamic_low_rank_columns": sum(x.low_rank_columns for x in d),
+            "dynamic_max_low_rank": max(x.max_rank for x in d),
+            "dynamic_stabilized_steps": sum(x.stabilized_steps for x in d),
+            "dynamic_wall_time_s": round(wall, 4),
+            "dynamic_output_time_s": round(sum(x.output_time_s for x in d), 4),
+            "dynamic_ms_per_step": round(1e3 * wall / max(steps, 1), 4),
+            "energy_error_max_J": float(max(x.energy_error_max for x in d)),
+            "energy_error_relative": float(max(x.energy_error_relative for x in d)),
+            "static_residual_carried": float(d[0].static_residual),
+            "dynamic_per_stage": json.dumps([p for x in d for p in x.per_stage]),
+        })
+    return out
 
 
-def print_summary(sc, mesh, model, eff, solver, stats, path, ds, file=None):
+def print_summary(sc, mesh, model, eff, solver, stats, path, ds, file=None, dyn_solvers=()):
     file = file or sys.stdout
     n_ip = sum(g.n_elem * g.nip for g in model.igroups)
     types = {}
@@ -195,6 +292,16 @@ def print_summary(sc, mesh, model, eff, solver, stats, path, ds, file=None):
                      f"{ps['step_cuts']} step cuts")
     lines.append(f"solver     : {solver.s.method}, {stats['factorizations']} factorization(s) "
                  f"[{resolve_backend(solver.s.linear_solver)}], {stats['newton_iterations']} iterations in total")
+    for dsol in dyn_solvers:
+        for p in dsol.stats.per_stage:
+            crit = f", dt_crit {p['dt_critical']:.3g} s" if p.get("dt_critical") else ""
+            lines.append(f"dynamic    : {p['stage']}: {p['steps']} steps of {p['dt']:g} s ({p['integrator']}{crit})")
+    if dyn_solvers:
+        lines.append(f"dynamics   : {stats['dynamic_newton_iterations']} iterations, {stats['dynamic_substeps']} "
+                     f"sub-step splits, {stats['dynamic_factorizations']} factorization(s), "
+                     f"{stats['dynamic_low_rank_solves']} low-rank solves, {stats['dynamic_ms_per_step']:.3g} ms/step")
+        lines.append(f"energy     : balance error {stats['energy_error_max_J']:.3g} J "
+                     f"({100 * stats['energy_error_relative']:.3g} % of the largest energy term)")
     if "joint_state" in ds and ds.sizes.get("joint_point", 0):
         last = ds.joint_state.isel(step=-1).values
         lines.append(f"joints end : {int((last == 0).sum())} stick, {int((last == 1).sum())} slip, "

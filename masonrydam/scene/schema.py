@@ -259,6 +259,168 @@ def _selection(value, key):
     raise SceneError(key, f"expected 'all' or a list of set names, got {value!r}")
 
 
+STAGE_TYPES = ("static", "dynamic")
+INTEGRATORS = ("newmark_average", "newmark_linear", "hht", "generalized_alpha", "central_difference")
+PULSE_SHAPES = ("rectangular", "half_sine")
+_DYNAMIC_KEYS = {"name", "type", "steps", "duration", "dt", "integrator", "alpha", "rho_inf", "mass", "damping",
+                 "ground_motion", "output", "max_iterations", "max_substeps", "force_tolerance", "energy_tolerance",
+                 "low_rank_max"}
+
+
+def _number(value, key, minimum=None, maximum=None, open_min=False):
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise SceneError(key, f"expected a number, got {value!r}")
+    v = float(value)
+    if minimum is not None and (v <= minimum if open_min else v < minimum):
+        raise SceneError(key, f"must be {'>' if open_min else '>='} {minimum:g}, got {value!r}")
+    if maximum is not None and v > maximum:
+        raise SceneError(key, f"must be <= {maximum:g}, got {value!r}")
+    return v
+
+
+def _time(value, key):
+    """A time in s (plain number, or a string '<number> s' / '<number> ms')."""
+    if isinstance(value, str):
+        parts = value.split()
+        factor = {"s": 1.0, "ms": 1e-3}.get(parts[-1]) if len(parts) == 2 else None
+        if factor is None:
+            raise SceneError(key, f"cannot read {value!r} as a time; write a number of seconds or e.g. '10 ms'")
+        try:
+            value = float(parts[0]) * factor
+        except ValueError:
+            raise SceneError(key, f"cannot read {value!r} as a time") from None
+    return _number(value, key, 0.0, open_min=True)
+
+
+def _ground_component(d, key):
+    """One ground-motion component: exactly one source (record, file, values, pulse) and an optional
+    scaling (scale or scale_to_pga)."""
+    _check_keys(d, {"record", "file", "format", "units", "dt", "values", "pulse", "scale", "scale_to_pga"}, key)
+    sources = [k for k in ("record", "file", "values", "pulse") if k in d]
+    if len(sources) != 1:
+        raise SceneError(key, "give exactly one of 'record' (a bundled record, `masonrydam records list`), "
+                              "'file' (a record file), 'values' (with 'dt') or 'pulse'")
+    src = sources[0]
+    out = {"source": src}
+    if src == "record":
+        if not isinstance(d["record"], str):
+            raise SceneError(f"{key}.record", f"expected a record name, got {d['record']!r}")
+        for k in ("format", "units", "dt"):
+            if k in d:
+                raise SceneError(f"{key}.{k}", "applies to 'file' and 'values' only (a bundled record knows it)")
+        out["record"] = d["record"]
+    elif src == "file":
+        out["file"] = str(d["file"])
+        out["format"] = None if "format" not in d else str(d["format"])
+        out["units"] = None if "units" not in d else str(d["units"])
+        out["dt"] = None if "dt" not in d else _time(d["dt"], f"{key}.dt")
+    elif src == "values":
+        vals = d["values"]
+        if not isinstance(vals, list) or len(vals) < 2:
+            raise SceneError(f"{key}.values", "expected a list of at least 2 accelerations")
+        out["values"] = [_number(v, f"{key}.values[{j}]") for j, v in enumerate(vals)]
+        if "dt" not in d:
+            raise SceneError(f"{key}.dt", "is required with 'values' (s)")
+        out["dt"] = _time(d["dt"], f"{key}.dt")
+        out["units"] = str(d.get("units", "m/s2"))
+        if "format" in d:
+            raise SceneError(f"{key}.format", "applies to 'file' only")
+    else:
+        p = d["pulse"]
+        pk = f"{key}.pulse"
+        _check_keys(p, {"shape", "amplitude", "duration"}, pk)
+        for req in ("shape", "amplitude", "duration"):
+            if req not in p:
+                raise SceneError(f"{pk}.{req}", "is required")
+        out["pulse"] = {"shape": _choice(p["shape"], PULSE_SHAPES, f"{pk}.shape"),
+                        "amplitude": quantity(p["amplitude"], "acceleration", f"{pk}.amplitude"),
+                        "duration": _time(p["duration"], f"{pk}.duration")}
+        out["dt"] = None if "dt" not in d else _time(d["dt"], f"{key}.dt")
+        for k in ("format", "units"):
+            if k in d:
+                raise SceneError(f"{key}.{k}", "has no meaning for a pulse")
+    if "scale" in d and "scale_to_pga" in d:
+        raise SceneError(f"{key}.scale", "give 'scale' or 'scale_to_pga', not both")
+    out["scale"] = None if "scale" not in d else _number(d["scale"], f"{key}.scale")
+    out["scale_to_pga"] = None if "scale_to_pga" not in d else _positive(d["scale_to_pga"], "acceleration",
+                                                                          f"{key}.scale_to_pga")
+    return out
+
+
+def _dynamic_stage(s, key, dim, index):
+    _check_keys(s, _DYNAMIC_KEYS, key)
+    if "loads" in s:
+        raise SceneError(f"{key}.loads", "a dynamic stage has no loads of its own: the loads of the static stages "
+                                         "stay applied, the excitation is 'ground_motion'")
+    out = {"name": str(s.get("name", f"stage{index + 1}")), "type": "dynamic"}
+    if "dt" not in s:
+        raise SceneError(f"{key}.dt", "is required for a dynamic stage (analysis time step, s)")
+    out["dt"] = _time(s["dt"], f"{key}.dt")
+    if "steps" in s and "duration" in s:
+        raise SceneError(f"{key}.steps", "give 'steps' or 'duration', not both")
+    out["steps"] = _int(s["steps"], f"{key}.steps", 1) if "steps" in s else None
+    out["duration"] = _time(s["duration"], f"{key}.duration") if "duration" in s else None
+    integ = _choice(s.get("integrator", "hht"), INTEGRATORS, f"{key}.integrator")
+    out["integrator"] = integ
+    if "alpha" in s and integ != "hht":
+        raise SceneError(f"{key}.alpha", f"is the HHT parameter; integrator is '{integ}'")
+    if "rho_inf" in s and integ != "generalized_alpha":
+        raise SceneError(f"{key}.rho_inf", f"is the generalized-alpha parameter; integrator is '{integ}'")
+    out["alpha"] = _number(s.get("alpha", -0.1), f"{key}.alpha", -1.0 / 3.0, 0.0)
+    out["rho_inf"] = _number(s.get("rho_inf", 0.8), f"{key}.rho_inf", 0.0, 1.0)
+    out["mass"] = _choice(s.get("mass", "lumped"), ("lumped", "consistent"), f"{key}.mass")
+    if integ == "central_difference" and out["mass"] != "lumped":
+        raise SceneError(f"{key}.mass", "central difference is explicit and needs mass = 'lumped'")
+    out["max_iterations"] = _int(s.get("max_iterations", 25), f"{key}.max_iterations", 1)
+    out["max_substeps"] = _int(s.get("max_substeps", 4), f"{key}.max_substeps", 0)
+    out["low_rank_max"] = _int(s.get("low_rank_max", 256), f"{key}.low_rank_max", 0)
+    for k, default in (("force_tolerance", 1e-6), ("energy_tolerance", 1e-8)):
+        v = s.get(k, default)
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 < v < 1:
+            raise SceneError(f"{key}.{k}", f"must be a number in (0, 1), got {v!r}")
+        out[k] = float(v)
+    damp = s.get("damping")
+    if damp is None:
+        out["damping"] = None
+    else:
+        dk = f"{key}.damping"
+        _check_keys(damp, {"ratio", "frequencies", "alpha", "beta", "exclude_joints"}, dk)
+        by_ratio = "ratio" in damp or "frequencies" in damp
+        by_coef = "alpha" in damp or "beta" in damp
+        if by_ratio == by_coef:
+            raise SceneError(dk, "give 'ratio' and 'frequencies' = [f1, f2] (Hz), or the Rayleigh coefficients "
+                                 "'alpha' (1/s) and 'beta' (s)")
+        d = {"exclude_joints": _bool(damp.get("exclude_joints", True), f"{dk}.exclude_joints")}
+        if by_ratio:
+            if "ratio" not in damp or "frequencies" not in damp:
+                raise SceneError(dk, "'ratio' needs 'frequencies' = [f1, f2] (Hz) and vice versa")
+            d["ratio"] = _number(damp["ratio"], f"{dk}.ratio", 0.0, 0.99)
+            fr = damp["frequencies"]
+            if not isinstance(fr, list) or len(fr) != 2:
+                raise SceneError(f"{dk}.frequencies", f"expected [f1, f2] in Hz, got {fr!r}")
+            f1 = _number(fr[0], f"{dk}.frequencies[0]", 0.0, open_min=True)
+            f2 = _number(fr[1], f"{dk}.frequencies[1]", 0.0, open_min=True)
+            if not f1 < f2:
+                raise SceneError(f"{dk}.frequencies", f"need f1 < f2, got {fr!r}")
+            d["frequencies"] = [f1, f2]
+        else:
+            d["alpha"] = _number(damp.get("alpha", 0.0), f"{dk}.alpha", 0.0)
+            d["beta"] = _number(damp.get("beta", 0.0), f"{dk}.beta", 0.0)
+        out["damping"] = d
+    gm = s.get("ground_motion")
+    if not isinstance(gm, dict) or not gm:
+        raise SceneError(f"{key}.ground_motion", "is required: give at least one component, e.g. "
+                                                 "[stages.ground_motion.x] record = \"elcentro_1940_ns_peknold\"")
+    _check_keys(gm, set(COMPONENT_NAMES[:dim]), f"{key}.ground_motion")
+    out["ground_motion"] = {c: _ground_component(v, f"{key}.ground_motion.{c}") for c, v in gm.items()}
+    o = s.get("output", {})
+    _check_keys(o, {"stride", "nodes", "joints"}, f"{key}.output")
+    out["output"] = {"stride": _int(o.get("stride", 1), f"{key}.output.stride", 1),
+                     "nodes": None if "nodes" not in o else _selection(o["nodes"], f"{key}.output.nodes"),
+                     "joints": None if "joints" not in o else _selection(o["joints"], f"{key}.output.joints")}
+    return out
+
+
 def normalize(raw: dict) -> dict:
     """Validate ``raw`` and return the normalised scene (SI floats, defaults filled)."""
     _check_keys(raw, {"model", "mesh", "materials", "joints", "supports", "stages", "solver", "output"}, "")
@@ -289,8 +451,16 @@ def normalize(raw: dict) -> dict:
     st = []
     for i, s in enumerate(stages):
         key = f"stages[{i}]"
+        if not isinstance(s, dict):
+            raise SceneError(key, f"expected a table, got {type(s).__name__}")
+        kind = _choice(s.get("type", "static"), STAGE_TYPES, f"{key}.type")
+        if kind == "dynamic":
+            st.append(_dynamic_stage(s, key, dim, i))
+            continue
+        if st and st[-1]["type"] == "dynamic":
+            raise SceneError(f"{key}.type", "static stages must come before the dynamic stages (the dynamic "
+                                            "stages continue from the static state)")
         _check_keys(s, {"name", "type", "steps", "loads"}, key)
-        _choice(s.get("type", "static"), ("static",), f"{key}.type")
         loads = s.get("loads", [])
         if not isinstance(loads, list):
             raise SceneError(f"{key}.loads", "expected an array of tables [[stages.loads]]")
@@ -300,6 +470,12 @@ def normalize(raw: dict) -> dict:
     names = [s["name"] for s in st]
     if len(set(names)) != len(names):
         raise SceneError("stages", f"stage names must be unique, got {names}")
+    dyn_out = [(i, x["output"]) for i, x in enumerate(st) if x["type"] == "dynamic"
+               and (x["output"]["nodes"] is not None or x["output"]["joints"] is not None)]
+    for (i, a), (j, b) in zip(dyn_out, dyn_out[1:]):
+        if (a["nodes"], a["joints"]) != (b["nodes"], b["joints"]):
+            raise SceneError(f"stages[{j}].output", f"selects other nodes or joints than stages[{i}].output; the "
+                                                    "result file has one node and joint selection for all stages")
     out_raw = raw.get("output", {})
     _check_keys(out_raw, {"nodes", "joints"}, "output")
     return {

@@ -11,6 +11,15 @@ non-symmetric, so both backends are used as general (unsymmetric) LU solvers.
 Singularity is never silent: SuperLU raises on an exactly singular matrix and PARDISO reports
 perturbed pivots; both are turned into :class:`SingularMatrix`, and every solve is checked for
 non-finite entries and a large relative residual.
+
+Iterative backend ``"amg"``: :class:`~masonrydam.solvers.iterative.AMGSolver`, smoothed-aggregation
+algebraic multigrid (pyamg) with the rigid-body near-nullspace as the preconditioner of CG (or of
+FGMRES for a non-symmetric tangent), solved to a relative residual of 1e-10. :func:`make_solver`
+returns a :class:`Factorization` or an ``AMGSolver`` behind the same interface (``solve(b)``, ``K``,
+``backend``). ``"auto"`` takes AMG for 3D models of ``AUTO_ITERATIVE_MIN_DOF`` equations or more,
+the crossover measured by ``benchmarks/bench_solvers_3d.py`` (docs/performance.md, "Linear solvers in
+3D: direct vs AMG"), and a direct solver otherwise (2D models always: PARDISO won at every size
+measured there).
 """
 from __future__ import annotations
 
@@ -18,7 +27,12 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-LINEAR_SOLVERS = ("auto", "pardiso", "superlu")
+LINEAR_SOLVERS = ("auto", "pardiso", "superlu", "amg")
+DIRECT_SOLVERS = ("pardiso", "superlu")
+
+#: "auto" uses the AMG solver for 3D models with at least this many equations (free DOFs), a direct
+#: solver below (measured crossover, docs/performance.md, "Linear solvers in 3D: direct vs AMG")
+AUTO_ITERATIVE_MIN_DOF = 10**12
 
 
 class SingularMatrix(Exception):
@@ -62,12 +76,59 @@ def _pardiso_available() -> bool:
     return _PARDISO_OK
 
 
-def resolve_backend(name: str) -> str:
+_PYAMG_OK: bool | None = None
+
+
+def _pyamg_available() -> bool:
+    global _PYAMG_OK
+    if _PYAMG_OK is None:
+        try:
+            import pyamg  # noqa: F401
+
+            _PYAMG_OK = True
+        except ImportError:
+            _PYAMG_OK = False
+    return _PYAMG_OK
+
+
+def resolve_backend(name: str, n_dof: int | None = None, dim: int | None = None) -> str:
+    """The backend that ``name`` stands for: ``"auto"`` -> ``"amg"`` for a 3D model (``dim == 3``)
+    with ``n_dof >= AUTO_ITERATIVE_MIN_DOF`` equations (when pyamg is installed), else ``"pardiso"``
+    where it can be loaded, else ``"superlu"``. Without ``n_dof`` and ``dim``, ``"auto"`` is a direct
+    solver."""
     if name not in LINEAR_SOLVERS:
         raise ValueError(f"unknown linear solver {name!r}; use one of {LINEAR_SOLVERS}")
     if name == "auto":
+        if dim == 3 and n_dof is not None and n_dof >= AUTO_ITERATIVE_MIN_DOF and _pyamg_available():
+            return "amg"
         return "pardiso" if _pardiso_available() else "superlu"
+    if name == "amg" and not _pyamg_available():
+        raise ValueError("linear solver 'amg' needs the pyamg package (pip install pyamg)")
     return name
+
+
+def make_solver(K: sp.csr_matrix, backend: str = "auto", near_nullspace: np.ndarray | None = None,
+                residual_check: float = 1e-6, *, dim: int | None = None, dof_coords: np.ndarray | None = None,
+                dof_nodes: np.ndarray | None = None, **amg_options):
+    """A linear solver for K behind one interface: ``solve(b)``, ``K``, ``backend``.
+
+    backend: one of ``LINEAR_SOLVERS``; ``"auto"`` is resolved by :func:`resolve_backend` with the
+    size of K and ``dim`` (or, without ``dim``, the dimension implied by the near-nullspace: 3
+    columns 2D, 6 columns 3D). near_nullspace (n, k), dof_coords (n, dim) and dof_nodes (n,): the
+    rigid-body modes (``masonrydam.solvers.iterative.rigid_body_modes``), the position and the node of
+    each row, used by ``"amg"`` only (the positions find the node pairs of interfaces); amg_options:
+    keyword arguments of :class:`~masonrydam.solvers.iterative.AMGSolver` (``tol``, ``maxiter``, ...).
+
+    Returns a :class:`Factorization` (``"pardiso"``, ``"superlu"``) or an ``AMGSolver`` (``"amg"``).
+    """
+    if dim is None and near_nullspace is not None:
+        dim = {3: 2, 6: 3}.get(np.shape(near_nullspace)[1] if np.ndim(near_nullspace) == 2 else 0)
+    name = resolve_backend(backend, n_dof=K.shape[0], dim=dim)
+    if name == "amg":
+        from .iterative import AMGSolver
+
+        return AMGSolver(K, near_nullspace, residual_check, dof_coords=dof_coords, dof_nodes=dof_nodes, **amg_options)
+    return Factorization(K, name, residual_check)
 
 
 class Factorization:
@@ -77,6 +138,10 @@ class Factorization:
     """
 
     def __init__(self, K: sp.csr_matrix, backend: str = "auto", residual_check: float = 1e-6):
+        if backend not in DIRECT_SOLVERS and backend != "auto":
+            if backend in LINEAR_SOLVERS:
+                raise ValueError(f"Factorization is a direct solver ({DIRECT_SOLVERS}); use make_solver() for {backend!r}")
+            resolve_backend(backend)  # raises: unknown name
         self.backend = resolve_backend(backend)
         self.K = K
         self.residual_check = residual_check

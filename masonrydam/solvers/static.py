@@ -25,7 +25,8 @@ import numpy as np
 
 from ..errors import ConvergenceError, MechanismError, NumericalError
 from .diagnostics import find_free_parts
-from .linear import Factorization, SingularMatrix
+from .iterative import rigid_body_modes
+from .linear import SingularMatrix, make_solver, resolve_backend
 
 #: tangent factor of open joint points in ordinary Newton iterations: a tiny stiffness in the
 #: tangent only (tractions stay zero) so that a block resting on a single contact point does not make
@@ -102,10 +103,25 @@ class StaticSolver:
         if self._fact is not None and self._fact_data is not None and len(self._fact_data) == len(K.data) \
                 and self._fact.K.shape == K.shape and np.array_equal(self._fact_data, K.data):
             return self._fact
-        self._fact = Factorization(K, self.s.linear_solver)
+        self._fact = self._linear_solver(K)
         self._fact_data = K.data.copy()
         self.stats.factorizations += 1
         return self._fact
+
+    def _linear_solver(self, K):
+        """make_solver for K; for the AMG backend with the rigid-body modes, positions and nodes of
+        the free DOFs (computed once per constraint set, only when AMG is used)."""
+        m = self.model
+        backend = resolve_backend(self.s.linear_solver, n_dof=K.shape[0], dim=m.dim)
+        if backend != "amg":
+            return make_solver(K, backend)
+        dm = m.dofmap
+        if getattr(self, "_modes_dofmap", None) is not dm:
+            self._modes = rigid_body_modes(m.coords, dm.free, m.dim)
+            self._dof_nodes = dm.free // m.dim
+            self._modes_dofmap = dm
+        return make_solver(K, backend, near_nullspace=self._modes, dof_coords=m.coords[self._dof_nodes],
+                           dof_nodes=self._dof_nodes)
 
     # -- one step ---------------------------------------------------------------------------------
     def _newton(self, u, f_ext):
@@ -162,7 +178,7 @@ class StaticSolver:
                 seen.add(sig)
             if s.method == "modified_newton":
                 if self._initial is None:
-                    self._initial = Factorization(K, s.linear_solver)
+                    self._initial = self._linear_solver(K)
                     self.stats.factorizations += 1
                 fact = self._initial
             else:

@@ -1,0 +1,115 @@
+"""Seismic benchmark of the issue: a 2D gravity-dam section (Koyna profile, reference problem 5)
+cut by 10 lift joints and a dam-foundation joint, about 7 500 DOF, self-weight then El Centro
+(NGA-West2 RSN6 horizontal component) scaled to a PGA of 0.5 g, 4 000 steps of 0.01 s with nonlinear
+Mohr-Coulomb joints; and the same with every joint linear.
+
+    /work/venv/bin/python benchmarks/bench_koyna_seismic.py [--steps 4000] [--element-size 1.3]
+
+Prints wall time, ms per step, Newton iterations per step, factorizations and the joint states at
+the end, for both runs. Target of the issue: under 5 ms per step for the nonlinear run on one core.
+A benchmark, not a test: it never fails on a slow figure.
+
+Joint data (assumed, typical of concrete lift joints; Bhattacharjee & Leger 1993 use similar
+values): kn = ks = 1e11 Pa/m, cohesion 1 MPa, tensile strength 1 MPa, friction angle 45 deg (a bond
+that is lost for good when a point opens, seed sec. 3.4);
+concrete E = 31.0 GPa, nu = 0.2, rho = 2643 kg/m3 (Chopra & Chakrabarti 1973); rock E = 18 GPa.
+Rayleigh damping 5 % at 3 and 15 Hz on the continuum only (the first mode of the section on rock is
+about 3 Hz).
+"""
+from __future__ import annotations
+
+import os
+
+for _k in ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
+    os.environ[_k] = "1"
+
+import argparse
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+if str(ROOT) not in sys.path:
+    sys.path.insert(0, str(ROOT))
+
+from _common import cpu_model  # noqa: E402
+
+
+def scene(law: str, steps: int, element_size: float) -> dict:
+    mc = {"normal_stiffness": 1e11, "shear_stiffness": 1e11, "friction_angle": 45.0, "cohesion": 1e6,
+          "tensile_strength": 1e6}
+    lin = {"law": "linear", "normal_stiffness": 1e11, "shear_stiffness": 1e11}
+    joint = mc if law == "mohr_coulomb" else lin
+    height = 103.0
+    lifts = [height * k / 11.0 for k in range(1, 11)]  # 10 lift joints
+    return {
+        "model": {"name": f"koyna_{law}", "hypothesis": "plane_strain", "thickness": 1.0},
+        "mesh": {"generator": "gravity_dam_2d",
+                 "parameters": {"preset": "koyna", "lift_heights": lifts, "foundation_width": 140.0,
+                                "foundation_depth": 20.0, "element_size": element_size}},
+        "materials": {"dam": {"youngs_modulus": 31.0e9, "poisson_ratio": 0.2, "density": 2643.0},
+                      "foundation": {"youngs_modulus": 18.0e9, "poisson_ratio": 0.2, "density": 0.0}},
+        "joints": {"lift_joints": joint, "base_joint": joint},
+        "supports": [{"set": "foundation_bottom"}],
+        "stages": [
+            {"name": "gravity", "loads": [{"type": "self_weight"}]},
+            {"name": "el_centro", "type": "dynamic", "dt": 0.01, "steps": steps, "integrator": "hht", "alpha": -0.1,
+             "damping": {"ratio": 0.05, "frequencies": [3.0, 15.0], "exclude_joints": True},
+             "ground_motion": {"x": {"record": "elcentro_1940_ns_ngaw2", "scale_to_pga": "0.5 g"}},
+             "output": {"stride": 10, "nodes": ["crest"]}},
+        ],
+    }
+
+
+def run_one(law, steps, element_size):
+    import masonrydam
+
+    with tempfile.TemporaryDirectory() as tmp:
+        t0 = time.perf_counter()
+        ds = masonrydam.run(scene(law, steps, element_size), output=Path(tmp) / "koyna.nc")
+        wall = time.perf_counter() - t0
+        attrs = dict(ds.attrs)
+        state = ds.joint_state.isel(step=-1).values
+        steps = int(attrs["dynamic_steps"])
+        out = {
+            "wall_s": wall,
+            "dyn_s": float(attrs["dynamic_wall_time_s"]),
+            "ms_per_step": float(attrs["dynamic_ms_per_step"]),
+            "its_per_step": int(attrs["dynamic_newton_iterations"]) / steps,
+            "factorizations": int(attrs["dynamic_factorizations"]),
+            "substeps": int(attrs["dynamic_substeps"]),
+            "low_rank": int(attrs.get("dynamic_low_rank_solves", 0)),
+            "states": np.bincount(state.astype(int), minlength=3).tolist(),
+            "crest_max_ux": float(np.abs(ds.displacement.sel(component="x")).max()),
+        }
+        ds.close()
+    return out
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--steps", type=int, default=4000)
+    ap.add_argument("--element-size", type=float, default=1.45)
+    args = ap.parse_args()
+    from masonrydam.scene.build import build_mesh
+    from masonrydam.scene.scene import Scene
+
+    sc = Scene(scene("linear", 1, args.element_size))
+    mesh = build_mesh(sc.normalized, sc.base_dir)
+    print(f"# Koyna section, El Centro at 0.5 g, {args.steps} steps of 0.01 s ({cpu_model()}, 1 thread)")
+    print(f"model: {mesh.n_nodes * 2} DOF, {mesh.n_elements()} elements, {mesh.n_interfaces()} interfaces "
+          f"({', '.join(f'{j.name} {len(j.cells)}' for j in mesh.joints)})")
+    run_one("linear", 5, args.element_size)  # JIT and numba cache outside the timings
+    for law in ("linear", "mohr_coulomb"):
+        r = run_one(law, args.steps, args.element_size)
+        print(f"\n[{law}] dynamic stage {r['dyn_s']:.1f} s = {r['ms_per_step']:.2f} ms/step; "
+              f"{r['its_per_step']:.2f} Newton iterations/step, {r['factorizations']} factorizations, "
+              f"{r['substeps']} sub-steps, {r['low_rank']} low-rank solves; whole run {r['wall_s']:.1f} s; "
+              f"final joint states stick/slip/open {r['states']}; max |u_x| at the crest {r['crest_max_ux'] * 1e3:.1f} mm")
+
+
+if __name__ == "__main__":
+    main()

@@ -348,8 +348,36 @@ def test_singular_floating_block_raises(pin):
         # and residual
         free = model.dofmap.free
         s = AMGSolver(K, rigid_body_modes(model.coords, free, 2)[:, :2], stagnation_window=30, maxiter=400)
-        with pytest.raises(SingularMatrix, match=r"(stagnated|broke down) after \d+ iterations.*relative residual [0-9.e+-]+"):
+        pattern = r"(stagnated|broke down) after \d+ iterations.*relative residual [0-9.e+-]+"
+        with pytest.raises(SingularMatrix, match=pattern):
             s.solve(b)
+
+
+def test_amg_is_deterministic_and_keeps_the_global_random_state():
+    """pyamg draws random start vectors; the solver seeds them, so a nonlinear run is reproducible,
+    and restores numpy's global generator."""
+    model, K, b, _ = model_system(wall_dict(length=0.4, height=0.2, epu=3))
+    xs = []
+    for seed in (1, 2):
+        np.random.seed(seed)
+        xs.append(amg_for(model, K).solve(b))
+        assert np.random.rand() == np.random.RandomState(seed).rand()
+    assert np.array_equal(xs[0], xs[1])
+
+
+@pytest.mark.parametrize("size", ["one level", "multilevel"])
+def test_amg_does_not_modify_the_matrix(size):
+    """K may share its arrays with the model (Model.evaluate): the solver must not touch them,
+    explicit zeros of the tangent pattern included."""
+    model, K, b, _ = model_system(wall_dict(length=0.4, height=0.2, epu=3))
+    assert (K.data == 0).any(), "the interface pattern stores explicit zeros"
+    before = (K.data.copy(), K.indices.copy(), K.indptr.copy())
+    one = {"max_coarse": 10**6, "tie_threshold": None} if size == "one level" else {}
+    s = amg_for(model, K, **one)
+    assert (s.levels == 1) == (size == "one level")
+    s.solve(b)
+    for a, c in zip(before, (K.data, K.indices, K.indptr)):
+        assert np.array_equal(a, c)
 
 
 def test_non_convergence_and_nan_raise():
@@ -382,8 +410,12 @@ def test_backend_names_and_auto_rule(monkeypatch):
     with pytest.raises(ValueError, match="make_solver"):
         Factorization(sp.identity(3, format="csr"), "amg")
     K = sp.diags([-np.ones(1999), 2.5 * np.ones(2000), -np.ones(1999)], [-1, 0, 1], format="csr")
-    assert isinstance(make_solver(K, "auto", dim=3), AMGSolver)
-    assert isinstance(make_solver(K, "auto", dim=2), Factorization)
+    modes = np.ones((2000, 6))
+    assert isinstance(make_solver(K, "auto", modes, dim=3), AMGSolver)
+    assert isinstance(make_solver(K, "auto", modes), AMGSolver), "6 modes: 3D"
+    assert isinstance(make_solver(K, "auto", dim=3), Factorization), "no near-nullspace: direct"
+    assert isinstance(make_solver(K, "auto", modes[:, :3], dim=2), Factorization)
+    assert isinstance(make_solver(K, "amg"), AMGSolver)
     assert isinstance(make_solver(K, "superlu"), Factorization)
 
 

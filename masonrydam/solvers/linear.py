@@ -16,10 +16,11 @@ Iterative backend ``"amg"``: :class:`~masonrydam.solvers.iterative.AMGSolver`, s
 algebraic multigrid (pyamg) with the rigid-body near-nullspace as the preconditioner of CG (or of
 FGMRES for a non-symmetric tangent), solved to a relative residual of 1e-10. :func:`make_solver`
 returns a :class:`Factorization` or an ``AMGSolver`` behind the same interface (``solve(b)``, ``K``,
-``backend``). ``"auto"`` takes AMG for 3D models of ``AUTO_ITERATIVE_MIN_DOF`` equations or more,
-the crossover measured by ``benchmarks/bench_solvers_3d.py`` (docs/performance.md, "Linear solvers in
-3D: direct vs AMG"), and a direct solver otherwise (2D models always: PARDISO won at every size
-measured there).
+``backend``). ``"auto"`` takes AMG for 3D models of ``AUTO_ITERATIVE_MIN_DOF`` (50 000) equations or
+more, from the crossover measured by ``benchmarks/bench_solvers_3d.py`` (docs/performance.md, "Linear
+solvers in 3D: direct vs AMG"), and a direct solver otherwise; 2D models always get a direct solver
+(PARDISO won at every 2D size measured, up to 197 000 DOFs, and AMG was 6.5x slower than PARDISO on
+the default scene).
 """
 from __future__ import annotations
 
@@ -31,8 +32,12 @@ LINEAR_SOLVERS = ("auto", "pardiso", "superlu", "amg")
 DIRECT_SOLVERS = ("pardiso", "superlu")
 
 #: "auto" uses the AMG solver for 3D models with at least this many equations (free DOFs), a direct
-#: solver below (measured crossover, docs/performance.md, "Linear solvers in 3D: direct vs AMG")
-AUTO_ITERATIVE_MIN_DOF = 10**12
+#: solver below. Measured (docs/performance.md, "Linear solvers in 3D: direct vs AMG"): for one
+#: factorization + one solve AMG overtakes PARDISO at 7 000-10 000 equations on elastic and tied-joint
+#: tangents, but a nonlinear tangent (sliding and open joints) needs 3-5x more iterations and only
+#: breaks even at ~45 000, and a reused factorization is worth 4-6 AMG solves at 27 000-52 000; from
+#: 50 000 on AMG wins on every tangent measured (2-16x, with 2-7x less memory).
+AUTO_ITERATIVE_MIN_DOF = 50_000
 
 
 class SingularMatrix(Exception):
@@ -120,10 +125,12 @@ def make_solver(K: sp.csr_matrix, backend: str = "auto", near_nullspace: np.ndar
     keyword arguments of :class:`~masonrydam.solvers.iterative.AMGSolver` (``tol``, ``maxiter``, ...).
 
     Returns a :class:`Factorization` (``"pardiso"``, ``"superlu"``) or an ``AMGSolver`` (``"amg"``).
+    ``"auto"`` never picks AMG without a near-nullspace (with the constant vector alone it converges
+    badly on elasticity).
     """
     if dim is None and near_nullspace is not None:
         dim = {3: 2, 6: 3}.get(np.shape(near_nullspace)[1] if np.ndim(near_nullspace) == 2 else 0)
-    name = resolve_backend(backend, n_dof=K.shape[0], dim=dim)
+    name = resolve_backend(backend, n_dof=K.shape[0], dim=dim if near_nullspace is not None else None)
     if name == "amg":
         from .iterative import AMGSolver
 
@@ -140,7 +147,8 @@ class Factorization:
     def __init__(self, K: sp.csr_matrix, backend: str = "auto", residual_check: float = 1e-6):
         if backend not in DIRECT_SOLVERS and backend != "auto":
             if backend in LINEAR_SOLVERS:
-                raise ValueError(f"Factorization is a direct solver ({DIRECT_SOLVERS}); use make_solver() for {backend!r}")
+                raise ValueError(f"Factorization is a direct solver ({DIRECT_SOLVERS}); "
+                                 f"use make_solver() for {backend!r}")
             resolve_backend(backend)  # raises: unknown name
         self.backend = resolve_backend(backend)
         self.K = K

@@ -546,6 +546,14 @@ def critical_time_step(K: sp.csr_matrix, mass_diag: np.ndarray | None = None, M:
     return Oc / w, w
 
 
+def _step_end(k: int, n_steps: int, dt: float, duration: float, tau: float) -> tuple[float, float]:
+    """End time and size of step ``k`` (1-based) of a stage: nominal steps use h = dt exactly (the
+    cached effective matrix is keyed by its values); the last step ends at the stage's duration."""
+    t_end = min(k * dt, duration) if k == n_steps else k * dt
+    h = dt if k < n_steps or abs(t_end - tau - dt) <= 1e-9 * dt else t_end - tau
+    return t_end, h
+
+
 class DynamicSolver:
     """Time integration of a :class:`~masonrydam.assembly.model.Model` through a :class:`DynamicStage`.
 
@@ -848,9 +856,7 @@ class DynamicSolver:
         s = self.s
         n_steps = stage.n_steps
         for k in range(1, n_steps + 1):
-            # nominal steps use h = dt exactly (the cached effective matrix is keyed by its values)
-            t_end = min(k * s.dt, stage.duration) if k == n_steps else k * s.dt
-            h = s.dt if k < n_steps or abs(t_end - st.tau - s.dt) <= 1e-9 * s.dt else t_end - st.tau
+            t_end, h = _step_end(k, n_steps, s.dt, stage.duration, st.tau)
             if h <= 1e-9 * s.dt:
                 break
             st = self._advance(stage, st, t_end, h, 0)
@@ -1074,8 +1080,7 @@ class DynamicSolver:
         md = self.mdiag
         n_steps = stage.n_steps
         for k in range(1, n_steps + 1):
-            t_end = min(k * s.dt, stage.duration) if k == n_steps else k * s.dt
-            h = s.dt if k < n_steps or abs(t_end - st.tau - s.dt) <= 1e-9 * s.dt else t_end - st.tau
+            t_end, h = _step_end(k, n_steps, s.dt, stage.duration, st.tau)
             if h <= 1e-9 * s.dt:
                 break
             v_half = st.v[free] + 0.5 * h * st.a[free]

@@ -44,7 +44,7 @@ def _cmd_check(args):
     sc = Scene.from_toml(_scene_arg(args))
     mesh = build_mesh(sc.normalized, sc.base_dir)
     model = build_model(sc.normalized, mesh)
-    build_stages(sc.normalized, mesh, model)
+    build_stages(sc.normalized, mesh, model, sc.base_dir)
     print(f"scene '{sc.name}' is valid: {model.n_nodes} nodes, {model.n_dof} DOFs, "
           f"{mesh.n_elements()} elements, {mesh.n_interfaces()} interfaces")
     for e in effects(sc.normalized, model):

@@ -118,7 +118,7 @@ def run(scene, output: str | os.PathLike | None = None, progress: bool = False, 
     static_stages = [st for st in stages if not isinstance(st, DynamicStage)]
     dyn_stages = [st for st in stages if isinstance(st, DynamicStage)]
     settings = SolverSettings(**s["solver"])
-    backend = resolve_backend(settings.linear_solver)
+    backend = resolve_backend(settings.linear_solver, n_dof=model.n_dof, dim=mesh.dim)
     eff = effects(s, model)
     nodes, jgroups, set_names = _output_selection(s, mesh, model)
     dim = mesh.dim
@@ -291,7 +291,7 @@ def print_summary(sc, mesh, model, eff, solver, stats, path, ds, file=None, dyn_
         lines.append(f"stage      : {ps['stage']}: {ps['steps']} steps, {ps['iterations']} Newton iterations, "
                      f"{ps['step_cuts']} step cuts")
     lines.append(f"solver     : {solver.s.method}, {stats['factorizations']} factorization(s) "
-                 f"[{resolve_backend(solver.s.linear_solver)}], {stats['newton_iterations']} iterations in total")
+                 f"[{resolve_backend(solver.s.linear_solver, n_dof=model.n_dof, dim=model.dim)}], {stats['newton_iterations']} iterations in total")
     for dsol in dyn_solvers:
         for p in dsol.stats.per_stage:
             crit = f", dt_crit {p['dt_critical']:.3g} s" if p.get("dt_critical") else ""

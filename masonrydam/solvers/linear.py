@@ -1,4 +1,4 @@
-"""Sparse direct solvers behind one interface.
+"""Linear solvers behind one interface: sparse direct (PARDISO, SuperLU) and AMG-preconditioned Krylov.
 
 Backends: ``"pardiso"`` (Intel MKL PARDISO through pypardiso, supernodal LU, pinned to one thread for
 reproducibility) and
@@ -18,9 +18,9 @@ FGMRES for a non-symmetric tangent), solved to a relative residual of 1e-10. :fu
 returns a :class:`Factorization` or an ``AMGSolver`` behind the same interface (``solve(b)``, ``K``,
 ``backend``). ``"auto"`` takes AMG for 3D models of ``AUTO_ITERATIVE_MIN_DOF`` (50 000) equations or
 more, from the crossover measured by ``benchmarks/bench_solvers_3d.py`` (docs/performance.md, "Linear
-solvers in 3D: direct vs AMG"), and a direct solver otherwise; 2D models always get a direct solver
-(PARDISO won at every 2D size measured, up to 197 000 DOFs, and AMG was 6.5x slower than PARDISO on
-the default scene).
+solvers in 3D: direct vs AMG"), and a direct solver otherwise. 2D models always get a direct
+solver: 2D fill grows slowly (PARDISO factorizes the 197 000-DOF wall in 1.3 s), and a full run of
+the default scene takes 3.4x longer with AMG.
 """
 from __future__ import annotations
 
@@ -33,10 +33,10 @@ DIRECT_SOLVERS = ("pardiso", "superlu")
 
 #: "auto" uses the AMG solver for 3D models with at least this many equations (free DOFs), a direct
 #: solver below. Measured (docs/performance.md, "Linear solvers in 3D: direct vs AMG"): for one
-#: factorization + one solve AMG overtakes PARDISO at 7 000-10 000 equations on elastic and tied-joint
-#: tangents, but a nonlinear tangent (sliding and open joints) needs 3-5x more iterations and only
-#: breaks even at ~45 000, and a reused factorization is worth 4-6 AMG solves at 27 000-52 000; from
-#: 50 000 on AMG wins on every tangent measured (2-16x, with 2-7x less memory).
+#: factorization + one solve AMG overtakes PARDISO at 7 000-12 000 equations on elastic and tied-joint
+#: tangents, but a nonlinear tangent (sliding and open joints) needs 3-6x more iterations and only
+#: breaks even at ~45 000, and a reused factorization is worth 3.5-6.5 AMG solves at 27 000-52 000;
+#: from 50 000 on AMG wins on every tangent measured (1.9-16x, with 2.7-6.7x less peak memory).
 AUTO_ITERATIVE_MIN_DOF = 50_000
 
 

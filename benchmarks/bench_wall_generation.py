@@ -2,7 +2,6 @@
 alternative that the generators do not use (an OCC boolean fragment of the unit boxes).
 
     /work/venv/bin/python benchmarks/bench_wall_generation.py [--repeats R] [--gmsh-boxes 500]
-                                                              [--with-grid3d-classify]
 
 Cases (each in a fresh subprocess, so imports start cold the same way and the peak resident memory
 is the case's own), Eindhoven bricks 210 x 52 x 100 mm with 10 mm joints (expanded 220 x 62 x 110):
@@ -15,10 +14,7 @@ is the case's own), Eindhoven bricks 210 x 52 x 100 mm with 10 mm joints (expand
   stretcher courses of 2 x 50, header courses of 101), default element size, unit cracks;
 * ``gmsh_fragment``: the gmsh route for comparison: ``--gmsh-boxes`` unit boxes of a stretcher
   wall (20 units per course) added with ``occ.addBox`` and made conformal with one
-  ``occ.fragment`` (gmsh run in try/finally with gmsh.finalize()); no meshing, no interfaces;
-* with ``--with-grid3d-classify``: ``english_grid3d_classify``, the English wall meshed by
-  :func:`generators.grid3d.boxes_to_mesh` classifying the joints itself (its per-pair face
-  selection is O(pairs x faces)); the generator uses :func:`generators.walls3d.mesh_boxes`.
+  ``occ.fragment`` (gmsh run in try/finally with gmsh.finalize()); no meshing, no interfaces.
 
 Printed per case: best wall time of ``--repeats`` calls (first call also shown), peak Python/numpy
 allocations of one call (tracemalloc) and the process's peak resident set size (ru_maxrss, the
@@ -62,19 +58,6 @@ def _units(kw) -> int:
                for c in range(n) for s in course_slots(kw["bond"], c, kw["length"], LU, LU / 2))
 
 
-def _grid3d_classify(**kw):
-    """The English wall through boxes_to_mesh's own joint classification (for comparison)."""
-    from generators import walls3d
-    from generators.grid3d import boxes_to_mesh
-
-    orig = walls3d.mesh_boxes
-    walls3d.mesh_boxes = lambda boxes, size, order, classify: boxes_to_mesh(boxes, size, order, classify)
-    try:
-        return walls3d.masonry_wall_3d(**kw)
-    finally:
-        walls3d.mesh_boxes = orig
-
-
 def gmsh_fragment(n_boxes: int) -> dict:
     """Add the first ``n_boxes`` unit boxes of a 20-unit stretcher wall and fragment them (OCC)."""
     import gmsh
@@ -114,10 +97,7 @@ def run_case(case: str, repeats: int, gmsh_boxes: int) -> dict:
         return r
     from generators.walls3d import masonry_wall_3d
 
-    if case == "english_grid3d_classify":
-        kw, fn = CASES["english_default"], _grid3d_classify
-    else:
-        kw, fn = CASES[case], masonry_wall_3d
+    kw, fn = CASES[case], masonry_wall_3d
     times = []
     for _ in range(repeats):
         t0 = time.perf_counter()
@@ -144,7 +124,6 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--repeats", type=int, default=2)
     ap.add_argument("--gmsh-boxes", type=int, default=500)
-    ap.add_argument("--with-grid3d-classify", action="store_true")
     ap.add_argument("--child", nargs=3, help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.child:
@@ -154,9 +133,8 @@ def main():
     import numpy
 
     print(f"CPU: {cpu_model()}; python {sys.version.split()[0]}, numpy {numpy.__version__}")
-    cases = list(CASES) + (["english_grid3d_classify"] if args.with_grid3d_classify else [])
-    for case in cases:
-        r = subprocess_case(case, args.repeats if case != "english_grid3d_classify" else 1, args.gmsh_boxes)
+    for case in CASES:
+        r = subprocess_case(case, args.repeats, args.gmsh_boxes)
         print(f"\n[{case}] {r['units']} units: {r['element_type']}, {r['nodes']} nodes, {r['elements']} elements, "
               f"{r['interfaces']} interfaces {r['joints']}")
         print(f"  generation: best {r['best_s']:.2f} s of {r['repeats']} (first call {r['first_s']:.2f} s); "

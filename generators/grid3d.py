@@ -159,7 +159,7 @@ def boxes_to_mesh(
     points = points[used]
     for b in blocks:
         b.cells = new_index[b.cells]
-    joint_facets = {k: new_index[np.vstack(v)] for k, v in joint_facets.items()}
+    joint_facets = {k: new_index[np.vstack(joint_facets[k])] for k in sorted(joint_facets)}  # sets in name order
 
     lo_b, hi_b = points.min(axis=0), points.max(axis=0)
     tol = 1e-9 * float((hi_b - lo_b).max())

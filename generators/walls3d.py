@@ -15,7 +15,6 @@ import numbers
 import numpy as np
 
 from masonrydam.errors import SceneError
-from masonrydam.mesh.interfaces import element_facets, insert_interfaces
 
 from .grid3d import Box, boxes_to_mesh
 from .walls import HEADER_BONDS, add_common_sets, check_mesh_options, joint_classifier, wall_parts, wall_spec
@@ -103,60 +102,8 @@ def masonry_wall_3d(
         return cls(a.kind, a.group, b.kind, b.group, axis)
 
     size = element_size if element_size > 0 else min(spec.lu, spec.hu, wu) / elements_per_unit
-    mesh = mesh_boxes(boxes, size, order, classify)
+    mesh = boxes_to_mesh(boxes, size, order, classify)
     return add_common_sets(mesh, spec)
-
-
-def _box_of_points(boxes: list[Box], xyz: np.ndarray) -> np.ndarray:
-    """Index of the box containing each point (points strictly inside a box, e.g. element centroids)."""
-    lo = np.array([b.lo() for b in boxes])
-    hi = np.array([b.hi() for b in boxes])
-    edges = [np.unique(np.round(np.concatenate([lo[:, a], hi[:, a]]), 12)) for a in range(3)]
-    i0 = [np.searchsorted(edges[a], np.round(lo[:, a], 12)) for a in range(3)]
-    i1 = [np.searchsorted(edges[a], np.round(hi[:, a], 12)) for a in range(3)]
-    owner = np.full([len(e) - 1 for e in edges], -1, dtype=np.int64)
-    for k in range(len(boxes)):
-        owner[i0[0][k]:i1[0][k], i0[1][k]:i1[1][k], i0[2][k]:i1[2][k]] = k
-    cell = [np.clip(np.searchsorted(edges[a], xyz[:, a], side="right") - 1, 0, len(edges[a]) - 2) for a in range(3)]
-    return owner[cell[0], cell[1], cell[2]]
-
-
-def mesh_boxes(boxes: list[Box], element_size: float, order: int, classify) -> "Mesh":  # noqa: F821
-    """:func:`generators.grid3d.boxes_to_mesh` with the joints found and classified here.
-
-    boxes_to_mesh classifies each pair of touching boxes and then selects that pair's faces with a
-    mask over all faces of the axis (``faces[inv == p]``): O(pairs x faces), 9.5 s instead of
-    4.3 s for the English-bond wall of 10 050 units of benchmarks/bench_wall_generation.py, 43 s
-    instead of 11 s for one of 30 000 units. Here the boxes are meshed glued (no joints), the faces shared
-    by elements of two different boxes are found once through a sorted facet table, classified
-    per pair of boxes and grouped by joint set with one sort, and the interfaces are inserted by
-    :func:`masonrydam.mesh.interfaces.insert_interfaces`: the same mesh, in a time linear in its size.
-    """
-    mesh = boxes_to_mesh(boxes, element_size=element_size, order=order, classify_joint=lambda a, b, axis: None)
-    pts = mesh.points
-    corners, elem_box, elem_c = [], [], []
-    for b in mesh.blocks:
-        cen = pts[b.cells[:, :8]].mean(axis=1)
-        box = _box_of_points(boxes, cen)
-        for _, local in element_facets(b.type):
-            corners.append(b.cells[:, list(local[:4])])
-            elem_box.append(box)
-            elem_c.append(cen)
-    corners = np.vstack(corners)
-    elem_box = np.concatenate(elem_box)
-    elem_c = np.vstack(elem_c)
-    keys = np.sort(corners, axis=1)
-    if mesh.n_nodes < 2**21:  # three smallest corners identify a face of a conformal hex mesh: one int64
-        code = (keys[:, 0] << 42) | (keys[:, 1] << 21) | keys[:, 2]
-    else:
-        code = np.unique(keys, axis=0, return_inverse=True)[1].ravel()
-    order_ = np.argsort(code, kind="stable")
-    same = code[order_[1:]] == code[order_[:-1]]  # a face is shared by at most two elements
-    first, second = order_[:-1][same], order_[1:][same]
-    diff = elem_box[first] != elem_box[second]
-    first, second = first[diff], second[diff]
-    if not len(first):
-        return mesh
     # axis of the face normal: the coordinate constant over its corners
     axis = np.argmin(np.ptp(pts[corners[first]], axis=1), axis=1)
     rows = np.arange(len(first))

@@ -14,3 +14,45 @@ def cpu_model() -> str:
     except OSError:
         pass
     return platform.processor() or "unknown"
+
+
+class RssSampler:
+    """Samples the resident memory of this process every ``dt`` s in a thread; ``peak`` in MiB after
+    the ``with`` block. With ``limit_bytes``, the process exits (status 3, after printing a
+    ``JSON:{"error": ...}`` line) when its RSS passes the limit, so that a solver whose memory was
+    under-predicted cannot take the machine down."""
+
+    def __init__(self, limit_bytes=None, dt=0.005):
+        import threading
+
+        import psutil
+
+        self.proc = psutil.Process()
+        self.dt, self.limit = dt, limit_bytes
+        self.peak = 0
+        self._stop = threading.Event()
+        self._t = threading.Thread(target=self._run, daemon=True)
+
+    def _run(self):
+        import json
+        import os
+        import time
+
+        while not self._stop.is_set():
+            rss = self.proc.memory_info().rss
+            self.peak = max(self.peak, rss)
+            if self.limit is not None and rss > self.limit:
+                print("JSON:" + json.dumps({"error": f"memory limit: RSS {rss / 2**30:.1f} GiB > "
+                                                     f"{self.limit / 2**30:.1f} GiB, stopped"}), flush=True)
+                os._exit(3)
+            time.sleep(self.dt)
+
+    def __enter__(self):
+        self.peak = self.proc.memory_info().rss
+        self._t.start()
+        return self
+
+    def __exit__(self, *exc):
+        self._stop.set()
+        self._t.join()
+        self.peak = max(self.peak, self.proc.memory_info().rss) / 2**20

@@ -101,7 +101,7 @@ def main():
 
     print(f"CPU: {cpu_model()}; python {sys.version.split()[0]}, numpy {numpy.__version__}, gmsh {gmsh.__version__}")
     size2d, dof, table = find_size_2d(args.dof)
-    print(f"2D Koyna, 10 lifts: element size -> DOF (2 per node, interface copies included):")
+    print("2D Koyna, 10 lifts: element size -> DOF (2 per node, interface copies included):")
     print("  " + ", ".join(f"{s:g} m: {d}" for s, d, _ in table if abs(d - args.dof) < 0.15 * args.dof))
     print(f"  closest to {args.dof} DOF: element_size = {size2d:g} m ({dof} DOF)")
     for case, size in (("2d", size2d), ("3d", args.size3d)):

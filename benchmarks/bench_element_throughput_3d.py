@@ -107,7 +107,7 @@ def main():
     u += 1e-6 * rng.standard_normal(n_dof)
 
     # JIT outside the timings
-    ke = cg.stiffness(mesh.points)
+    cg.stiffness(mesh.points)
     for gs in igroups.values():
         for g in gs:
             g.evaluate(mesh.points, u, True)

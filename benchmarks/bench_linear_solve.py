@@ -44,7 +44,6 @@ import resource
 import subprocess
 import sys
 import tempfile
-import threading
 import time
 from pathlib import Path
 
@@ -68,40 +67,13 @@ MAIN = (4.4, 2.48, 5)
 SWEEP = [(1.0, 0.62, 2), (2.2, 1.24, 2), (2.2, 1.24, 4), (4.4, 2.48, 3), MAIN]
 
 
-from _common import cpu_model  # noqa: E402  (benchmarks/ is sys.path[0] when run as a script)
+from _common import RssSampler, cpu_model  # noqa: E402  (benchmarks/ is sys.path[0] when run as a script)
 
 
 def peak_rss_mib() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # KiB on Linux
 
 
-class RssSampler:
-    """Samples the RSS of this process every ``dt`` s in a thread; ``peak`` in MiB."""
-
-    def __init__(self, dt=0.005):
-        import psutil
-
-        self.proc = psutil.Process()
-        self.dt = dt
-        self.peak = 0
-        self._stop = threading.Event()
-        self._t = threading.Thread(target=self._run, daemon=True)
-
-    def _run(self):
-        while not self._stop.is_set():
-            self.peak = max(self.peak, self.proc.memory_info().rss)
-            time.sleep(self.dt)
-
-    def __enter__(self):
-        self.peak = self.proc.memory_info().rss
-        self._t.start()
-        return self
-
-    def __exit__(self, *exc):
-        self._stop.set()
-        self._t.join()
-        self.peak = max(self.peak, self.proc.memory_info().rss)
-        self.peak /= 2**20
 
 
 def scene_dict(length, height, epu):

@@ -54,7 +54,6 @@ import resource
 import subprocess
 import sys
 import tempfile
-import threading
 import time
 from pathlib import Path
 
@@ -65,7 +64,7 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from _common import cpu_model  # noqa: E402  (benchmarks/ is sys.path[0] when run as a script)
+from _common import RssSampler, cpu_model  # noqa: E402  (benchmarks/ is sys.path[0] when run as a script)
 
 E_BLOCK = 20e9
 NU_BLOCK = 0.2
@@ -309,39 +308,6 @@ def peak_rss_mib() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # KiB on Linux
 
 
-class RssSampler:
-    """Samples the RSS of this process every ``dt`` s in a thread (``peak`` in MiB); exits the
-    process (status 3) when it passes ``limit_bytes``, so that a solver whose memory was
-    under-predicted cannot take the machine down."""
-
-    def __init__(self, limit_bytes, dt=0.005):
-        import psutil
-
-        self.proc = psutil.Process()
-        self.dt, self.limit = dt, limit_bytes
-        self.peak = 0
-        self._stop = threading.Event()
-        self._t = threading.Thread(target=self._run, daemon=True)
-
-    def _run(self):
-        while not self._stop.is_set():
-            rss = self.proc.memory_info().rss
-            self.peak = max(self.peak, rss)
-            if rss > self.limit:
-                print("JSON:" + json.dumps({"error": f"memory limit: RSS {rss / 2**30:.1f} GiB > "
-                                                     f"{self.limit / 2**30:.1f} GiB, stopped"}), flush=True)
-                os._exit(3)
-            time.sleep(self.dt)
-
-    def __enter__(self):
-        self.peak = self.proc.memory_info().rss
-        self._t.start()
-        return self
-
-    def __exit__(self, *exc):
-        self._stop.set()
-        self._t.join()
-        self.peak = max(self.peak, self.proc.memory_info().rss) / 2**20
 
 
 def _warm_up(solver):

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import numbers
 
-import numpy as np
 
 from masonrydam.errors import SceneError
 
@@ -104,21 +103,3 @@ def masonry_wall_3d(
     size = element_size if element_size > 0 else min(spec.lu, spec.hu, wu) / elements_per_unit
     mesh = boxes_to_mesh(boxes, size, order, classify)
     return add_common_sets(mesh, spec)
-    # axis of the face normal: the coordinate constant over its corners
-    axis = np.argmin(np.ptp(pts[corners[first]], axis=1), axis=1)
-    rows = np.arange(len(first))
-    a_low = elem_c[first][rows, axis] < elem_c[second][rows, axis]
-    box_lo = np.where(a_low, elem_box[first], elem_box[second])
-    box_hi = np.where(a_low, elem_box[second], elem_box[first])
-    triples, tinv = np.unique(np.stack([box_lo, box_hi, axis], axis=1), axis=0, return_inverse=True)
-    tinv = tinv.ravel()
-    names = [classify(boxes[lo], boxes[hi], "xyz"[ax]) for lo, hi, ax in triples]
-    set_names = sorted({n for n in names if n})
-    name_idx = np.array([set_names.index(n) if n else -1 for n in names], dtype=np.int64)[tinv]
-    joint_facets = {n: corners[first[name_idx == i]] for i, n in enumerate(set_names)}
-    if not joint_facets:
-        return mesh
-    mesh = insert_interfaces(mesh, joint_facets)
-    for b in mesh.blocks:  # nodes of each material group: after insertion, only the group's own copies
-        mesh.node_sets[f"{b.name}_nodes"] = np.unique(b.cells.ravel())
-    return mesh

@@ -12,7 +12,7 @@ import numpy as np
 
 from ..elements import continuum as ck
 from ..elements import interface as ik
-from ..elements.shapes import ELEMENT_TYPES, shape_functions
+from ..elements.shapes import shape_functions
 from ..errors import STATUS_BAD_GEOMETRY, STATUS_BAD_JACOBIAN, STATUS_NAN, MeshError, NumericalError
 from ..materials import mohr_coulomb as mc
 from ..mesh.model import INTERFACE_FACE_TYPE

@@ -217,6 +217,7 @@ def dynamic_settings(st: dict, index: int, linear_solver: str = "auto"):
                            max_iterations=st["max_iterations"], force_tolerance=st["force_tolerance"],
                            energy_tolerance=st["energy_tolerance"], max_substeps=st["max_substeps"], mass=st["mass"],
                            damping=damping, linear_solver=linear_solver, low_rank_max=st["low_rank_max"],
+                           joint_space=st["joint_space"],
                            key=f"stages[{index}].")
 
 

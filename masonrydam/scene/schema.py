@@ -264,7 +264,7 @@ INTEGRATORS = ("newmark_average", "newmark_linear", "hht", "generalized_alpha", 
 PULSE_SHAPES = ("rectangular", "half_sine")
 _DYNAMIC_KEYS = {"name", "type", "steps", "duration", "dt", "integrator", "alpha", "rho_inf", "mass", "damping",
                  "ground_motion", "output", "max_iterations", "max_substeps", "force_tolerance", "energy_tolerance",
-                 "low_rank_max"}
+                 "low_rank_max", "joint_space"}
 
 
 def _number(value, key, minimum=None, maximum=None, open_min=False):
@@ -374,6 +374,10 @@ def _dynamic_stage(s, key, dim, index):
     out["max_iterations"] = _int(s.get("max_iterations", 25), f"{key}.max_iterations", 1)
     out["max_substeps"] = _int(s.get("max_substeps", 4), f"{key}.max_substeps", 0)
     out["low_rank_max"] = _int(s.get("low_rank_max", 256), f"{key}.low_rank_max", 0)
+    js = s.get("joint_space", "auto")
+    if isinstance(js, bool):
+        js = "on" if js else "off"
+    out["joint_space"] = _choice(js, ("auto", "on", "off"), f"{key}.joint_space")
     for k, default in (("force_tolerance", 1e-6), ("energy_tolerance", 1e-8)):
         v = s.get(k, default)
         if isinstance(v, bool) or not isinstance(v, (int, float)) or not 0 < v < 1:

@@ -149,9 +149,11 @@ import scipy.sparse.linalg as spla
 
 from ..errors import ConvergenceError, NumericalError, SceneError
 from .dynamic_kernels import woodbury_apply, woodbury_factor
+from .joint_space import JOINT_SPACE_MAX, JointSpace, joint_space_size
 from .linear import DIRECT_SOLVERS, Factorization, SingularMatrix, resolve_backend
 from .modal import MassMatrix, RayleighDamping, elastic_joint_full, elastic_tangent_data
 
+JOINT_SPACE_MODES = ("auto", "on", "off")
 INTEGRATORS = ("newmark_average", "newmark_linear", "hht", "generalized_alpha", "central_difference")
 
 #: open-joint tangent factor in dynamics: 0 (consistent; the mass keeps K_eff regular)
@@ -172,6 +174,9 @@ def low_rank_column_budget(n_eq: int) -> int:
 
 #: factorizations of effective matrices kept (the all-stick one of the nominal step included)
 MAX_CACHED = 3
+#: the joint-space Newton converges to this fraction of the step's force tolerance, so that the check
+#: against the full residual, which adds the round-off of two substitutions, passes
+JOINT_SPACE_FORCE_FRACTION = 0.5
 
 
 @dataclass
@@ -185,6 +190,8 @@ class DynamicSettings:
     damping or None; linear_solver: backend of :class:`Factorization`; low_rank_max: largest rank of a
     Woodbury update before refactorizing (0: refactorize whenever the matrix changes);
     stability_safety: fraction of the critical step allowed for conditionally stable schemes;
+    joint_space: "auto" | "on" | "off" - Newton condensed on the nonlinear joints
+    (:mod:`.joint_space`; "auto": when they have at most ``JOINT_SPACE_MAX`` components);
     key: scene key prefix used in error messages (e.g. ``"stages[1]."``).
     """
 
@@ -204,6 +211,7 @@ class DynamicSettings:
     line_search: bool = True
     energy_growth_tolerance: float = 1e-3
     stability_safety: float = 0.9
+    joint_space: str = "auto"
     key: str = ""
 
     def __post_init__(self):
@@ -228,6 +236,8 @@ class DynamicSettings:
             v = getattr(self, name)
             if not 0.0 < v < 1.0:
                 raise SceneError(f"{k}{name}", f"must be in (0, 1), got {v!r}")
+        if self.joint_space not in JOINT_SPACE_MODES:
+            raise SceneError(f"{k}joint_space", f"must be one of {list(JOINT_SPACE_MODES)}, got {self.joint_space!r}")
         if self.linear_solver not in ("auto",) + DIRECT_SOLVERS:
             raise SceneError(f"{k}linear_solver", f"dynamic stages use a direct solver (the fast path reuses and "
                                                   f"updates factorizations): one of {('auto',) + DIRECT_SOLVERS}, "
@@ -352,6 +362,11 @@ class DynamicStats:
     energy_error_relative: float = 0.0
     dt_critical: float | None = None
     static_residual: float = 0.0
+    joint_space_size: int = 0
+    joint_space_setup_s: float = 0.0
+    joint_space_steps: int = 0
+    joint_space_iterations: int = 0
+    joint_space_fallbacks: int = 0
     per_stage: list = field(default_factory=list)
 
     def as_dict(self):
@@ -574,6 +589,7 @@ class DynamicSolver:
         self.stats = DynamicStats()
         self.backend = resolve_backend(settings.linear_solver)
         self._Kj_full = None
+        self.js = None
 
     # ------------------------------------------------------------------------------------------
     def _setup(self, stage):
@@ -775,7 +791,8 @@ class DynamicSolver:
             else:
                 self.eff = EffectiveSolver(m.indptr, m.indices, self.n, self.backend, s.low_rank_max,
                                            max_cached=MAX_CACHED, stats=self.stats)
-                self.eff.factorize(self._elastic_eff(s.dt), pin=True, key=("elastic", s.dt))
+                ref = self.eff.factorize(self._elastic_eff(s.dt), pin=True, key=("elastic", s.dt))
+                self._setup_joint_space(ref)
                 st = self._run_implicit(stage, st)
         finally:
             m.set_open_tangent(1e-6)  # the static solver's regularisation (solvers.static.OPEN_TANGENT_REGULAR)
@@ -783,6 +800,21 @@ class DynamicSolver:
         self.stats.per_stage.append({"stage": stage.name, "steps": stage.n_steps, "dt": s.dt,
                                      "integrator": s.integrator, "dt_critical": dtc})
         return DynamicState(st.t, st.u, st.v, st.a, st.energy)
+
+    def _setup_joint_space(self, ref):
+        """Condense the nominal step on the nonlinear joints (:mod:`.joint_space`) if the settings and
+        the size allow; sets ``self.js`` (None when off)."""
+        self.js = None
+        s, m = self.s, self.model
+        if s.joint_space == "off" or not m.nonlinear:
+            return
+        size = joint_space_size(m)
+        if s.joint_space == "auto" and size > JOINT_SPACE_MAX:
+            return
+        t0 = time.perf_counter()
+        self.js = JointSpace(m, ref.fact)
+        self.stats.joint_space_size = size
+        self.stats.joint_space_setup_s += time.perf_counter() - t0
 
     # ------------------------------------------------------------------------------------------
     def _record_energy(self, st, prev):
@@ -936,6 +968,29 @@ class DynamicSolver:
         try:
             R, a1, v1, ma_norm = residual(u, f_int)
             r0 = float(np.linalg.norm(R))
+            if self.js is not None and h == s.dt:
+                # condensed on the joints (module .joint_space): the step's solution from one or two
+                # substitutions; verified below against the full residual like any Newton iterate
+                ref = max(ma_norm, float(np.linalg.norm(f_int[free])), p1_norm, 1e-30)
+                try:
+                    u_js, its, converged, why = self.js.solve_step(u, R, JOINT_SPACE_FORCE_FRACTION * s.force_tolerance * ref)
+                except FloatingPointError:
+                    u_js, its, converged = None, 0, False
+                self.stats.joint_space_iterations += its
+                self._iters_since_record += its
+                if u_js is not None:
+                    # go on from the joint-space solution (or its last iterate): the loop below accepts
+                    # it at once when the full residual is within tolerance, and otherwise iterates on
+                    f_j, _ = m.evaluate(u_js, want_tangent=False)
+                    u, f_int, Kdata = u_js, f_j, None
+                    hint[0] = True
+                    R, a1, v1, ma_norm = residual(u, f_int)
+                    ref = max(ma_norm, float(np.linalg.norm(f_int[free])), p1_norm, 1e-30)
+                    converged = converged and float(np.linalg.norm(R)) <= s.force_tolerance * ref
+                if converged:
+                    self.stats.joint_space_steps += 1
+                else:
+                    self.stats.joint_space_fallbacks += 1
             while True:
                 rn = float(np.linalg.norm(R))
                 ref = max(ma_norm, float(np.linalg.norm(f_int[free])), p1_norm, r0 if it > 0 else 0.0, 1e-30)

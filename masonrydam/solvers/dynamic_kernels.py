@@ -27,6 +27,68 @@ STATUS_SINGULAR = 4
 
 
 @numba.njit(cache=True)
+def lu_factor_inplace(A, piv):
+    """LU factors of the square matrix ``A`` in place (unit lower L below the diagonal, U on and above),
+    partial pivoting with the row swaps in ``piv`` (Golub & Van Loan, *Matrix Computations*, 4th ed.
+    2013, Alg. 3.4.1). Returns STATUS_OK, STATUS_SINGULAR (a pivot below 1e-14 x max|A|) or STATUS_NAN."""
+    m = A.shape[0]
+    scale = 0.0
+    for i in range(m):
+        for j in range(m):
+            a = abs(A[i, j])
+            if a > scale:
+                scale = a
+    if not (scale < np.inf):
+        return STATUS_NAN
+    tiny = 1e-14 * scale
+    for col in range(m):
+        p = col
+        best = abs(A[col, col])
+        for r in range(col + 1, m):
+            a = abs(A[r, col])
+            if a > best:
+                best = a
+                p = r
+        if not (best > tiny):
+            return STATUS_SINGULAR
+        piv[col] = p
+        if p != col:
+            for j in range(m):
+                t = A[col, j]
+                A[col, j] = A[p, j]
+                A[p, j] = t
+        d = A[col, col]
+        for r in range(col + 1, m):
+            f = A[r, col] / d
+            A[r, col] = f
+            if f != 0.0:
+                for j in range(col + 1, m):
+                    A[r, j] -= f * A[col, j]
+    return STATUS_OK
+
+
+@numba.njit(cache=True)
+def lu_solve_inplace(A, piv, w):
+    """Solve with the factors of :func:`lu_factor_inplace`; ``w`` is the right-hand side on entry and
+    the solution on exit."""
+    m = A.shape[0]
+    for col in range(m):
+        p = piv[col]
+        if p != col:
+            t = w[col]
+            w[col] = w[p]
+            w[p] = t
+        wc = w[col]
+        for r in range(col + 1, m):
+            w[r] -= A[r, col] * wc
+    for col in range(m - 1, -1, -1):
+        acc = w[col]
+        for j in range(col + 1, m):
+            acc -= A[col, j] * w[j]
+        w[col] = acc / A[col, col]
+
+
+@numba.njit(cache=True)
 def woodbury_factor(ZT, J, e_row, e_col, e_val, S, piv):
     """LU factors (partial pivoting, in place in ``S``, row swaps in ``piv``) of the capacitance matrix
     ``I + E Z_JJ``; returns STATUS_OK, STATUS_SINGULAR or STATUS_NAN."""
@@ -41,39 +103,7 @@ def woodbury_factor(ZT, J, e_row, e_col, e_val, S, piv):
         jc = J[e_col[k]]
         for i in range(m):
             S[r, i] += v * ZT[i, jc]
-    scale = 0.0
-    for i in range(m):
-        for j in range(m):
-            a = abs(S[i, j])
-            if a > scale:
-                scale = a
-    if not (scale < np.inf):
-        return STATUS_NAN
-    tiny = 1e-14 * scale
-    for col in range(m):
-        p = col
-        best = abs(S[col, col])
-        for r in range(col + 1, m):
-            a = abs(S[r, col])
-            if a > best:
-                best = a
-                p = r
-        if not (best > tiny):
-            return STATUS_SINGULAR
-        piv[col] = p
-        if p != col:
-            for j in range(m):
-                t = S[col, j]
-                S[col, j] = S[p, j]
-                S[p, j] = t
-        d = S[col, col]
-        for r in range(col + 1, m):
-            f = S[r, col] / d
-            S[r, col] = f
-            if f != 0.0:
-                for j in range(col + 1, m):
-                    S[r, j] -= f * S[col, j]
-    return STATUS_OK
+    return lu_factor_inplace(S, piv)
 
 
 @numba.njit(cache=True)
@@ -85,20 +115,7 @@ def woodbury_apply(ZT, J, e_row, e_col, e_val, S, piv, y, w, x):
         w[i] = 0.0
     for k in range(e_val.shape[0]):
         w[e_row[k]] += e_val[k] * y[J[e_col[k]]]
-    for col in range(m):  # forward: apply the row swaps and L
-        p = piv[col]
-        if p != col:
-            t = w[col]
-            w[col] = w[p]
-            w[p] = t
-        wc = w[col]
-        for r in range(col + 1, m):
-            w[r] -= S[r, col] * wc
-    for col in range(m - 1, -1, -1):
-        acc = w[col]
-        for j in range(col + 1, m):
-            acc -= S[col, j] * w[j]
-        w[col] = acc / S[col, col]
+    lu_solve_inplace(S, piv, w)
     for j in range(n):
         x[j] = y[j]
     for i in range(m):

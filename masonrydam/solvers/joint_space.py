@@ -1,0 +1,322 @@
+"""Joint-space Newton: the implicit step condensed on the relative displacements of the nonlinear joints.
+
+Why. In a jointed model whose blocks are linear elastic the only nonlinearity of a time step sits in
+the joint law, at the ``P`` integration points of the nonlinear joint sets. With the reference
+effective matrix ``K_ref = K_continuum + B^T W D0 B + c_m M + c_c C`` (every joint point sticking, the
+matrix the dynamic solver factorizes once per step size) the internal forces of the joints are
+
+    f_joint = B^T W t(delta) = B^T W D0 B u + B^T q(delta),   q = W (t(delta) - D0 delta),
+
+with ``delta = B u`` the local relative displacements (seed eqs. 1-6 and 10; ``B`` (m, n_dof),
+``m = P dim``), ``W`` the tributary areas and ``D0 = diag(ks, [ks,] kn)`` (seed eq. 11). ``q`` vanishes
+for an elastic point and is constant while a point sticks (``-w ks s_p``). The step residual is then
+affine in ``u`` apart from ``q``, and eliminating ``u`` (static condensation of the linear part on the
+joint unknowns; Wriggers, *Computational Contact Mechanics*, 2nd ed. 2006, sec. 6.5 and 9.4 uses the
+same reduction for contact) leaves
+
+    F(delta) = delta - delta_y + S (q(delta) - q_n) = 0,     S = B K_ref^-1 B^T  (m x m, m/N),
+
+with ``y = u_n - K_ref^-1 R(u_n)`` (one substitution: the elastic predictor), ``delta_y = B y`` and
+``q_n = q(delta_n)`` from the committed state. Newton on ``F`` costs no factorization and no
+substitution: its matrix ``I + S Qt`` (``Qt = dq/d delta``, zero at sticking points) is block
+lower-triangular, so only the ``dim x |A|`` components of the points ``A`` that slide or are open
+need a dense LU; the others follow by one product. When ``delta`` has converged the displacements are
+``u = y - K_ref^-1 B^T (q - q_n)`` (a second substitution, skipped when no point left the elastic
+state, i.e. ``q = q_n``). A step whose joints all stick therefore costs one substitution, like a
+linear step; a step with sliding or opening points costs two substitutions plus small dense work,
+whatever the number of state changes during its iterations.
+
+Cost of the set-up: ``m`` substitutions for ``S`` (done in blocks of columns) and ``8 m^2`` bytes.
+:func:`joint_space_size` counts ``m``; the dynamic solver uses this path for a scene whose nonlinear
+joints have at most :data:`JOINT_SPACE_MAX` components (``joint_space = "auto"``) and only at the
+nominal step size (sub-steps take the general Newton path with its own factorizations).
+
+Iteration control: the joint law is non-smooth; a state pattern that comes back (cycling between
+open and closed) switches open points to their initial stiffness in the iteration matrix and
+latches bonds broken in the step, as the general path does; after :data:`MAX_JOINT_SPACE_ITERATIONS`
+the step is handed to the general Newton path from the last committed state. The result is always
+checked by the caller against the full residual of the step.
+"""
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..errors import STATUS_OK
+from ..materials import mohr_coulomb as mc
+from .joint_space_kernels import (capacitance_factor, joint_points_evaluate, joint_space_correction,
+                                  joint_space_residual)
+
+#: largest number of joint components (points x dim) condensed by ``joint_space = "auto"``: the dense
+#: flexibility takes 8 m^2 bytes (288 MB at 6 000) and m substitutions to set up
+JOINT_SPACE_MAX = 6000
+#: Newton iterations in joint space before the step is handed to the general path
+MAX_JOINT_SPACE_ITERATIONS = 25
+#: iterations with the initial (elastic) stiffness at every point that follow a Newton phase that did
+#: not converge: a stress-transfer fixed point (Zienkiewicz, Valliappan & King 1968) that needs no
+#: factorization, converges linearly and does not cycle
+MAX_INITIAL_STIFFNESS_ITERATIONS = 60
+#: state changes of a point within a step after which it keeps its initial stiffness in the iteration matrix
+FLIPS_BEFORE_INITIAL_TANGENT = 3
+#: step lengths tried by the backtracking line search, in order
+LINE_SEARCH_STEPS = (1.0, 0.5, 0.25)
+#: columns of ``K_ref^-1 B^T`` computed per multi-right-hand-side substitution while setting up S
+_COLUMN_BLOCK = 256
+import os
+_DEBUG = bool(os.environ.get("JS_DEBUG"))
+
+
+def joint_space_size(model) -> int:
+    """Number of joint unknowns ``m`` (points x dim) of the nonlinear joint sets of ``model``."""
+    return sum(g.n_elem * g.nip * model.dim for g in model.igroups if g.nonlinear)
+
+
+def joint_operator(model) -> tuple[sp.csr_matrix, np.ndarray, np.ndarray, np.ndarray]:
+    """``(B, weight, params_table, param_index)`` of the nonlinear joint sets of ``model``.
+
+    B : CSR (m, n_dof): local relative displacement ``delta = B u`` (m) at every point, rows
+        ``(point * dim + component)``, points in group order then element-major (the order of the
+        groups' ``(n_elem, nip)`` state arrays), components ``[s1, (s2,) n]``; entries
+        ``+-N_a(xi_ip) R[c, k]`` (top +, bottom -; seed eqs. 4-6, 10, as in
+        :func:`~masonrydam.elements.interface.interface_evaluate`).
+    weight : (P,) tributary area ``j w h`` (m^2; 2D: length x thickness).
+    params_table : (n_sets, N_JOINT_PARAMS), param_index : (P,) int64 — the law parameters per point.
+    """
+    dim = model.dim
+    rows, cols, vals, weights, tables, index = [], [], [], [], [], []
+    off_row, off_tab = 0, 0
+    for g in (g for g in model.igroups if g.nonlinear):
+        ne, nip, ns = g.n_elem, g.nip, g.N.shape[1]
+        # coef[e, ip, c, a, k] = N[ip, a] * R[e, ip, c, k]
+        coef = g.N[None, :, None, :, None] * g.frame[:, :, :, None, :]
+        r = off_row + np.arange(ne * nip * dim).reshape(ne, nip, dim)
+        r = np.broadcast_to(r[:, :, :, None, None], coef.shape)
+        bot = g.conn[:, :ns][:, None, None, :, None] * dim + np.arange(dim)[None, None, None, None, :]
+        top = g.conn[:, ns:][:, None, None, :, None] * dim + np.arange(dim)[None, None, None, None, :]
+        bot = np.broadcast_to(bot, coef.shape)
+        top = np.broadcast_to(top, coef.shape)
+        rows += [r.ravel(), r.ravel()]
+        cols += [top.ravel(), bot.ravel()]
+        vals += [coef.ravel(), -coef.ravel()]
+        weights.append((g.jw * g.thickness[:, None]).ravel())
+        tables.append(g.params_table)
+        index.append(np.repeat(g.param_index, nip) + off_tab)
+        off_row += ne * nip * dim
+        off_tab += len(g.params_table)
+    B = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                      shape=(off_row, model.n_dof))
+    B.sum_duplicates()
+    B.eliminate_zeros()
+    return (B, np.ascontiguousarray(np.concatenate(weights)), np.ascontiguousarray(np.concatenate(tables)),
+            np.ascontiguousarray(np.concatenate(index), dtype=np.int64))
+
+
+class JointSpace:
+    """The condensed joint-space system of one reference factorization (one step size).
+
+    model : the :class:`~masonrydam.assembly.model.Model` (constraints set); factorization : an object
+    with ``solve(b)`` for ``K_ref`` on the free DOFs (a vector or an (n_eq, k) block).
+    """
+
+    def __init__(self, model, factorization):
+        self.model = model
+        self.dim = dim = model.dim
+        self.groups = [g for g in model.igroups if g.nonlinear]
+        self.B, self.weight, params, self.param_index = joint_operator(model)
+        self.params_table = params.copy()  # own copy: the open-tangent factor is not used here
+        self.m = m = self.B.shape[0]
+        self.n_points = m // dim
+        free = model.dofmap.free
+        self.fact = factorization
+        Bf_T = self.B[:, free].T.tocsc()  # (n_eq, m)
+        # ST[j] = column j of S = B_f K_ref^-1 B_f^T (K_ref is symmetric, so S is too; ST is kept as
+        # the transpose anyway, so that nothing depends on it)
+        self.ST = np.empty((m, m))
+        Bf = self.B[:, free].tocsr()
+        for j0 in range(0, m, _COLUMN_BLOCK):
+            j1 = min(m, j0 + _COLUMN_BLOCK)
+            X = np.asarray(factorization.solve(Bf_T[:, j0:j1].toarray(order="F"))).reshape(len(free), j1 - j0)
+            self.ST[j0:j1] = (Bf @ X).T
+        self.Bf_T = Bf_T.tocsr()
+        P, ns = self.n_points, mc.N_JOINT_STATE
+        self.base = np.zeros((P, ns))
+        self.trial = np.zeros((P, ns))
+        self.traction = np.zeros((P, dim))
+        self.q = np.zeros((P, dim))
+        self.qt = np.zeros((P, dim, dim))
+        self.codes = np.zeros(P, dtype=np.int8)
+        self.info = np.zeros(1, dtype=np.int64)
+        self.F = np.zeros(m)
+        self.step = np.zeros(m)
+        self.J = np.zeros((0, 0))
+        self.piv = np.zeros(0, dtype=np.int64)
+        self.z = np.zeros(0)
+        self._lu_key = None
+        #: dense LU factorizations of capacitance matrices so far (a statistic)
+        self.factorizations = 0
+        self.params_table[:, mc.P_OPEN_TANGENT] = 0.0
+        k0 = np.empty((P, dim))
+        k0[:] = self.params_table[self.param_index, mc.P_KS][:, None]
+        k0[:, -1] = self.params_table[self.param_index, mc.P_KN]
+        #: (m,) N/m: elastic stiffness times area of every component (a displacement error to a force)
+        self.wk = (k0 * self.weight[:, None]).ravel()
+
+    # ------------------------------------------------------------------------------------------
+    def _load_base(self):
+        k = 0
+        for g in self.groups:
+            n = g.n_elem * g.nip
+            self.base[k:k + n] = g.state_base.reshape(n, -1)
+            k += n
+
+    def _store_latched_bonds(self):
+        col, k = mc.S_BOND_BROKEN, 0
+        for g in self.groups:
+            n = g.n_elem * g.nip
+            gb = g.state_base.reshape(n, -1)
+            gb[:, col] = np.maximum(gb[:, col], self.base[k:k + n, col])
+            k += n
+
+    def _evaluate(self, delta):
+        st = joint_points_evaluate(self.params_table, self.param_index, self.weight, delta.reshape(-1, self.dim),
+                                   self.base, self.trial, self.traction, self.q, self.qt, self.codes, self.info)
+        if st != STATUS_OK:
+            raise FloatingPointError(f"joint point {int(self.info[0])} returned status {st}")
+
+    def _error(self, delta, delta_y, q_n):
+        """Force error ``|W D0 F|`` (N) of the condensed residual at ``delta`` (law already evaluated)."""
+        dq = (self.q - q_n).ravel()
+        changed = np.flatnonzero((dq != 0.0).reshape(-1, self.dim).any(axis=1)).astype(np.int64)
+        st = joint_space_residual(self.ST, delta, delta_y, dq, changed, self.dim, self.F)
+        if st != STATUS_OK:
+            raise FloatingPointError("NaN in the joint-space residual")
+        return float(np.linalg.norm(self.wk * self.F)), len(changed)
+
+    def _line_search(self, delta, delta_y, q_n, err):
+        """``delta += lam * step`` with the first ``lam`` of :data:`LINE_SEARCH_STEPS` that does not raise the
+        force error ``err``, else the best of them (backtracking on a non-smooth law: a full step can
+        cross many stick/slip/open switches; each try costs a law pass and no substitution)."""
+        delta_old = delta.copy()
+        best = None
+        for lam in LINE_SEARCH_STEPS:
+            np.add(delta_old, lam * self.step, out=delta)
+            self._evaluate(delta)
+            e_try = self._error(delta, delta_y, q_n)[0]
+            if best is None or e_try < best[0]:
+                best = (e_try, lam)
+            if e_try <= err:
+                return
+        if best[1] != lam:
+            np.add(delta_old, best[1] * self.step, out=delta)
+            self._evaluate(delta)
+
+    def _work(self, na):
+        if self.J.shape[0] < na:
+            size = max(na, 2 * self.J.shape[0], 16)
+            self.J = np.zeros((size, size))
+            self.piv = np.zeros(size, dtype=np.int64)
+            self.z = np.zeros(size)
+            self._lu_key = None
+
+    def _state_key(self):
+        """Per point: state code and the sign of the first shear traction (a friction direction that
+        flips is a state change too)."""
+        return (2 * self.codes + (self.traction[:, 0] > 0.0)).astype(np.int8)
+
+    def solve_step(self, u_n, R_n, force_tolerance):
+        """Solve one step in joint space.
+
+        u_n : (n_dof,) m — start of the step (committed state); R_n : (n_eq,) N — the step's residual
+        at ``u_n``; force_tolerance : N — bound on the joint force error ``|W D0 F|``.
+        Returns ``(u, iterations, converged, why)``: u (n_dof,) m - the last iterate when the iteration
+        did not converge within its limits (``why`` says how far it got; the caller goes on from it
+        with the general Newton path) - or None after a singular matrix or NaN (the groups' states
+        are then untouched). The bonds latched broken in the step are written to the groups'
+        ``state_base`` whenever u is returned.
+
+        Iteration control. Newton with the consistent tangent and a backtracking line search on the
+        force error. Points whose state (code or friction direction) has changed
+        :data:`FLIPS_BEFORE_INITIAL_TANGENT` times in the step get their initial (elastic) stiffness
+        in the iteration matrix for the rest of it, and a state pattern that comes back switches every
+        open point to it and latches broken bonds: the residual is never changed, only the
+        iteration matrix, so the converged state is the same, reached linearly instead of by cycling
+        (the static solver's remedy, Zienkiewicz, Valliappan & King 1968, applied per point)."""
+        dim, free, P = self.dim, self.model.dofmap.free, self.n_points
+        self._load_base()
+        # elastic predictor y = u_n - K_ref^-1 R_n
+        u_y = u_n.copy()
+        u_y[free] -= self.fact.solve(R_n)
+        delta_n = self.B @ u_n
+        delta_y = self.B @ u_y
+        self._evaluate(delta_n)
+        q_n = self.q.copy()
+        delta = delta_y.copy()
+        self._evaluate(delta)
+        if np.array_equal(self.q, q_n):
+            return u_y, 0, True, ""  # every point kept its elastic state: the predictor is the solution
+        flips = np.zeros(P, dtype=np.int64)
+        initial = np.zeros(P, dtype=bool)
+        seen, prev_sig, prev_key, stabilized, same = set(), None, None, False, 0
+        it, why = 0, ""
+        while True:
+            err, n_changed = self._error(delta, delta_y, q_n)
+            key = self._state_key()
+            sig = key.tobytes()
+            if _DEBUG:
+                print(f"  it {it} err {err:.3g} tol {force_tolerance:.3g} slip {(self.codes == 1).sum()} "
+                      f"open {(self.codes == 2).sum()} initial {initial.sum()} stab {stabilized} changed {n_changed}")
+            if err <= force_tolerance:
+                break
+            if it >= MAX_JOINT_SPACE_ITERATIONS + MAX_INITIAL_STIFFNESS_ITERATIONS:
+                why = (f"joint-space iteration: force error {err:.3g} N after {it} iterations "
+                       f"({MAX_JOINT_SPACE_ITERATIONS} Newton, then initial stiffness)")
+                break
+            fixed_point = it >= MAX_JOINT_SPACE_ITERATIONS
+            if prev_key is not None:
+                changed_state = key != prev_key
+                same = 0 if changed_state.any() else same + 1
+                if same >= 2 and (initial.any() or stabilized):
+                    # the pattern has settled: the consistent tangent again (quadratic convergence;
+                    # the initial stiffness converges only linearly)
+                    initial[:] = False
+                    flips[:] = 0
+                    stabilized = False
+                    seen = set()
+                else:
+                    flips += changed_state
+                    initial |= flips >= FLIPS_BEFORE_INITIAL_TANGENT
+            if not stabilized and sig != prev_sig and sig in seen:
+                stabilized = True
+                broken = self.trial[:, mc.S_BOND_BROKEN] != 0
+                self.base[broken, mc.S_BOND_BROKEN] = 1.0
+                self._evaluate(delta)
+                err, n_changed = self._error(delta, delta_y, q_n)
+            seen.add(sig)
+            prev_sig, prev_key = sig, key
+            qt = self.qt.reshape(P * dim, dim)
+            if stabilized:
+                self.qt[self.codes == mc.OPEN] = 0.0
+            self.qt[initial] = 0.0
+            if fixed_point:
+                self.qt[:] = 0.0
+            rows = np.flatnonzero(qt.any(axis=1)).astype(np.int64)
+            self._work(len(rows))
+            lu_key = rows.tobytes() + qt[rows].tobytes()
+            if lu_key != self._lu_key:
+                self._lu_key = None
+                if capacitance_factor(self.ST, rows, self.qt, self.J, self.piv) != STATUS_OK:
+                    return None, it, False, f"singular joint-space iteration matrix ({len(rows)} active components)"
+                self._lu_key = lu_key
+                self.factorizations += 1
+            st = joint_space_correction(self.ST, self.F, rows, self.qt, self.J, self.piv, self.z, self.step)
+            it += 1
+            if st != STATUS_OK:
+                return None, it, False, "NaN in the joint-space correction"
+            self._line_search(delta, delta_y, q_n, err)
+        dq = (self.q - q_n).ravel()
+        u = u_y
+        if dq.any():
+            u = u_y.copy()
+            u[free] -= self.fact.solve(self.Bf_T @ dq)
+        self._store_latched_bonds()
+        return u, it, not why, why

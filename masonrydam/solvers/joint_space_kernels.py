@@ -1,0 +1,148 @@
+"""Numba kernels of the joint-space (condensed) Newton solver, :mod:`masonrydam.solvers.joint_space`.
+
+Notation (see that module): the ``P`` joint integration points of the nonlinear joint sets, each with
+``dim`` local relative-displacement components, give ``m = P * dim`` joint unknowns ``delta``
+(local frame, m). ``ST`` (m, m) is the transpose of the joint flexibility ``S = B K_ref^-1 B^T`` (m/N),
+stored so that a column of ``S`` is a contiguous row of ``ST``. ``q`` (P, dim) is the joint force
+correction ``w (t - D0 delta)`` (N) and ``qt`` (P, dim, dim) its derivative ``w (C - D0)`` (N/m), with
+``w`` the point's tributary area (m^2), ``D0 = diag(ks, [ks,] kn)`` and ``t``, ``C`` the traction and
+tangent of the joint law.
+
+All kernels are single-threaded and deterministic (docs/architecture.md) and return a status code;
+the dense LU is written out here for the reason given in :mod:`.dynamic_kernels` (a multi-threaded
+BLAS is slower for these small systems and not bitwise reproducible).
+"""
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from ..errors import STATUS_NAN, STATUS_OK
+from ..materials.mohr_coulomb import P_KN, P_KS, S_CODE, S_PLASTIC_SLIP, STICK, mohr_coulomb_update
+from .dynamic_kernels import STATUS_SINGULAR, lu_factor_inplace, lu_solve_inplace  # noqa: F401
+
+@numba.njit(cache=True)
+def joint_points_evaluate(params_table, param_index, weight, delta, state_base, state_trial, traction, q, qt,
+                          codes, info):
+    """Joint law at every point for the local relative displacements ``delta`` (P, dim), from
+    ``state_base`` (P, N_JOINT_STATE; read only) into ``state_trial`` and ``traction`` (P, dim).
+
+    Writes ``q`` (P, dim) N, ``qt`` (P, dim, dim) N/m and the state ``codes`` (P,) int8. A sticking point
+    has ``qt = 0`` and ``q = -w ks s_p`` (shear), 0 (normal) - written from the plastic slip, not as the
+    difference ``w (t - D0 delta)``, so that it is exactly the same in every iteration and step while
+    the point sticks (its correction then never enters the condensed system). Returns STATUS_OK, or
+    STATUS_NAN with the point in ``info[0]``."""
+    n_pts = delta.shape[0]
+    dim = delta.shape[1]
+    tangent = np.zeros((dim, dim))
+    for p in range(n_pts):
+        par = params_table[param_index[p]]
+        st = mohr_coulomb_update(par, delta[p], state_base[p], state_trial[p], traction[p], tangent)
+        if st != STATUS_OK:
+            info[0] = p
+            return st
+        code = int(state_trial[p, S_CODE])
+        codes[p] = code
+        w = weight[p]
+        ks = par[P_KS]
+        kn = par[P_KN]
+        if code == STICK:
+            for c in range(dim - 1):
+                q[p, c] = -w * ks * state_trial[p, S_PLASTIC_SLIP + c]
+            q[p, dim - 1] = 0.0
+            for c in range(dim):
+                for d in range(dim):
+                    qt[p, c, d] = 0.0
+            continue
+        for c in range(dim):
+            k0 = kn if c == dim - 1 else ks
+            q[p, c] = w * (traction[p, c] - k0 * delta[p, c])
+            for d in range(dim):
+                qt[p, c, d] = w * tangent[c, d]
+            qt[p, c, c] -= w * k0
+        for c in range(dim):
+            if not (abs(q[p, c]) < np.inf):
+                info[0] = p
+                return STATUS_NAN
+    return STATUS_OK
+
+
+@numba.njit(cache=True)
+def joint_space_residual(ST, delta, delta_y, dq, changed, dim, F):
+    """``F = delta - delta_y + S dq`` with ``dq`` nonzero only at the points listed in ``changed``;
+    ``delta``, ``delta_y``, ``dq``, ``F`` flat (m,), ``dim`` components per point. Returns STATUS_OK
+    or STATUS_NAN."""
+    m = F.shape[0]
+    for i in range(m):
+        F[i] = delta[i] - delta_y[i]
+    for k in range(changed.shape[0]):
+        p = changed[k]
+        for c in range(dim):
+            j = p * dim + c
+            v = dq[j]
+            if v != 0.0:
+                row = ST[j]
+                for i in range(m):
+                    F[i] += row[i] * v
+    for i in range(m):
+        if not (abs(F[i]) < np.inf):
+            return STATUS_NAN
+    return STATUS_OK
+
+
+@numba.njit(cache=True)
+def capacitance_factor(ST, rows, qt, J, piv):
+    """LU factors (in ``J[:na, :na]``, ``na = len(rows)``) of the capacitance matrix ``I + Qt_a S_:a``.
+
+    ``rows`` (na,) int64 are the flat components ``p * dim + c`` whose row of ``Qt`` is not zero (a point
+    that slides without hardening has a zero normal row, so in 2D it adds one row, not two);
+    ``J[i, j] = delta_ij + sum_d qt[p_i, c_i, d] S[(p_i, d), rows_j]``. Returns the status of
+    :func:`lu_factor_inplace`."""
+    dim = qt.shape[1]
+    na = rows.shape[0]
+    A = J[:na, :na]
+    for i in range(na):
+        p = rows[i] // dim
+        c = rows[i] % dim
+        for j in range(na):
+            rj = ST[rows[j]]
+            acc = 0.0
+            for d in range(dim):
+                acc += qt[p, c, d] * rj[p * dim + d]
+            A[i, j] = acc
+        A[i, i] += 1.0
+    return lu_factor_inplace(A, piv[:na])
+
+
+@numba.njit(cache=True)
+def joint_space_correction(ST, F, rows, qt, J, piv, z, step):
+    """Newton correction ``D`` of the condensed system ``delta + S q(delta) = const``, written to ``step`` (m,).
+
+    With ``z = Qt_a D`` on the components ``rows`` where ``Qt`` has a nonzero row (the other
+    components of ``Qt D`` vanish): ``D = -F - S_:a z`` and ``(I + Qt_a S_:a) z = -Qt_a F``, solved with
+    the factors of :func:`capacitance_factor` in ``J``, ``piv``; ``z`` (>= na) is work space.
+    Returns STATUS_OK or STATUS_NAN."""
+    m = F.shape[0]
+    dim = qt.shape[1]
+    na = rows.shape[0]
+    w = z[:na]
+    for i in range(na):
+        p = rows[i] // dim
+        c = rows[i] % dim
+        acc = 0.0
+        for d in range(dim):
+            acc += qt[p, c, d] * F[p * dim + d]
+        w[i] = -acc
+    lu_solve_inplace(J[:na, :na], piv[:na], w)
+    for i in range(m):
+        step[i] = -F[i]
+    for j in range(na):
+        v = w[j]
+        if v != 0.0:
+            row = ST[rows[j]]
+            for i in range(m):
+                step[i] -= row[i] * v
+    for i in range(m):
+        if not (abs(step[i]) < np.inf):
+            return STATUS_NAN
+    return STATUS_OK

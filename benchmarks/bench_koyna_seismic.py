@@ -64,12 +64,14 @@ def scene(law: str, steps: int, element_size: float) -> dict:
     }
 
 
-def run_one(law, steps, element_size):
+def run_one(law, steps, element_size, joint_space="auto"):
     import masonrydam
 
+    sc = scene(law, steps, element_size)
+    sc["stages"][1]["joint_space"] = joint_space
     with tempfile.TemporaryDirectory() as tmp:
         t0 = time.perf_counter()
-        ds = masonrydam.run(scene(law, steps, element_size), output=Path(tmp) / "koyna.nc")
+        ds = masonrydam.run(sc, output=Path(tmp) / "koyna.nc")
         wall = time.perf_counter() - t0
         attrs = dict(ds.attrs)
         state = ds.joint_state.isel(step=-1).values
@@ -82,6 +84,12 @@ def run_one(law, steps, element_size):
             "factorizations": int(attrs["dynamic_factorizations"]),
             "substeps": int(attrs["dynamic_substeps"]),
             "low_rank": int(attrs.get("dynamic_low_rank_solves", 0)),
+            "js_size": int(attrs.get("dynamic_joint_space_size", 0)),
+            "js_setup": float(attrs.get("dynamic_joint_space_setup_s", 0.0)),
+            "js_steps": int(attrs.get("dynamic_joint_space_steps", 0)),
+            "js_its": int(attrs.get("dynamic_joint_space_iterations", 0)),
+            "js_lu": int(attrs.get("dynamic_joint_space_dense_factorizations", 0)),
+            "js_fallbacks": int(attrs.get("dynamic_joint_space_fallbacks", 0)),
             "states": np.bincount(state.astype(int), minlength=3).tolist(),
             "crest_max_ux": float(np.abs(ds.displacement.sel(component="x")).max()),
         }
@@ -93,6 +101,8 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--steps", type=int, default=4000)
     ap.add_argument("--element-size", type=float, default=1.45)
+    ap.add_argument("--joint-space", nargs="+", default=["auto", "off"], choices=["auto", "on", "off"],
+                    help="joint-space settings of the nonlinear runs (default: auto, then off for comparison)")
     args = ap.parse_args()
     from masonrydam.scene.build import build_mesh
     from masonrydam.scene.scene import Scene
@@ -103,13 +113,21 @@ def main():
     print(f"model: {mesh.n_nodes * 2} DOF, {mesh.n_elements()} elements, {mesh.n_interfaces()} interfaces "
           f"({', '.join(f'{j.name} {len(j.cells)}' for j in mesh.joints)})")
     run_one("linear", 5, args.element_size)  # JIT and numba cache outside the timings
-    for law in ("linear", "mohr_coulomb"):
-        r = run_one(law, args.steps, args.element_size)
-        print(f"\n[{law}] dynamic stage {r['dyn_s']:.1f} s = {r['ms_per_step']:.2f} ms/step; "
-              f"{r['its_per_step']:.2f} Newton iterations/step, {r['factorizations']} factorizations, "
+    run_one("mohr_coulomb", 5, args.element_size)
+    runs = [("linear", "auto")] + [("mohr_coulomb", js) for js in args.joint_space]
+    for law, js in runs:
+        r = run_one(law, args.steps, args.element_size, js)
+        name = law if law == "linear" else f"{law}, joint_space = {js}"
+        print(f"\n[{name}] dynamic stage {r['dyn_s']:.1f} s = {r['ms_per_step']:.2f} ms/step; "
+              f"{r['its_per_step']:.2f} general Newton iterations/step, {r['factorizations']} factorizations, "
               f"{r['substeps']} sub-steps, {r['low_rank']} low-rank solves; whole run {r['wall_s']:.1f} s; "
               f"final joint states stick/slip/open {r['states']}; max |u_x| at the crest {r['crest_max_ux'] * 1e3:.1f} mm")
-
+        if r["js_size"]:
+            per_step = 1e3 * (r["dyn_s"] - r["js_setup"]) / max(args.steps, 1)
+            print(f"  joint space: {r['js_size']} unknowns, set-up {r['js_setup']:.2f} s (included above; without it "
+                  f"{per_step:.2f} ms/step); {r['js_steps']} steps solved "
+                  f"there, {r['js_its'] / max(r['js_steps'] + r['js_fallbacks'], 1):.2f} iterations/step, "
+                  f"{r['js_lu']} dense LU, {r['js_fallbacks']} steps finished by the general path")
 
 if __name__ == "__main__":
     main()

@@ -263,6 +263,7 @@ def _stats_attrs(solver, t_start, dyn_solvers=()):
             "dynamic_joint_space_steps": sum(x.joint_space_steps for x in d),
             "dynamic_joint_space_iterations": sum(x.joint_space_iterations for x in d),
             "dynamic_joint_space_fallbacks": sum(x.joint_space_fallbacks for x in d),
+            "dynamic_joint_space_dense_factorizations": sum(x.joint_space_dense_factorizations for x in d),
             "dynamic_joint_space_setup_s": round(sum(x.joint_space_setup_s for x in d), 4),
             "dynamic_wall_time_s": round(wall, 4),
             "dynamic_output_time_s": round(sum(x.output_time_s for x in d), 4),
@@ -305,6 +306,15 @@ def print_summary(sc, mesh, model, eff, solver, stats, path, ds, file=None, dyn_
         lines.append(f"dynamics   : {stats['dynamic_newton_iterations']} iterations, {stats['dynamic_substeps']} "
                      f"sub-step splits, {stats['dynamic_factorizations']} factorization(s), "
                      f"{stats['dynamic_low_rank_solves']} low-rank solves, {stats['dynamic_ms_per_step']:.3g} ms/step")
+        if stats["dynamic_joint_space_size"]:
+            lines.append(f"joint space: {stats['dynamic_joint_space_size']} joint unknowns condensed (set-up "
+                         f"{stats['dynamic_joint_space_setup_s']:.3g} s); {stats['dynamic_joint_space_steps']} steps "
+                         f"solved there in {stats['dynamic_joint_space_iterations']} iterations "
+                         f"({stats['dynamic_joint_space_dense_factorizations']} dense LU), "
+                         f"{stats['dynamic_joint_space_fallbacks']} finished by the general path")
+        else:
+            lines.append("joint space: off (no nonlinear joints, an explicit scheme, joint_space = 'off', or more "
+                         "joint unknowns than the 'auto' limit)")
         lines.append(f"energy     : balance error {stats['energy_error_max_J']:.3g} J "
                      f"({100 * stats['energy_error_relative']:.3g} % of the largest energy term)")
     if "joint_state" in ds and ds.sizes.get("joint_point", 0):

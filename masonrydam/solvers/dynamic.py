@@ -367,6 +367,7 @@ class DynamicStats:
     joint_space_steps: int = 0
     joint_space_iterations: int = 0
     joint_space_fallbacks: int = 0
+    joint_space_dense_factorizations: int = 0
     per_stage: list = field(default_factory=list)
 
     def as_dict(self):
@@ -793,7 +794,11 @@ class DynamicSolver:
                                            max_cached=MAX_CACHED, stats=self.stats)
                 ref = self.eff.factorize(self._elastic_eff(s.dt), pin=True, key=("elastic", s.dt))
                 self._setup_joint_space(ref)
-                st = self._run_implicit(stage, st)
+                try:
+                    st = self._run_implicit(stage, st)
+                finally:
+                    if self.js is not None:
+                        self.stats.joint_space_dense_factorizations += self.js.factorizations
         finally:
             m.set_open_tangent(1e-6)  # the static solver's regularisation (solvers.static.OPEN_TANGENT_REGULAR)
             self.stats.wall_time_s += time.perf_counter() - t_wall

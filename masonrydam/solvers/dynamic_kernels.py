@@ -72,12 +72,15 @@ def lu_solve_inplace(A, piv, w):
     """Solve with the factors of :func:`lu_factor_inplace`; ``w`` is the right-hand side on entry and
     the solution on exit."""
     m = A.shape[0]
+    # the factorization swaps whole rows (multipliers included, as LAPACK's getrf does), so
+    # P A = L U with P the product of all the swaps: apply them all to w first, then solve L
     for col in range(m):
         p = piv[col]
         if p != col:
             t = w[col]
             w[col] = w[p]
             w[p] = t
+    for col in range(m):
         wc = w[col]
         for r in range(col + 1, m):
             w[r] -= A[r, col] * wc

@@ -11,31 +11,34 @@ with ``delta = B u`` the local relative displacements (seed eqs. 1-6 and 10; ``B
 ``m = P dim``), ``W`` the tributary areas and ``D0 = diag(ks, [ks,] kn)`` (seed eq. 11). ``q`` vanishes
 for an elastic point and is constant while a point sticks (``-w ks s_p``). The step residual is then
 affine in ``u`` apart from ``q``, and eliminating ``u`` (static condensation of the linear part on the
-joint unknowns; Wriggers, *Computational Contact Mechanics*, 2nd ed. 2006, sec. 6.5 and 9.4 uses the
-same reduction for contact) leaves
+joint unknowns, the flexibility formulation of contact problems of Francavilla & Zienkiewicz 1975,
+IJNME 9:913-924) leaves
 
     F(delta) = delta - delta_y + S (q(delta) - q_n) = 0,     S = B K_ref^-1 B^T  (m x m, m/N),
 
 with ``y = u_n - K_ref^-1 R(u_n)`` (one substitution: the elastic predictor), ``delta_y = B y`` and
-``q_n = q(delta_n)`` from the committed state. Newton on ``F`` costs no factorization and no
-substitution: its matrix ``I + S Qt`` (``Qt = dq/d delta``, zero at sticking points) is block
-lower-triangular, so only the ``dim x |A|`` components of the points ``A`` that slide or are open
-need a dense LU; the others follow by one product. When ``delta`` has converged the displacements are
-``u = y - K_ref^-1 B^T (q - q_n)`` (a second substitution, skipped when no point left the elastic
-state, i.e. ``q = q_n``). A step whose joints all stick therefore costs one substitution, like a
-linear step; a step with sliding or opening points costs two substitutions plus small dense work,
-whatever the number of state changes during its iterations.
+``q_n = q(delta_n)`` from the committed state. Newton on ``F`` needs no sparse factorization and no
+substitution: with ``Qt = dq/d delta`` (block diagonal, zero at sticking points) and ``z = Qt D`` on
+the ``na`` components where ``Qt`` has a nonzero row (two per open point, one per point sliding
+without hardening in 2D), the correction is ``D = -F - S_:a z`` with ``(I + Qt_a S_:a) z = -Qt_a F``:
+one dense LU of size ``na``, kept while the active rows and their values repeat. When ``delta`` has
+converged the displacements are ``u = y - K_ref^-1 B^T (q - q_n)`` (a second substitution, skipped
+when no point left its elastic state, i.e. ``q = q_n``). A step whose joints all stick therefore
+costs one substitution, like a linear step; a step with sliding or opening points costs two
+substitutions plus the dense work, whatever the number of iterations.
 
 Cost of the set-up: ``m`` substitutions for ``S`` (done in blocks of columns) and ``8 m^2`` bytes.
 :func:`joint_space_size` counts ``m``; the dynamic solver uses this path for a scene whose nonlinear
 joints have at most :data:`JOINT_SPACE_MAX` components (``joint_space = "auto"``) and only at the
 nominal step size (sub-steps take the general Newton path with its own factorizations).
 
-Iteration control: the joint law is non-smooth; a state pattern that comes back (cycling between
-open and closed) switches open points to their initial stiffness in the iteration matrix and
-latches bonds broken in the step, as the general path does; after :data:`MAX_JOINT_SPACE_ITERATIONS`
-the step is handed to the general Newton path from the last committed state. The result is always
-checked by the caller against the full residual of the step.
+Iteration control (the joint law is non-smooth; see :meth:`JointSpace.solve_step`): Newton with a
+backtracking line search; points whose state keeps changing get their initial stiffness in the
+iteration matrix until the pattern settles; a pattern that comes back does the same for every open
+point and latches broken bonds (the general path's remedy); after
+:data:`MAX_JOINT_SPACE_ITERATIONS` Newton iterations, initial-stiffness iterations. A step not
+converged within these limits goes on in the general Newton path from the last iterate. Every result
+is checked by the caller against the full residual of the step.
 """
 from __future__ import annotations
 
@@ -50,7 +53,7 @@ from .joint_space_kernels import (capacitance_factor, joint_points_evaluate, joi
 #: largest number of joint components (points x dim) condensed by ``joint_space = "auto"``: the dense
 #: flexibility takes 8 m^2 bytes (288 MB at 6 000) and m substitutions to set up
 JOINT_SPACE_MAX = 6000
-#: Newton iterations in joint space before the step is handed to the general path
+#: Newton iterations in joint space before the initial-stiffness iterations
 MAX_JOINT_SPACE_ITERATIONS = 25
 #: iterations with the initial (elastic) stiffness at every point that follow a Newton phase that did
 #: not converge: a stress-transfer fixed point (Zienkiewicz, Valliappan & King 1968) that needs no
@@ -62,8 +65,6 @@ FLIPS_BEFORE_INITIAL_TANGENT = 3
 LINE_SEARCH_STEPS = (1.0, 0.5, 0.25)
 #: columns of ``K_ref^-1 B^T`` computed per multi-right-hand-side substitution while setting up S
 _COLUMN_BLOCK = 256
-import os
-_DEBUG = bool(os.environ.get("JS_DEBUG"))
 
 
 def joint_space_size(model) -> int:
@@ -190,7 +191,7 @@ class JointSpace:
         st = joint_space_residual(self.ST, delta, delta_y, dq, changed, self.dim, self.F)
         if st != STATUS_OK:
             raise FloatingPointError("NaN in the joint-space residual")
-        return float(np.linalg.norm(self.wk * self.F)), len(changed)
+        return float(np.linalg.norm(self.wk * self.F))
 
     def _line_search(self, delta, delta_y, q_n, err):
         """``delta += lam * step`` with the first ``lam`` of :data:`LINE_SEARCH_STEPS` that does not raise the
@@ -201,7 +202,7 @@ class JointSpace:
         for lam in LINE_SEARCH_STEPS:
             np.add(delta_old, lam * self.step, out=delta)
             self._evaluate(delta)
-            e_try = self._error(delta, delta_y, q_n)[0]
+            e_try = self._error(delta, delta_y, q_n)
             if best is None or e_try < best[0]:
                 best = (e_try, lam)
             if e_try <= err:
@@ -259,12 +260,9 @@ class JointSpace:
         seen, prev_sig, prev_key, stabilized, same = set(), None, None, False, 0
         it, why = 0, ""
         while True:
-            err, n_changed = self._error(delta, delta_y, q_n)
+            err = self._error(delta, delta_y, q_n)
             key = self._state_key()
             sig = key.tobytes()
-            if _DEBUG:
-                print(f"  it {it} err {err:.3g} tol {force_tolerance:.3g} slip {(self.codes == 1).sum()} "
-                      f"open {(self.codes == 2).sum()} initial {initial.sum()} stab {stabilized} changed {n_changed}")
             if err <= force_tolerance:
                 break
             if it >= MAX_JOINT_SPACE_ITERATIONS + MAX_INITIAL_STIFFNESS_ITERATIONS:
@@ -290,7 +288,7 @@ class JointSpace:
                 broken = self.trial[:, mc.S_BOND_BROKEN] != 0
                 self.base[broken, mc.S_BOND_BROKEN] = 1.0
                 self._evaluate(delta)
-                err, n_changed = self._error(delta, delta_y, q_n)
+                err = self._error(delta, delta_y, q_n)
             seen.add(sig)
             prev_sig, prev_key = sig, key
             qt = self.qt.reshape(P * dim, dim)

@@ -19,7 +19,7 @@ import numpy as np
 
 from ..errors import STATUS_NAN, STATUS_OK
 from ..materials.mohr_coulomb import P_KN, P_KS, S_CODE, S_PLASTIC_SLIP, STICK, mohr_coulomb_update
-from .dynamic_kernels import STATUS_SINGULAR, lu_factor_inplace, lu_solve_inplace  # noqa: F401
+from .dynamic_kernels import lu_factor_inplace, lu_solve_inplace
 
 @numba.njit(cache=True)
 def joint_points_evaluate(params_table, param_index, weight, delta, state_base, state_trial, traction, q, qt,

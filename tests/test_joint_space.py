@@ -1,0 +1,227 @@
+"""Joint-space (condensed) Newton of the dynamic solver, masonrydam.solvers.joint_space.
+
+The condensed step must reproduce the general Newton path: both solve the same discrete equations
+(HHT step of Hilber, Hughes & Taylor 1977 with the seed's Mohr-Coulomb joints), so the two time
+histories agree to the Newton tolerance. Checked on reference problem 1 (Newmark 1965 sliding block,
+shared/reference/PROBLEMS.md: the permanent slip of the rectangular pulse within 2 % of the closed
+form, as tests/test_dynamics.py checks for the general path) and reference problem 3 (Housner 1963
+rocking block: opening, impact and re-closure). The pieces are checked against their definitions:
+``delta = B u`` against the interface kernel at random displacements on inclined 2D and 3D joints,
+and the block-triangular Newton correction against a dense solve of ``(I + S Qt) D = -F``.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import masonrydam
+from masonrydam.errors import SceneError
+from masonrydam.scene.build import build_mesh, build_model, build_stages
+from masonrydam.scene.scene import Scene
+from masonrydam.solvers.dynamic_kernels import STATUS_SINGULAR, woodbury_apply, woodbury_factor
+from masonrydam.solvers.joint_space import joint_operator, joint_space_size
+from masonrydam.solvers.joint_space_kernels import capacitance_factor, joint_space_correction
+
+G = 9.80665
+
+
+def _model(scene):
+    sc = Scene(scene)
+    mesh = build_mesh(sc.normalized, ".")
+    model = build_model(sc.normalized, mesh)
+    build_stages(sc.normalized, mesh, model)
+    return model
+
+
+def _inclined_2d(angle_deg):
+    """Two blocks whose joint is inclined at angle_deg (the mesh rotated as a whole)."""
+    return {"model": {"name": "incl", "thickness": 0.7},
+            "mesh": {"generator": "blocks_2d", "parameters": {"blocks": [
+                {"x0": 0, "y0": 0, "x1": 1.0, "y1": 0.4, "group": "base"},
+                {"x0": 0, "y0": 0.4, "x1": 1.0, "y1": 0.9, "group": "block"}], "element_size": 0.2,
+                "rotation_deg": angle_deg}},
+            "materials": {g: {"youngs_modulus": 30e9, "poisson_ratio": 0.2, "density": 2000} for g in ("base", "block")},
+            "joints": {"joints": {"normal_stiffness": 1e10, "shear_stiffness": 1e10, "friction_angle": 30.0}},
+            "supports": [{"set": "base"}],
+            "stages": [{"name": "g", "loads": [{"type": "self_weight"}]}]}
+
+
+def _oblique_3d():
+    return {"model": {"dimension": 3},
+            "mesh": {"generator": "blocks_3d", "parameters": {
+                "blocks": [{"x0": 0, "y0": 0, "z0": 0, "x1": 1, "y1": 1, "z1": 0.2, "group": "base"},
+                           {"x0": 0, "y0": 0, "z0": 0.2, "x1": 1, "y1": 1, "z1": 0.5, "group": "block"}],
+                "element_size": 0.25, "rotation_deg": [20.0, -35.0, 10.0]}},
+            "materials": {g: {"youngs_modulus": "30 GPa", "poisson_ratio": 0.2, "density": 2000.0} for g in ("base", "block")},
+            "joints": {"joints": {"normal_stiffness": 1e10, "shear_stiffness": 1e10, "friction_angle": 30.0}},
+            "supports": [{"set": "base_nodes"}],
+            "stages": [{"name": "g", "loads": [{"type": "self_weight"}]}]}
+
+
+@pytest.mark.parametrize("scene", [_inclined_2d(0.0), _inclined_2d(37.0), _oblique_3d()],
+                         ids=["2d-flat", "2d-37deg", "3d-oblique"])
+def test_joint_operator_gives_the_kernel_relative_displacements_and_forces(scene):
+    """B u equals the local relative displacements of the interface kernel (seed eqs. 4-6, 10) at a
+    random displacement field, and B^T (w t) its nodal forces, on flat, inclined and oblique joints."""
+    model = _model(scene)
+    rng = np.random.default_rng(3)
+    u = 1e-4 * rng.standard_normal(model.n_dof)
+    B, weight, _, _ = joint_operator(model)
+    assert B.shape == (joint_space_size(model), model.n_dof)
+    f, _ = model.evaluate(u, want_tangent=False)
+    f_joint = f - model.K_continuum @ u
+    (g,) = model.igroups
+    delta = g.delta.reshape(-1, model.dim)
+    np.testing.assert_allclose((B @ u).reshape(-1, model.dim), delta, rtol=0, atol=1e-12 * np.abs(delta).max())
+    forces = B.T @ (weight[:, None] * g.traction.reshape(-1, model.dim)).ravel()
+    np.testing.assert_allclose(forces, f_joint, rtol=0, atol=1e-9 * np.abs(f_joint).max())
+
+
+def test_condensed_correction_equals_the_dense_newton_solve():
+    """The block-triangular correction D = -F - S_:a z, (I + Qt_a S_:a) z = -Qt_a F is the solution of
+    (I + S Qt) D = -F for a block-diagonal Qt that is zero at sticking points and has zero rows
+    (a point sliding without hardening: normal row zero)."""
+    rng = np.random.default_rng(7)
+    dim, P = 2, 9
+    m = dim * P
+    A = rng.standard_normal((m, m))
+    S = A @ A.T / m + np.eye(m)
+    qt = np.zeros((P, dim, dim))
+    qt[1] = -np.diag([3.0, 5.0])                      # open: -w D0
+    qt[4] = [[-2.0, -0.7], [0.0, 0.0]]                # sliding: shear row only
+    qt[6] = rng.standard_normal((dim, dim))           # anything
+    F = rng.standard_normal(m)
+    Qt = np.zeros((m, m))
+    for p in range(P):
+        Qt[p * dim:(p + 1) * dim, p * dim:(p + 1) * dim] = qt[p]
+    expected = np.linalg.solve(np.eye(m) + S @ Qt, -F)
+    rows = np.flatnonzero(qt.reshape(m, dim).any(axis=1)).astype(np.int64)
+    assert len(rows) == 5
+    J, piv, z, step = np.zeros((8, 8)), np.zeros(8, dtype=np.int64), np.zeros(8), np.zeros(m)
+    ST = np.ascontiguousarray(S.T)
+    assert capacitance_factor(ST, rows, qt, J, piv) == 0
+    assert joint_space_correction(ST, F, rows, qt, J, piv, z, step) == 0
+    np.testing.assert_allclose(step, expected, rtol=1e-12, atol=1e-12 * np.abs(expected).max())
+    # a singular capacitance matrix is reported, not solved: Qt = -S^-1 on one point's block
+    qs = np.zeros((P, dim, dim))
+    qs[2] = -np.linalg.inv(S[4:6, 4:6])
+    rows2 = np.array([4, 5], dtype=np.int64)
+    assert capacitance_factor(ST, rows2, qs, J, piv) == STATUS_SINGULAR
+
+
+def test_woodbury_update_equals_the_dense_solve():
+    """Sherman-Morrison-Woodbury (Golub & Van Loan 2013, sec. 2.1.4) as used by the general path's
+    low-rank updates: K = K_ref + P E P^T solved from K_ref^-1 columns, with a capacitance matrix that
+    needs row pivoting."""
+    rng = np.random.default_rng(11)
+    n = 14
+    A = rng.standard_normal((n, n))
+    K_ref = A @ A.T + n * np.eye(n)
+    Jd = np.array([2, 5, 6, 11], dtype=np.int64)
+    E = rng.standard_normal((4, 4)) * 40.0
+    K = K_ref.copy()
+    K[np.ix_(Jd, Jd)] += E
+    b = rng.standard_normal(n)
+    ZT = np.ascontiguousarray(np.linalg.solve(K_ref, np.eye(n)[:, Jd]).T)
+    e_row, e_col = (a.ravel().astype(np.int64) for a in np.meshgrid(np.arange(4), np.arange(4), indexing="ij"))
+    e_val = np.ascontiguousarray(E.ravel())
+    Sm, piv = np.empty((4, 4)), np.empty(4, dtype=np.int64)
+    assert woodbury_factor(ZT, Jd, e_row, e_col, e_val, Sm, piv) == 0
+    assert (piv != np.arange(4)).any(), "the test must exercise pivoting"
+    x, w = np.empty(n), np.empty(4)
+    assert woodbury_apply(ZT, Jd, e_row, e_col, e_val, Sm, piv, np.linalg.solve(K_ref, b), w, x) == 0
+    np.testing.assert_allclose(x, np.linalg.solve(K, b), rtol=1e-10, atol=1e-12)
+
+
+def _sliding_scene(joint_space, amplitude=0.4 * G, duration=0.5):
+    mu = 0.2
+    stage = {"name": "pulse", "type": "dynamic", "dt": 0.002, "duration": duration, "integrator": "hht",
+             "joint_space": joint_space,
+             "ground_motion": {"x": {"pulse": {"shape": "rectangular", "amplitude": amplitude, "duration": 0.2}}}}
+    return {
+        "model": {"name": "sliding_block", "thickness": 1.0},
+        "mesh": {"generator": "blocks_2d", "parameters": {"blocks": [
+            {"x0": 0, "y0": 0, "x1": 2, "y1": 0.25, "group": "base"},
+            {"x0": 0, "y0": 0.25, "x1": 2, "y1": 0.75, "group": "block"}], "element_size": 0.25}},
+        "materials": {g: {"youngs_modulus": 30e9, "poisson_ratio": 0.2, "density": 2000} for g in ("base", "block")},
+        "joints": {"joints": {"normal_stiffness": 1e10, "shear_stiffness": 1e10,
+                              "friction_angle": math.degrees(math.atan(mu))}},
+        "supports": [{"set": "base", "components": ["x", "y"]}],
+        "stages": [{"name": "gravity", "loads": [{"type": "self_weight"}]}, stage],
+    }
+
+
+def test_sliding_block_same_history_as_the_general_path_and_newmark_slip():
+    """Reference problem 1: rectangular pulse A = 0.4 g for 0.2 s on a joint with mu = 0.2. Permanent
+    slip of a rigid block (Newmark 1965): s = A t_p^2 (A - a_y) / (2 a_y) with a_y = mu g. The condensed
+    and the general Newton paths give the same history (to 1e-6 of the slip), and the condensed path
+    solved every step itself."""
+    hist = {}
+    for mode in ("on", "off"):
+        ds = masonrydam.run(_sliding_scene(mode))
+        top = np.nonzero(np.isclose(ds.y.values, 0.75))[0]
+        hist[mode] = ds.displacement.sel(component="x").isel(node=top).mean(axis=1).values
+        if mode == "on":
+            assert int(ds.attrs["dynamic_joint_space_steps"]) == int(ds.attrs["dynamic_steps"])
+            assert int(ds.attrs["dynamic_joint_space_fallbacks"]) == 0
+            assert int(ds.attrs["dynamic_factorizations"]) == 1
+        else:
+            assert int(ds.attrs["dynamic_joint_space_size"]) == 0
+    A, tp, ay = 0.4 * G, 0.2, 0.2 * G
+    slip = A * tp**2 * (A - ay) / (2 * ay)
+    assert -hist["on"][-1] == pytest.approx(slip, rel=0.02)  # the block lags behind the ground
+    np.testing.assert_allclose(hist["on"], hist["off"], rtol=0, atol=1e-6 * slip)
+
+
+def test_sticking_steps_take_no_joint_space_iteration():
+    """Below the sliding threshold (A = 0.1 g < mu g) every point sticks: each step is the elastic
+    predictor (one substitution), with no iteration and the single factorization of the stage."""
+    ds = masonrydam.run(_sliding_scene("on", amplitude=0.1 * G, duration=0.1))
+    a = ds.attrs
+    assert int(a["dynamic_joint_space_steps"]) == int(a["dynamic_steps"]) == 50
+    assert int(a["dynamic_joint_space_iterations"]) == 0
+    assert int(a["dynamic_newton_iterations"]) == 0
+    assert int(a["dynamic_factorizations"]) == 1
+
+
+def test_rocking_block_same_history_as_the_general_path():
+    """Reference problem 3 (Housner 1963): the block 0.3 x 1.5 m on a no-tension joint under a
+    half-sine ground pulse of 1.5 g b/h lifts off (joint points open), rocks on its toe and lands on
+    its heel. Until that first impact the joint-space path gives the general path's uplift history to
+    1e-6 of the peak uplift (about 1 mm). After it the histories part: the impact of a stiff block
+    (kn = 1e12 Pa/m, dt = 1 ms) is resolved by step splitting driven by the energy check, which
+    rounds differently in the two paths."""
+    B, H = 0.3, 1.5
+    out = {}
+    for mode in ("on", "off"):
+        scene = {"model": {"name": "rocking", "thickness": 1.0},
+                 "mesh": {"generator": "blocks_2d", "parameters": {"blocks": [
+                     {"x0": -0.1, "y0": -0.1, "x1": B + 0.1, "y1": 0.0, "group": "base"},
+                     {"x0": 0.0, "y0": 0.0, "x1": B, "y1": H, "group": "block"}], "element_size": 0.05}},
+                 "materials": {g: {"youngs_modulus": 200e9, "poisson_ratio": 0.2, "density": 2000} for g in ("base", "block")},
+                 "joints": {"joints": {"normal_stiffness": 1e12, "shear_stiffness": 1e12, "friction_angle": 45.0}},
+                 "supports": [{"set": "base", "components": ["x", "y"]}],
+                 "stages": [{"name": "gravity", "loads": [{"type": "self_weight"}]},
+                            {"name": "pulse", "type": "dynamic", "dt": 1e-3, "duration": 0.4, "integrator": "hht",
+                             "joint_space": mode,
+                             "ground_motion": {"x": {"pulse": {"shape": "half_sine", "amplitude": 1.5 * G * B / H,
+                                                               "duration": 0.15}}}}]}
+        ds = masonrydam.run(scene)
+        heel = np.nonzero(np.isclose(ds.x.values, B) & np.isclose(ds.y.values, 0.0))[0]
+        out[mode] = ds.displacement.sel(component="y").isel(node=heel).max(axis=1).values
+        if mode == "on":
+            assert int(ds.attrs["dynamic_joint_space_steps"]) > 0.9 * int(ds.attrs["dynamic_steps"])
+    peak = out["off"].max()
+    assert peak > 1e-3, "the block rocks"
+    top = int(np.argmax(out["off"]))
+    impact = top + int(np.argmax(out["off"][top:] < 1e-6))  # first re-contact of the heel
+    assert impact > top
+    np.testing.assert_allclose(out["on"][:impact], out["off"][:impact], rtol=0, atol=1e-6 * peak)
+
+
+def test_joint_space_key_is_checked():
+    sc = _sliding_scene("sometimes")
+    with pytest.raises(SceneError, match=r"stages\[1\]\.joint_space"):
+        masonrydam.run(sc)

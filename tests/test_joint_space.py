@@ -22,7 +22,8 @@ from masonrydam.scene.build import build_mesh, build_model, build_stages
 from masonrydam.scene.scene import Scene
 from masonrydam.solvers.dynamic_kernels import STATUS_SINGULAR, woodbury_apply, woodbury_factor
 from masonrydam.solvers.joint_space import joint_operator, joint_space_size
-from masonrydam.solvers.joint_space_kernels import capacitance_factor, joint_space_correction
+from masonrydam.solvers.joint_space_kernels import (STATUS_TOO_MANY_CHANGES, apply_correction, capacitance_factor,
+                                                    capacitance_update_solve, joint_space_correction)
 
 G = 9.80665
 
@@ -109,6 +110,46 @@ def test_condensed_correction_equals_the_dense_newton_solve():
     qs[2] = -np.linalg.inv(S[4:6, 4:6])
     rows2 = np.array([4, 5], dtype=np.int64)
     assert capacitance_factor(ST, rows2, qs, J, piv) == STATUS_SINGULAR
+
+
+def test_capacitance_update_equals_the_dense_newton_solve():
+    """The LU of one active set (reference) updated to another by Sherman-Morrison-Woodbury on the
+    union of their rows (Golub & Van Loan 2013, sec. 2.1.4): a point that closed, one that opened,
+    one whose friction direction flipped and an unchanged pair give the dense Newton correction; with
+    fewer allowed changes than there are, the kernel declines (status 5) instead of solving."""
+    rng = np.random.default_rng(5)
+    dim, P = 2, 12
+    m = dim * P
+    A = rng.standard_normal((m, m))
+    S = A @ A.T / m + np.eye(m)
+    ST = np.ascontiguousarray(S.T)
+    kinds = {"open": -np.diag([3.0, 5.0]), "slip+": np.array([[-2.0, -0.7], [0.0, 0.0]]),
+             "slip-": np.array([[-2.0, 0.7], [0.0, 0.0]])}
+
+    def qt_of(points):
+        qt = np.zeros((P, dim, dim))
+        for p, kind in points.items():
+            qt[p] = kinds[kind]
+        return qt
+
+    q_ref = qt_of({1: "open", 3: "slip+", 5: "open", 8: "slip+"})
+    q_cur = qt_of({1: "open", 3: "slip-", 6: "slip+", 8: "slip+", 10: "open"})
+    F = rng.standard_normal(m)
+    Qt = np.zeros((m, m))
+    for p in range(P):
+        Qt[p * dim:(p + 1) * dim, p * dim:(p + 1) * dim] = q_cur[p]
+    expected = np.linalg.solve(np.eye(m) + S @ Qt, -F)
+    r_ref = np.flatnonzero(q_ref.reshape(m, dim).any(axis=1)).astype(np.int64)
+    r_cur = np.flatnonzero(q_cur.reshape(m, dim).any(axis=1)).astype(np.int64)
+    J, piv = np.zeros((16, 16)), np.zeros(16, dtype=np.int64)
+    assert capacitance_factor(ST, r_ref, q_ref, J, piv) == 0
+    z, step = np.zeros(16), np.zeros(m)
+    args = (ST, r_ref, np.ascontiguousarray(q_ref.reshape(m, dim)[r_ref]), J, piv, r_cur,
+            np.ascontiguousarray(q_cur.reshape(m, dim)[r_cur]), F)
+    assert capacitance_update_solve(*args, 100, z) == 0
+    assert apply_correction(ST, F, r_cur, z, step) == 0
+    np.testing.assert_allclose(step, expected, rtol=1e-12, atol=1e-12 * np.abs(expected).max())
+    assert capacitance_update_solve(*args, 2, z) == STATUS_TOO_MANY_CHANGES
 
 
 def test_woodbury_update_equals_the_dense_solve():

@@ -264,6 +264,7 @@ def _stats_attrs(solver, t_start, dyn_solvers=()):
             "dynamic_joint_space_iterations": sum(x.joint_space_iterations for x in d),
             "dynamic_joint_space_fallbacks": sum(x.joint_space_fallbacks for x in d),
             "dynamic_joint_space_dense_factorizations": sum(x.joint_space_dense_factorizations for x in d),
+            "dynamic_joint_space_dense_updates": sum(x.joint_space_dense_updates for x in d),
             "dynamic_joint_space_setup_s": round(sum(x.joint_space_setup_s for x in d), 4),
             "dynamic_wall_time_s": round(wall, 4),
             "dynamic_output_time_s": round(sum(x.output_time_s for x in d), 4),
@@ -310,7 +311,8 @@ def print_summary(sc, mesh, model, eff, solver, stats, path, ds, file=None, dyn_
             lines.append(f"joint space: {stats['dynamic_joint_space_size']} joint unknowns condensed (set-up "
                          f"{stats['dynamic_joint_space_setup_s']:.3g} s); {stats['dynamic_joint_space_steps']} steps "
                          f"solved there in {stats['dynamic_joint_space_iterations']} iterations "
-                         f"({stats['dynamic_joint_space_dense_factorizations']} dense LU), "
+                         f"({stats['dynamic_joint_space_dense_factorizations']} dense LU, "
+                         f"{stats['dynamic_joint_space_dense_updates']} low-rank updates of them), "
                          f"{stats['dynamic_joint_space_fallbacks']} finished by the general path")
         else:
             lines.append("joint space: off (no nonlinear joints, an explicit scheme, joint_space = 'off', or more "

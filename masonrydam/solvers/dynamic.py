@@ -80,7 +80,20 @@ non-converged one (accepted at the last halving and reported in ``stats.energy_g
 
 Fast path (how a step with sticking joints costs about as much as a linear step)
 --------------------------------------------------------------------------------
-The continuum is linear, so ``K_eff`` changes only where joint points leave the elastic (stick)
+The continuum is linear, so the nonlinearity of a step sits in the joint law alone. At the nominal
+step size a step is first solved in *joint space* (:mod:`.joint_space`, ``joint_space = "auto"``):
+the step's equations condensed on the local relative displacements of the nonlinear joint points
+through the dense flexibility ``S = B K_ref^-1 B^T`` of the all-stick effective matrix (set up once
+per stage: one multi-right-hand-side substitution per joint unknown). A step whose points all stick
+is then one substitution (the elastic predictor), exactly like a linear step; a step with sliding or
+open points iterates on the joint unknowns with small dense LU factorizations of the active
+components and costs one more substitution at the end; no sparse matrix is factorized. The result
+is accepted by the same full-residual test as any Newton iterate; a step that the joint-space
+iteration does not converge within its limits goes on from its last iterate in the general path
+below. Sub-steps (after a failure) use the general path. ``"auto"`` condenses up to
+``JOINT_SPACE_MAX`` joint unknowns (8 m^2 bytes for S); ``"off"`` forces the general path.
+
+General path. ``K_eff`` changes only where joint points leave the elastic (stick)
 state. :class:`EffectiveSolver` keeps up to three LU factorizations of ``K_eff`` (the all-stick
 matrix of the nominal step, factorized once at the start and pinned, and the latest others). Every
 Newton iteration takes the first that applies:
@@ -368,6 +381,7 @@ class DynamicStats:
     joint_space_iterations: int = 0
     joint_space_fallbacks: int = 0
     joint_space_dense_factorizations: int = 0
+    joint_space_dense_updates: int = 0
     per_stage: list = field(default_factory=list)
 
     def as_dict(self):
@@ -799,6 +813,7 @@ class DynamicSolver:
                 finally:
                     if self.js is not None:
                         self.stats.joint_space_dense_factorizations += self.js.factorizations
+                        self.stats.joint_space_dense_updates += self.js.updates
         finally:
             m.set_open_tangent(1e-6)  # the static solver's regularisation (solvers.static.OPEN_TANGENT_REGULAR)
             self.stats.wall_time_s += time.perf_counter() - t_wall

@@ -146,3 +146,189 @@ def joint_space_correction(ST, F, rows, qt, J, piv, z, step):
         if not (abs(step[i]) < np.inf):
             return STATUS_NAN
     return STATUS_OK
+
+
+#: more rows changed than allowed for an update of the reference LU: refactorize instead
+STATUS_TOO_MANY_CHANGES = 5
+
+
+@numba.njit(cache=True)
+def _apply_ref_inverse(Jref, piv, ref_rows_n, JRN, posR, nN_idx, v, x):
+    """``x = J_ref(U)^-1 v`` for the capacitance matrix of the reference rows embedded in the union U:
+    rows of U not in the reference are identity rows, so ``x_N = v_N`` and
+    ``x_R = LU^-1 (v_R - J_RN v_N)``."""
+    nr = ref_rows_n
+    t = np.empty(nr)
+    for i in range(nr):
+        t[i] = 0.0
+    nU = v.shape[0]
+    for u in range(nU):
+        if posR[u] >= 0:
+            t[posR[u]] += v[u]
+    for k in range(nN_idx.shape[0]):
+        vn = v[nN_idx[k]]
+        if vn != 0.0:
+            for i in range(nr):
+                t[i] -= JRN[i, k] * vn
+    lu_solve_inplace(Jref[:nr, :nr], piv[:nr], t)
+    for u in range(nU):
+        if posR[u] >= 0:
+            x[u] = t[posR[u]]
+        else:
+            x[u] = v[u]
+
+
+@numba.njit(cache=True)
+def capacitance_update_solve(ST, ref_rows, ref_qt, Jref, piv, rows, qt_rows, F, max_changes, z):
+    """Solve ``(I + Qt_c S_:c) z = -Qt_c F`` for the current active components ``rows`` (sorted, with
+    their rows of Qt in ``qt_rows`` (nc, dim)) from the LU (``Jref``, ``piv``) of the capacitance
+    matrix of reference components ``ref_rows`` (sorted; ``ref_qt`` (nr, dim)).
+
+    On the union U of both sets the two matrices differ only in the rows whose Qt row changed (the
+    set D): ``J_c = J_r + E_D W`` with ``W = (Qt_c - Qt_r)_D S_:U``, and the Sherman-Morrison-Woodbury
+    identity (Golub & Van Loan 2013, sec. 2.1.4) gives ``z = y - Y (I + W Y)^-1 W y`` with
+    ``y = J_r^-1 b``, ``Y = J_r^-1 E_D``: |D| solves with the old factors and a |D| x |D| LU instead of
+    an LU of size |U|. Returns STATUS_OK, STATUS_TOO_MANY_CHANGES (|D| > max_changes: nothing is
+    written), STATUS_SINGULAR or STATUS_NAN; ``z`` (>= nc) receives the solution in the order of
+    ``rows``."""
+    dim = qt_rows.shape[1]
+    nr = ref_rows.shape[0]
+    nc = rows.shape[0]
+    U = np.empty(nr + nc, dtype=np.int64)
+    posR = np.empty(nr + nc, dtype=np.int64)
+    posC = np.empty(nr + nc, dtype=np.int64)
+    i = 0
+    j = 0
+    nU = 0
+    while i < nr or j < nc:
+        if j >= nc or (i < nr and ref_rows[i] < rows[j]):
+            U[nU] = ref_rows[i]
+            posR[nU] = i
+            posC[nU] = -1
+            i += 1
+        elif i >= nr or rows[j] < ref_rows[i]:
+            U[nU] = rows[j]
+            posR[nU] = -1
+            posC[nU] = j
+            j += 1
+        else:
+            U[nU] = rows[j]
+            posR[nU] = i
+            posC[nU] = j
+            i += 1
+            j += 1
+        nU += 1
+    # changed rows and their Qt differences
+    D = np.empty(nU, dtype=np.int64)
+    dq = np.empty((nU, dim))
+    nd = 0
+    for u in range(nU):
+        diff = False
+        for d in range(dim):
+            a = ref_qt[posR[u], d] if posR[u] >= 0 else 0.0
+            b = qt_rows[posC[u], d] if posC[u] >= 0 else 0.0
+            dq[nd, d] = b - a
+            if a != b:
+                diff = True
+        if diff:
+            D[nd] = u
+            nd += 1
+    if nd > max_changes:
+        return STATUS_TOO_MANY_CHANGES
+    # columns of the union outside the reference and J_RN
+    nN = 0
+    for u in range(nU):
+        if posR[u] < 0:
+            nN += 1
+    N_idx = np.empty(nN, dtype=np.int64)
+    k = 0
+    for u in range(nU):
+        if posR[u] < 0:
+            N_idx[k] = u
+            k += 1
+    JRN = np.empty((nr, nN))
+    for ii in range(nr):
+        p = ref_rows[ii] // dim
+        for kk in range(nN):
+            col = ST[U[N_idx[kk]]]
+            acc = 0.0
+            for d in range(dim):
+                acc += ref_qt[ii, d] * col[p * dim + d]
+            JRN[ii, kk] = acc
+    # right-hand side b = -Qt_c F on U
+    b = np.zeros(nU)
+    for u in range(nU):
+        if posC[u] >= 0:
+            p = U[u] // dim
+            acc = 0.0
+            for d in range(dim):
+                acc += qt_rows[posC[u], d] * F[p * dim + d]
+            b[u] = -acc
+    y = np.empty(nU)
+    _apply_ref_inverse(Jref, piv, nr, JRN, posR, N_idx, b, y)
+    # Y = J_r^-1 E_D (nU x nd), W = dQt_D S_:U (nd x nU)
+    Y = np.empty((nd, nU))
+    e = np.zeros(nU)
+    col_out = np.empty(nU)
+    for kk in range(nd):
+        e[D[kk]] = 1.0
+        _apply_ref_inverse(Jref, piv, nr, JRN, posR, N_idx, e, col_out)
+        e[D[kk]] = 0.0
+        for u in range(nU):
+            Y[kk, u] = col_out[u]
+    W = np.empty((nd, nU))
+    for kk in range(nd):
+        p = U[D[kk]] // dim
+        for u in range(nU):
+            col = ST[U[u]]
+            acc = 0.0
+            for d in range(dim):
+                acc += dq[kk, d] * col[p * dim + d]
+            W[kk, u] = acc
+    Cm = np.empty((nd, nd))
+    for a in range(nd):
+        for c in range(nd):
+            acc = 0.0
+            for u in range(nU):
+                acc += W[a, u] * Y[c, u]
+            Cm[a, c] = acc
+        Cm[a, a] += 1.0
+    cpiv = np.empty(nd, dtype=np.int64)
+    st = lu_factor_inplace(Cm, cpiv)
+    if st != STATUS_OK:
+        return st
+    s = np.empty(nd)
+    for a in range(nd):
+        acc = 0.0
+        for u in range(nU):
+            acc += W[a, u] * y[u]
+        s[a] = acc
+    lu_solve_inplace(Cm, cpiv, s)
+    for u in range(nU):
+        acc = y[u]
+        for c in range(nd):
+            acc -= Y[c, u] * s[c]
+        if posC[u] >= 0:
+            z[posC[u]] = acc
+    for jj in range(nc):
+        if not (abs(z[jj]) < np.inf):
+            return STATUS_NAN
+    return STATUS_OK
+
+
+@numba.njit(cache=True)
+def apply_correction(ST, F, rows, z, step):
+    """``step = -F - S_:a z`` (m,) for the components ``rows`` and their ``z``; STATUS_OK or STATUS_NAN."""
+    m = F.shape[0]
+    for i in range(m):
+        step[i] = -F[i]
+    for j in range(rows.shape[0]):
+        v = z[j]
+        if v != 0.0:
+            row = ST[rows[j]]
+            for i in range(m):
+                step[i] -= row[i] * v
+    for i in range(m):
+        if not (abs(step[i]) < np.inf):
+            return STATUS_NAN
+    return STATUS_OK

@@ -88,7 +88,7 @@ def test_condensed_correction_equals_the_dense_newton_solve():
     dim, P = 2, 9
     m = dim * P
     A = rng.standard_normal((m, m))
-    S = A @ A.T / m + np.eye(m)
+    S = A @ A.T / m + np.eye(m) + 0.3 * (A - A.T) / m  # not symmetric: checks rows against columns
     qt = np.zeros((P, dim, dim))
     qt[1] = -np.diag([3.0, 5.0])                      # open: -w D0
     qt[4] = [[-2.0, -0.7], [0.0, 0.0]]                # sliding: shear row only
@@ -121,7 +121,7 @@ def test_capacitance_update_equals_the_dense_newton_solve():
     dim, P = 2, 12
     m = dim * P
     A = rng.standard_normal((m, m))
-    S = A @ A.T / m + np.eye(m)
+    S = A @ A.T / m + np.eye(m) + 0.3 * (A - A.T) / m  # not symmetric: checks rows against columns
     ST = np.ascontiguousarray(S.T)
     kinds = {"open": -np.diag([3.0, 5.0]), "slip+": np.array([[-2.0, -0.7], [0.0, 0.0]]),
              "slip-": np.array([[-2.0, 0.7], [0.0, 0.0]])}

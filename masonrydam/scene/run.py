@@ -263,6 +263,7 @@ def _stats_attrs(solver, t_start, dyn_solvers=()):
             "dynamic_joint_space_steps": sum(x.joint_space_steps for x in d),
             "dynamic_joint_space_iterations": sum(x.joint_space_iterations for x in d),
             "dynamic_joint_space_fallbacks": sum(x.joint_space_fallbacks for x in d),
+            "dynamic_joint_space_splits": sum(x.joint_space_splits for x in d),
             "dynamic_joint_space_dense_factorizations": sum(x.joint_space_dense_factorizations for x in d),
             "dynamic_joint_space_dense_updates": sum(x.joint_space_dense_updates for x in d),
             "dynamic_joint_space_setup_s": round(sum(x.joint_space_setup_s for x in d), 4),
@@ -313,6 +314,7 @@ def print_summary(sc, mesh, model, eff, solver, stats, path, ds, file=None, dyn_
                          f"solved there in {stats['dynamic_joint_space_iterations']} iterations "
                          f"({stats['dynamic_joint_space_dense_factorizations']} dense LU, "
                          f"{stats['dynamic_joint_space_dense_updates']} low-rank updates of them), "
+                         f"{stats['dynamic_joint_space_splits']} halved, "
                          f"{stats['dynamic_joint_space_fallbacks']} finished by the general path")
         else:
             lines.append("joint space: off (no nonlinear joints, an explicit scheme, joint_space = 'off', or more "

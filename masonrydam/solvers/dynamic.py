@@ -162,7 +162,8 @@ import scipy.sparse.linalg as spla
 
 from ..errors import ConvergenceError, NumericalError, SceneError
 from .dynamic_kernels import woodbury_apply, woodbury_factor
-from .joint_space import JOINT_SPACE_MAX, JointSpace, joint_space_size
+from .joint_space import (JOINT_SPACE_MAX, MAX_INITIAL_STIFFNESS_ITERATIONS, SPLIT_INITIAL_STIFFNESS_ITERATIONS, JointSpace,
+                          joint_space_size)
 from .linear import DIRECT_SOLVERS, Factorization, SingularMatrix, resolve_backend
 from .modal import MassMatrix, RayleighDamping, elastic_joint_full, elastic_tangent_data
 
@@ -380,6 +381,7 @@ class DynamicStats:
     joint_space_steps: int = 0
     joint_space_iterations: int = 0
     joint_space_fallbacks: int = 0
+    joint_space_splits: int = 0
     joint_space_dense_factorizations: int = 0
     joint_space_dense_updates: int = 0
     per_stage: list = field(default_factory=list)
@@ -605,6 +607,7 @@ class DynamicSolver:
         self.backend = resolve_backend(settings.linear_solver)
         self._Kj_full = None
         self.js = None
+        self._js_by_h = {}
 
     # ------------------------------------------------------------------------------------------
     def _setup(self, stage):
@@ -811,9 +814,9 @@ class DynamicSolver:
                 try:
                     st = self._run_implicit(stage, st)
                 finally:
-                    if self.js is not None:
-                        self.stats.joint_space_dense_factorizations += self.js.factorizations
-                        self.stats.joint_space_dense_updates += self.js.updates
+                    for js in self._js_by_h.values():
+                        self.stats.joint_space_dense_factorizations += js.factorizations
+                        self.stats.joint_space_dense_updates += js.updates
         finally:
             m.set_open_tangent(1e-6)  # the static solver's regularisation (solvers.static.OPEN_TANGENT_REGULAR)
             self.stats.wall_time_s += time.perf_counter() - t_wall
@@ -825,16 +828,34 @@ class DynamicSolver:
         """Condense the nominal step on the nonlinear joints (:mod:`.joint_space`) if the settings and
         the size allow; sets ``self.js`` (None when off)."""
         self.js = None
+        self._js_by_h = {}
         s, m = self.s, self.model
         if s.joint_space == "off" or not m.nonlinear:
             return
         size = joint_space_size(m)
         if s.joint_space == "auto" and size > JOINT_SPACE_MAX:
             return
-        t0 = time.perf_counter()
-        self.js = JointSpace(m, ref.fact)
+        self.js = self._new_joint_space(ref, s.dt)
         self.stats.joint_space_size = size
+
+    def _new_joint_space(self, ref, h):
+        t0 = time.perf_counter()
+        js = self._js_by_h[h] = JointSpace(self.model, ref.fact)
         self.stats.joint_space_setup_s += time.perf_counter() - t0
+        return js
+
+    def _joint_space_for(self, h):
+        """The joint-space system of step size h: the nominal one, or one of a sub-step size (its
+        all-stick matrix factorized and pinned, and its flexibility set up, when first needed)."""
+        if self.js is None:
+            return None
+        js = self._js_by_h.get(h)
+        if js is None:
+            if not any(h == self.s.dt / 2 ** k for k in range(1, self.s.max_substeps + 1)):
+                return None  # e.g. a shorter last step of the stage: not worth a set-up
+            ref = self.eff.factorize(self._elastic_eff(h), pin=True, key=("elastic", h))
+            js = self._new_joint_space(ref, h)
+        return js
 
     # ------------------------------------------------------------------------------------------
     def _record_energy(self, st, prev):
@@ -918,7 +939,8 @@ class DynamicSolver:
 
     def _advance(self, stage, st, t_end, h, level):
         """Advance the committed state ``st`` by ``h`` to stage time ``t_end``, halving on failure."""
-        ok, new, why = self._implicit_try(st, t_end, h, check_energy=level < self.s.max_substeps)
+        ok, new, why = self._implicit_try(st, t_end, h, check_energy=level < self.s.max_substeps,
+                                          can_split=level < self.s.max_substeps)
         if ok:
             return new
         self.model.revert()
@@ -932,7 +954,7 @@ class DynamicSolver:
         st = self._advance(stage, st, st.tau + 0.5 * h, 0.5 * h, level + 1)
         return self._advance(stage, st, t_end, 0.5 * h, level + 1)
 
-    def _implicit_try(self, st, t_end, h, check_energy=True):
+    def _implicit_try(self, st, t_end, h, check_energy=True, can_split=False):
         """One step of size ``h`` from the committed state ``st`` to stage time ``t_end``; returns
         (ok, new_state, why)."""
         m, s = self.model, self.s
@@ -988,12 +1010,15 @@ class DynamicSolver:
         try:
             R, a1, v1, ma_norm = residual(u, f_int)
             r0 = float(np.linalg.norm(R))
-            if self.js is not None and h == s.dt:
+            js = self._joint_space_for(h)
+            if js is not None:
                 # condensed on the joints (module .joint_space): the step's solution from one or two
                 # substitutions; verified below against the full residual like any Newton iterate
                 ref = max(ma_norm, float(np.linalg.norm(f_int[free])), p1_norm, 1e-30)
                 try:
-                    u_js, its, converged, why = self.js.solve_step(u, R, JOINT_SPACE_FORCE_FRACTION * s.force_tolerance * ref)
+                    u_js, its, converged, why = js.solve_step(
+                        u, R, JOINT_SPACE_FORCE_FRACTION * s.force_tolerance * ref,
+                        SPLIT_INITIAL_STIFFNESS_ITERATIONS if can_split else MAX_INITIAL_STIFFNESS_ITERATIONS)
                 except FloatingPointError:
                     u_js, its, converged = None, 0, False
                 self.stats.joint_space_iterations += its
@@ -1009,6 +1034,11 @@ class DynamicSolver:
                     converged = converged and float(np.linalg.norm(R)) <= s.force_tolerance * ref
                 if converged:
                     self.stats.joint_space_steps += 1
+                elif can_split:
+                    # halve the step (the joint-space systems of the halves are set up once): cheaper
+                    # than finishing it in the general path, which refactorizes at state changes
+                    self.stats.joint_space_splits += 1
+                    return False, None, f"the joint-space iteration did not converge ({why})"
                 else:
                     self.stats.joint_space_fallbacks += 1
             while True:

@@ -21,7 +21,8 @@ with ``y = u_n - K_ref^-1 R(u_n)`` (one substitution: the elastic predictor), ``
 substitution: with ``Qt = dq/d delta`` (block diagonal, zero at sticking points) and ``z = Qt D`` on
 the ``na`` components where ``Qt`` has a nonzero row (two per open point, one per point sliding
 without hardening in 2D), the correction is ``D = -F - S_:a z`` with ``(I + Qt_a S_:a) z = -Qt_a F``:
-one dense LU of size ``na``, kept while the active rows and their values repeat. When ``delta`` has
+one dense LU of size ``na``, kept while the active rows and their values repeat and updated by
+Sherman-Morrison-Woodbury while only a few of them change. When ``delta`` has
 converged the displacements are ``u = y - K_ref^-1 B^T (q - q_n)`` (a second substitution, skipped
 when no point left its elastic state, i.e. ``q = q_n``). A step whose joints all stick therefore
 costs one substitution, like a linear step; a step with sliding or opening points costs two
@@ -60,6 +61,8 @@ MAX_JOINT_SPACE_ITERATIONS = 25
 #: not converge: a stress-transfer fixed point (Zienkiewicz, Valliappan & King 1968) that needs no
 #: factorization, converges linearly and does not cycle
 MAX_INITIAL_STIFFNESS_ITERATIONS = 60
+#: the same when the step can still be halved instead
+SPLIT_INITIAL_STIFFNESS_ITERATIONS = 10
 #: state changes of a point within a step after which it keeps its initial stiffness in the iteration matrix
 FLIPS_BEFORE_INITIAL_TANGENT = 3
 #: the reference LU of the capacitance matrix is updated (not refactorized) while at most
@@ -159,6 +162,7 @@ class JointSpace:
         self.piv = np.zeros(0, dtype=np.int64)
         self.z = np.zeros(0)
         self._lu_key = None
+        self._dq_last = None  # the converged q - q_n of the last step (an extrapolation of the next)
         self._ref = None  # (rows, qt rows) of the capacitance matrix whose LU is in self.J
         #: dense LU factorizations of capacitance matrices, and low-rank updates of them (statistics)
         self.factorizations = 0
@@ -225,6 +229,8 @@ class JointSpace:
         low-rank update of it when at most a fifth of the rows changed (cheaper than a new LU of the
         size of the union), else with a new LU, which becomes the reference. Returns a status."""
         na = len(rows)
+        if na == 0:  # initial stiffness everywhere: D = -F (the reference LU is kept)
+            return apply_correction(self.ST, self.F, rows, self.z, self.step)
         if self.z.shape[0] < na:
             self.z = np.zeros(max(na, 2 * self.z.shape[0], 16))
         key = rows.tobytes() + qt_rows.tobytes()
@@ -255,11 +261,13 @@ class JointSpace:
         flips is a state change too)."""
         return (2 * self.codes + (self.traction[:, 0] > 0.0)).astype(np.int8)
 
-    def solve_step(self, u_n, R_n, force_tolerance):
+    def solve_step(self, u_n, R_n, force_tolerance, initial_stiffness_iterations=None):
         """Solve one step in joint space.
 
         u_n : (n_dof,) m — start of the step (committed state); R_n : (n_eq,) N — the step's residual
-        at ``u_n``; force_tolerance : N — bound on the joint force error ``|W D0 F|``.
+        at ``u_n``; force_tolerance : N — bound on the joint force error ``|W D0 F|``;
+        initial_stiffness_iterations: limit of the initial-stiffness phase (default
+        :data:`MAX_INITIAL_STIFFNESS_ITERATIONS`; less when the caller can halve the step instead).
         Returns ``(u, iterations, converged, why)``: u (n_dof,) m - the last iterate when the iteration
         did not converge within its limits (``why`` says how far it got; the caller goes on from it
         with the general Newton path) - or None after a singular matrix or NaN (the groups' states
@@ -285,20 +293,36 @@ class JointSpace:
         delta = delta_y.copy()
         self._evaluate(delta)
         if np.array_equal(self.q, q_n):
+            self._dq_last = None
             return u_y, 0, True, ""  # every point kept its elastic state: the predictor is the solution
+        if self._dq_last is not None:
+            # start from the joint forces changing as in the last step (a joint sliding on keeps
+            # sliding at about the same rate): delta = delta_y - S dq_last, if that is closer
+            e0 = self._error(delta, delta_y, q_n)
+            changed = np.flatnonzero(self._dq_last.reshape(-1, dim).any(axis=1)).astype(np.int64)
+            trial = delta.copy()
+            joint_space_residual(self.ST, np.zeros_like(delta), np.zeros_like(delta), self._dq_last, changed, dim,
+                                 self.F)
+            trial -= self.F
+            self._evaluate(trial)
+            if self._error(trial, delta_y, q_n) < e0:
+                delta = trial
+            else:
+                self._evaluate(delta)
         flips = np.zeros(P, dtype=np.int64)
         initial = np.zeros(P, dtype=bool)
         seen, prev_sig, prev_key, stabilized, same = set(), None, None, False, 0
         it, why = 0, ""
+        n_fixed = MAX_INITIAL_STIFFNESS_ITERATIONS if initial_stiffness_iterations is None else initial_stiffness_iterations
         while True:
             err = self._error(delta, delta_y, q_n)
             key = self._state_key()
             sig = key.tobytes()
             if err <= force_tolerance:
                 break
-            if it >= MAX_JOINT_SPACE_ITERATIONS + MAX_INITIAL_STIFFNESS_ITERATIONS:
+            if it >= MAX_JOINT_SPACE_ITERATIONS + n_fixed:
                 why = (f"joint-space iteration: force error {err:.3g} N after {it} iterations "
-                       f"({MAX_JOINT_SPACE_ITERATIONS} Newton, then initial stiffness)")
+                       f"({MAX_JOINT_SPACE_ITERATIONS} Newton, {n_fixed} with the initial stiffness)")
                 break
             fixed_point = it >= MAX_JOINT_SPACE_ITERATIONS
             if prev_key is not None:
@@ -337,6 +361,7 @@ class JointSpace:
                 return None, it, False, "NaN in the joint-space correction"
             self._line_search(delta, delta_y, q_n, err)
         dq = (self.q - q_n).ravel()
+        self._dq_last = dq.copy() if not why else None
         u = u_y
         if dq.any():
             u = u_y.copy()

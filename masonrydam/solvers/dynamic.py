@@ -88,9 +88,10 @@ per stage: one multi-right-hand-side substitution per joint unknown). A step who
 is then one substitution (the elastic predictor), exactly like a linear step; a step with sliding or
 open points iterates on the joint unknowns with small dense LU factorizations of the active
 components and costs one more substitution at the end; no sparse matrix is factorized. The result
-is accepted by the same full-residual test as any Newton iterate; a step that the joint-space
-iteration does not converge within its limits goes on from its last iterate in the general path
-below. Sub-steps (after a failure) use the general path. ``"auto"`` condenses up to
+is accepted by the same full-residual test as any Newton iterate. A step that the joint-space
+iteration does not converge within its limits is halved like a failed step (each sub-step size
+gets its own joint-space system, set up the first time it is needed); at the last halving it goes
+on from its last iterate in the general path below. ``"auto"`` condenses up to
 ``JOINT_SPACE_MAX`` joint unknowns (8 m^2 bytes for S); ``"off"`` forces the general path.
 
 General path. ``K_eff`` changes only where joint points leave the elastic (stick)

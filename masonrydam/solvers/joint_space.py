@@ -30,16 +30,18 @@ substitutions plus the dense work, whatever the number of iterations.
 
 Cost of the set-up: ``m`` substitutions for ``S`` (done in blocks of columns) and ``8 m^2`` bytes.
 :func:`joint_space_size` counts ``m``; the dynamic solver uses this path for a scene whose nonlinear
-joints have at most :data:`JOINT_SPACE_MAX` components (``joint_space = "auto"``) and only at the
-nominal step size (sub-steps take the general Newton path with its own factorizations).
+joints have at most :data:`JOINT_SPACE_MAX` components (``joint_space = "auto"``), at the nominal
+step size and at the halved sizes of sub-steps (one system per size, set up when first needed).
 
 Iteration control (the joint law is non-smooth; see :meth:`JointSpace.solve_step`): Newton with a
 backtracking line search; points whose state keeps changing get their initial stiffness in the
 iteration matrix until the pattern settles; a pattern that comes back does the same for every open
 point and latches broken bonds (the general path's remedy); after
-:data:`MAX_JOINT_SPACE_ITERATIONS` Newton iterations, initial-stiffness iterations. A step not
-converged within these limits goes on in the general Newton path from the last iterate. Every result
-is checked by the caller against the full residual of the step.
+:data:`MAX_JOINT_SPACE_ITERATIONS` Newton iterations, initial-stiffness iterations. Each step starts
+from the joint forces extrapolated from the last step (if that is closer than the elastic
+predictor). A step not converged within these limits is halved by the caller, or at the last halving
+goes on in the general Newton path from the last iterate. Every result is checked by the caller
+against the full residual of the step.
 """
 from __future__ import annotations
 

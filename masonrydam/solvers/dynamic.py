@@ -128,7 +128,10 @@ Each factorization's PARDISO iterative refinement is switched off (``iparm(8) = 
 refinement steps made each substitution 7x slower (4.5 ms against 0.64 ms at 7 048 equations) and
 serve only perturbed pivots, which :class:`~masonrydam.solvers.linear.Factorization` rejects.
 
-Measured (one PARDISO thread, 2-core shared machine, HHT alpha = -0.1, dt = 5 ms, El Centro 1940 NS at
+Measured for the general path alone, before the joint-space path existed and before a row-swap error
+in the Woodbury solves was fixed (failed updates were caught by the residual check and refactorized,
+so the low-rank figures below understate that path; one PARDISO thread, 2-core shared machine, HHT
+alpha = -0.1, dt = 5 ms, El Centro 1940 NS at
 0.7 g with the vertical component, 600 steps; wall of ``examples/wall_el_centro.toml`` enlarged to
 2.4 x 1.6 m: 7 048 equations, 2 464 joint points, solver time without output):
 

@@ -80,6 +80,15 @@ def test_joint_operator_gives_the_kernel_relative_displacements_and_forces(scene
     np.testing.assert_allclose(forces, f_joint, rtol=0, atol=1e-9 * np.abs(f_joint).max())
 
 
+def _dense_newton_correction(S, qt, F):
+    """Reference: D = -(I + S Qt)^-1 F with Qt block diagonal from qt (P, dim, dim)."""
+    P, dim = qt.shape[0], qt.shape[1]
+    Qt = np.zeros((P * dim, P * dim))
+    for p in range(P):
+        Qt[p * dim:(p + 1) * dim, p * dim:(p + 1) * dim] = qt[p]
+    return np.linalg.solve(np.eye(P * dim) + S @ Qt, -F)
+
+
 def test_condensed_correction_equals_the_dense_newton_solve():
     """The block-triangular correction D = -F - S_:a z, (I + Qt_a S_:a) z = -Qt_a F is the solution of
     (I + S Qt) D = -F for a block-diagonal Qt that is zero at sticking points and has zero rows
@@ -94,10 +103,7 @@ def test_condensed_correction_equals_the_dense_newton_solve():
     qt[4] = [[-2.0, -0.7], [0.0, 0.0]]                # sliding: shear row only
     qt[6] = rng.standard_normal((dim, dim))           # anything
     F = rng.standard_normal(m)
-    Qt = np.zeros((m, m))
-    for p in range(P):
-        Qt[p * dim:(p + 1) * dim, p * dim:(p + 1) * dim] = qt[p]
-    expected = np.linalg.solve(np.eye(m) + S @ Qt, -F)
+    expected = _dense_newton_correction(S, qt, F)
     rows = np.flatnonzero(qt.reshape(m, dim).any(axis=1)).astype(np.int64)
     assert len(rows) == 5
     J, piv, z, step = np.zeros((8, 8)), np.zeros(8, dtype=np.int64), np.zeros(8), np.zeros(m)
@@ -135,10 +141,7 @@ def test_capacitance_update_equals_the_dense_newton_solve():
     q_ref = qt_of({1: "open", 3: "slip+", 5: "open", 8: "slip+"})
     q_cur = qt_of({1: "open", 3: "slip-", 6: "slip+", 8: "slip+", 10: "open"})
     F = rng.standard_normal(m)
-    Qt = np.zeros((m, m))
-    for p in range(P):
-        Qt[p * dim:(p + 1) * dim, p * dim:(p + 1) * dim] = q_cur[p]
-    expected = np.linalg.solve(np.eye(m) + S @ Qt, -F)
+    expected = _dense_newton_correction(S, q_cur, F)
     r_ref = np.flatnonzero(q_ref.reshape(m, dim).any(axis=1)).astype(np.int64)
     r_cur = np.flatnonzero(q_cur.reshape(m, dim).any(axis=1)).astype(np.int64)
     J, piv = np.zeros((16, 16)), np.zeros(16, dtype=np.int64)

@@ -122,7 +122,6 @@ def joint_space_correction(ST, F, rows, qt, J, piv, z, step):
     components of ``Qt D`` vanish): ``D = -F - S_:a z`` and ``(I + Qt_a S_:a) z = -Qt_a F``, solved with
     the factors of :func:`capacitance_factor` in ``J``, ``piv``; ``z`` (>= na) is work space.
     Returns STATUS_OK or STATUS_NAN."""
-    m = F.shape[0]
     dim = qt.shape[1]
     na = rows.shape[0]
     w = z[:na]
@@ -134,18 +133,7 @@ def joint_space_correction(ST, F, rows, qt, J, piv, z, step):
             acc += qt[p, c, d] * F[p * dim + d]
         w[i] = -acc
     lu_solve_inplace(J[:na, :na], piv[:na], w)
-    for i in range(m):
-        step[i] = -F[i]
-    for j in range(na):
-        v = w[j]
-        if v != 0.0:
-            row = ST[rows[j]]
-            for i in range(m):
-                step[i] -= row[i] * v
-    for i in range(m):
-        if not (abs(step[i]) < np.inf):
-            return STATUS_NAN
-    return STATUS_OK
+    return apply_correction(ST, F, rows, w, step)
 
 
 #: more rows changed than allowed for an update of the reference LU: refactorize instead

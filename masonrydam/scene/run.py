@@ -305,7 +305,7 @@ def print_summary(sc, mesh, model, eff, solver, stats, path, ds, file=None, dyn_
             crit = f", dt_crit {p['dt_critical']:.3g} s" if p.get("dt_critical") else ""
             lines.append(f"dynamic    : {p['stage']}: {p['steps']} steps of {p['dt']:g} s ({p['integrator']}{crit})")
     if dyn_solvers:
-        lines.append(f"dynamics   : {stats['dynamic_newton_iterations']} iterations, {stats['dynamic_substeps']} "
+        lines.append(f"dynamics   : {stats['dynamic_newton_iterations']} general Newton iterations, {stats['dynamic_substeps']} "
                      f"sub-step splits, {stats['dynamic_factorizations']} factorization(s), "
                      f"{stats['dynamic_low_rank_solves']} low-rank solves, {stats['dynamic_ms_per_step']:.3g} ms/step")
         if stats["dynamic_joint_space_size"]:

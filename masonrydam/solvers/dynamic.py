@@ -610,8 +610,7 @@ class DynamicSolver:
         self.stats = DynamicStats()
         self.backend = resolve_backend(settings.linear_solver)
         self._Kj_full = None
-        self.js = None
-        self._js_by_h = {}
+        self._js_by_h = {}  # joint-space systems by step size (empty: the path is off)
 
     # ------------------------------------------------------------------------------------------
     def _setup(self, stage):
@@ -830,8 +829,7 @@ class DynamicSolver:
 
     def _setup_joint_space(self, ref):
         """Condense the nominal step on the nonlinear joints (:mod:`.joint_space`) if the settings and
-        the size allow; sets ``self.js`` (None when off)."""
-        self.js = None
+        the size allow (``self._js_by_h`` stays empty otherwise)."""
         self._js_by_h = {}
         s, m = self.s, self.model
         if s.joint_space == "off" or not m.nonlinear:
@@ -839,7 +837,7 @@ class DynamicSolver:
         size = joint_space_size(m)
         if s.joint_space == "auto" and size > JOINT_SPACE_MAX:
             return
-        self.js = self._new_joint_space(ref, s.dt)
+        self._new_joint_space(ref, s.dt)
         self.stats.joint_space_size = size
 
     def _new_joint_space(self, ref, h):
@@ -851,7 +849,7 @@ class DynamicSolver:
     def _joint_space_for(self, h):
         """The joint-space system of step size h: the nominal one, or one of a sub-step size (its
         all-stick matrix factorized and pinned, and its flexibility set up, when first needed)."""
-        if self.js is None:
+        if not self._js_by_h:
             return None
         js = self._js_by_h.get(h)
         if js is None:
@@ -943,8 +941,7 @@ class DynamicSolver:
 
     def _advance(self, stage, st, t_end, h, level):
         """Advance the committed state ``st`` by ``h`` to stage time ``t_end``, halving on failure."""
-        ok, new, why = self._implicit_try(st, t_end, h, check_energy=level < self.s.max_substeps,
-                                          can_split=level < self.s.max_substeps)
+        ok, new, why = self._implicit_try(st, t_end, h, can_split=level < self.s.max_substeps)
         if ok:
             return new
         self.model.revert()
@@ -958,9 +955,11 @@ class DynamicSolver:
         st = self._advance(stage, st, st.tau + 0.5 * h, 0.5 * h, level + 1)
         return self._advance(stage, st, t_end, 0.5 * h, level + 1)
 
-    def _implicit_try(self, st, t_end, h, check_energy=True, can_split=False):
+    def _implicit_try(self, st, t_end, h, can_split=True):
         """One step of size ``h`` from the committed state ``st`` to stage time ``t_end``; returns
-        (ok, new_state, why)."""
+        (ok, new_state, why). ``can_split``: the caller can still halve the step, so a joint-space
+        iteration that does not converge and a step that gains energy are refused (ok False) rather
+        than finished in the general path or accepted."""
         m, s = self.model, self.s
         free = self.free
         beta, gamma, am, af = s.coefficients()
@@ -977,6 +976,10 @@ class DynamicSolver:
         add = self._add(h)
         nonlinear = m.nonlinear
         p1_norm = float(np.linalg.norm(p1))
+
+        def force_scale(ma_norm, f_int, r0=0.0):
+            """Force scale of the convergence test (N)."""
+            return max(ma_norm, float(np.linalg.norm(f_int[free])), p1_norm, r0, 1e-30)
 
         def residual(u, f_int):
             a1 = (u[free] - un - h * vn - h * h * (0.5 - beta) * an) / (beta * h * h)
@@ -1018,7 +1021,7 @@ class DynamicSolver:
             if js is not None:
                 # condensed on the joints (module .joint_space): the step's solution from one or two
                 # substitutions; verified below against the full residual like any Newton iterate
-                ref = max(ma_norm, float(np.linalg.norm(f_int[free])), p1_norm, 1e-30)
+                ref = force_scale(ma_norm, f_int)
                 try:
                     u_js, its, converged, why = js.solve_step(
                         u, R, JOINT_SPACE_FORCE_FRACTION * s.force_tolerance * ref,
@@ -1034,7 +1037,7 @@ class DynamicSolver:
                     u, f_int, Kdata = u_js, f_j, None
                     hint[0] = True
                     R, a1, v1, ma_norm = residual(u, f_int)
-                    ref = max(ma_norm, float(np.linalg.norm(f_int[free])), p1_norm, 1e-30)
+                    ref = force_scale(ma_norm, f_int)
                     converged = converged and float(np.linalg.norm(R)) <= s.force_tolerance * ref
                 if converged:
                     self.stats.joint_space_steps += 1
@@ -1047,7 +1050,7 @@ class DynamicSolver:
                     self.stats.joint_space_fallbacks += 1
             while True:
                 rn = float(np.linalg.norm(R))
-                ref = max(ma_norm, float(np.linalg.norm(f_int[free])), p1_norm, r0 if it > 0 else 0.0, 1e-30)
+                ref = force_scale(ma_norm, f_int, r0 if it > 0 else 0.0)
                 force_ok = rn <= s.force_tolerance * ref
                 energy_ok = it == 0 or e0 == 0.0 or e_last <= s.energy_tolerance * e0
                 if force_ok and energy_ok:
@@ -1160,7 +1163,7 @@ class DynamicSolver:
         new.a[free] = a1
         new.Kc_u = m.K_continuum @ u
         self._record_energy(new, st)
-        if check_energy and nonlinear and s.energy_growth_tolerance > 0:
+        if can_split and nonlinear and s.energy_growth_tolerance > 0:
             # the trapezoidal work of a joint point that opens or closes within the step is not the
             # change of its stored energy (Armero & Petocz 1998, Comput. Methods Appl. Mech. Eng. 158;
             # Laursen & Chawla 1997, IJNME 40): with an implicit scheme an impact can create energy.

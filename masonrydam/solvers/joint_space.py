@@ -210,7 +210,8 @@ class JointSpace:
     def _line_search(self, delta, delta_y, q_n, err):
         """``delta += lam * step`` with the first ``lam`` of :data:`LINE_SEARCH_STEPS` that does not raise the
         force error ``err``, else the best of them (backtracking on a non-smooth law: a full step can
-        cross many stick/slip/open switches; each try costs a law pass and no substitution)."""
+        cross many stick/slip/open switches; each try costs a law pass and no substitution).
+        Returns the force error at the new ``delta``, with the law and ``self.F`` evaluated there."""
         delta_old = delta.copy()
         best = None
         for lam in LINE_SEARCH_STEPS:
@@ -220,10 +221,12 @@ class JointSpace:
             if best is None or e_try < best[0]:
                 best = (e_try, lam)
             if e_try <= err:
-                return
+                return e_try
         if best[1] != lam:
             np.add(delta_old, best[1] * self.step, out=delta)
             self._evaluate(delta)
+            return self._error(delta, delta_y, q_n)
+        return best[0]
 
     def _correction(self, rows, qt_rows):
         """Newton correction into ``self.step`` for the active components ``rows`` (their Qt rows
@@ -297,27 +300,28 @@ class JointSpace:
         if np.array_equal(self.q, q_n):
             self._dq_last = None
             return u_y, 0, True, ""  # every point kept its elastic state: the predictor is the solution
+        err = self._error(delta, delta_y, q_n)
         if self._dq_last is not None:
             # start from the joint forces changing as in the last step (a joint sliding on keeps
             # sliding at about the same rate): delta = delta_y - S dq_last, if that is closer
-            e0 = self._error(delta, delta_y, q_n)
             changed = np.flatnonzero(self._dq_last.reshape(-1, dim).any(axis=1)).astype(np.int64)
             trial = delta.copy()
             joint_space_residual(self.ST, np.zeros_like(delta), np.zeros_like(delta), self._dq_last, changed, dim,
                                  self.F)
             trial -= self.F
             self._evaluate(trial)
-            if self._error(trial, delta_y, q_n) < e0:
-                delta = trial
-            else:
+            e_trial = self._error(trial, delta_y, q_n)
+            if e_trial < err:
+                delta, err = trial, e_trial
+            else:  # back to the predictor (self.F was used as work space)
                 self._evaluate(delta)
+                err = self._error(delta, delta_y, q_n)
         flips = np.zeros(P, dtype=np.int64)
         initial = np.zeros(P, dtype=bool)
         seen, prev_sig, prev_key, stabilized, same = set(), None, None, False, 0
         it, why = 0, ""
         n_fixed = MAX_INITIAL_STIFFNESS_ITERATIONS if initial_stiffness_iterations is None else initial_stiffness_iterations
-        while True:
-            err = self._error(delta, delta_y, q_n)
+        while True:  # err and self.F are those of delta on entry to every iteration
             key = self._state_key()
             sig = key.tobytes()
             if err <= force_tolerance:
@@ -361,7 +365,7 @@ class JointSpace:
             it += 1
             if st != STATUS_OK:
                 return None, it, False, "NaN in the joint-space correction"
-            self._line_search(delta, delta_y, q_n, err)
+            err = self._line_search(delta, delta_y, q_n, err)
         dq = (self.q - q_n).ravel()
         self._dq_last = dq.copy() if not why else None
         u = u_y

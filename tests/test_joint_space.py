@@ -17,12 +17,12 @@ import numpy as np
 import pytest
 
 import masonrydam
-from masonrydam.errors import SceneError
+from masonrydam.errors import STATUS_NAN, SceneError
 from masonrydam.scene.build import build_mesh, build_model, build_stages
 from masonrydam.scene.scene import Scene
 from masonrydam.solvers.dynamic_kernels import STATUS_SINGULAR, woodbury_apply, woodbury_factor
-from masonrydam.solvers.joint_space import joint_operator, joint_space_size
-from masonrydam.solvers.joint_space_kernels import (STATUS_TOO_MANY_CHANGES, apply_correction, capacitance_factor,
+from masonrydam.solvers.joint_space import capacitance_lu, joint_operator, joint_space_size
+from masonrydam.solvers.joint_space_kernels import (STATUS_TOO_MANY_CHANGES, apply_correction,
                                                     capacitance_update_solve, joint_space_correction)
 
 G = 9.80665
@@ -106,16 +106,21 @@ def test_condensed_correction_equals_the_dense_newton_solve():
     expected = _dense_newton_correction(S, qt, F)
     rows = np.flatnonzero(qt.reshape(m, dim).any(axis=1)).astype(np.int64)
     assert len(rows) == 5
-    J, piv, z, step = np.zeros((8, 8)), np.zeros(8, dtype=np.int64), np.zeros(8), np.zeros(m)
+    z, step = np.zeros(8), np.zeros(m)
     ST = np.ascontiguousarray(S.T)
-    assert capacitance_factor(ST, rows, qt, J, piv) == 0
+    st, J, piv = capacitance_lu(ST, rows, qt)
+    assert st == 0
     assert joint_space_correction(ST, F, rows, qt, J, piv, z, step) == 0
     np.testing.assert_allclose(step, expected, rtol=1e-12, atol=1e-12 * np.abs(expected).max())
     # a singular capacitance matrix is reported, not solved: Qt = -S^-1 on one point's block
     qs = np.zeros((P, dim, dim))
     qs[2] = -np.linalg.inv(S[4:6, 4:6])
     rows2 = np.array([4, 5], dtype=np.int64)
-    assert capacitance_factor(ST, rows2, qs, J, piv) == STATUS_SINGULAR
+    assert capacitance_lu(ST, rows2, qs)[0] == STATUS_SINGULAR
+    # and a NaN in the law's tangent is reported before LAPACK sees it
+    qn = qt.copy()
+    qn[4, 0, 0] = np.nan
+    assert capacitance_lu(ST, rows, qn)[0] == STATUS_NAN
 
 
 def test_capacitance_update_equals_the_dense_newton_solve():
@@ -144,8 +149,8 @@ def test_capacitance_update_equals_the_dense_newton_solve():
     expected = _dense_newton_correction(S, q_cur, F)
     r_ref = np.flatnonzero(q_ref.reshape(m, dim).any(axis=1)).astype(np.int64)
     r_cur = np.flatnonzero(q_cur.reshape(m, dim).any(axis=1)).astype(np.int64)
-    J, piv = np.zeros((16, 16)), np.zeros(16, dtype=np.int64)
-    assert capacitance_factor(ST, r_ref, q_ref, J, piv) == 0
+    st, J, piv = capacitance_lu(ST, r_ref, q_ref)
+    assert st == 0
     z, step = np.zeros(16), np.zeros(m)
     args = (ST, r_ref, np.ascontiguousarray(q_ref.reshape(m, dim)[r_ref]), J, piv, r_cur,
             np.ascontiguousarray(q_cur.reshape(m, dim)[r_cur]), F)

@@ -254,6 +254,7 @@ def _stats_attrs(solver, t_start, dyn_solvers=()):
             "dynamic_steps": steps, "dynamic_substeps": sum(x.substeps for x in d),
             "dynamic_newton_iterations": sum(x.iterations for x in d),
             "dynamic_factorizations": sum(x.factorizations for x in d),
+            "dynamic_reference_solver": ",".join(sorted({x.reference_solver for x in d if x.reference_solver})),
             "dynamic_exact_reuse_solves": sum(x.exact_solves for x in d),
             "dynamic_low_rank_solves": sum(x.low_rank_solves for x in d),
             "dynamic_low_rank_columns": sum(x.low_rank_columns for x in d),
@@ -306,7 +307,8 @@ def print_summary(sc, mesh, model, eff, solver, stats, path, ds, file=None, dyn_
             lines.append(f"dynamic    : {p['stage']}: {p['steps']} steps of {p['dt']:g} s ({p['integrator']}{crit})")
     if dyn_solvers:
         lines.append(f"dynamics   : {stats['dynamic_newton_iterations']} general Newton iterations, {stats['dynamic_substeps']} "
-                     f"sub-step splits, {stats['dynamic_factorizations']} factorization(s), "
+                     f"sub-step splits, {stats['dynamic_factorizations']} factorization(s) "
+                     f"[all-stick matrix: {stats['dynamic_reference_solver'] or '-'}], "
                      f"{stats['dynamic_low_rank_solves']} low-rank solves, {stats['dynamic_ms_per_step']:.3g} ms/step")
         if stats["dynamic_joint_space_size"]:
             lines.append(f"joint space: {stats['dynamic_joint_space_size']} joint unknowns condensed (set-up "

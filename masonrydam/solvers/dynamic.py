@@ -163,12 +163,13 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
+from threadpoolctl import threadpool_limits
 
 from ..errors import ConvergenceError, NumericalError, SceneError
 from .dynamic_kernels import woodbury_apply, woodbury_factor
 from .joint_space import (JOINT_SPACE_MAX, MAX_INITIAL_STIFFNESS_ITERATIONS, SPLIT_INITIAL_STIFFNESS_ITERATIONS, JointSpace,
                           joint_space_size)
-from .linear import DIRECT_SOLVERS, Factorization, SingularMatrix, resolve_backend
+from .linear import DIRECT_SOLVERS, Factorization, SingularMatrix, SymmetricFactorization, resolve_backend
 from .modal import MassMatrix, RayleighDamping, elastic_joint_full, elastic_tangent_data
 
 JOINT_SPACE_MODES = ("auto", "on", "off")
@@ -388,6 +389,8 @@ class DynamicStats:
     joint_space_splits: int = 0
     joint_space_dense_factorizations: int = 0
     joint_space_dense_updates: int = 0
+    #: the solver of the first (all-stick) effective matrix: "ldlt", "pardiso" or "superlu"
+    reference_solver: str = ""
     per_stage: list = field(default_factory=list)
 
     def as_dict(self):
@@ -417,8 +420,10 @@ class EffectiveSolver:
             self.piv = None
             self.columns_computed = 0
 
-    def __init__(self, indptr, indices, n, backend="auto", max_rank=256, max_cached=MAX_CACHED, stats=None):
+    def __init__(self, indptr, indices, n, backend="auto", max_rank=256, max_cached=MAX_CACHED, stats=None,
+                 symmetric_fast=False):
         self.indptr, self.indices, self.n = indptr, indices, n
+        self.symmetric_fast = symmetric_fast
         self.rows = np.repeat(np.arange(n, dtype=np.int64), np.diff(indptr))
         self.cols = indices.astype(np.int64)
         self.backend = backend
@@ -433,8 +438,21 @@ class EffectiveSolver:
     def _matrix(self, data):
         return sp.csr_matrix((data, self.indices, self.indptr), shape=(self.n, self.n))
 
-    def factorize(self, data, pin=False, key=None):
-        fact = Factorization(self._matrix(data.copy()), self.backend)
+    def factorize(self, data, pin=False, key=None, symmetric=False):
+        """Factorize the effective matrix of values ``data`` and cache it (``pin``: never evicted).
+        ``symmetric``: the matrix is a symmetric positive definite one (the all-stick matrix of a step
+        size) that will be solved many times: with ``self.symmetric_fast`` it gets a sparse
+        ``L D L^T`` with fast substitutions (:class:`~masonrydam.solvers.linear.SymmetricFactorization`),
+        falling back to the general backend should that refuse it."""
+        fact = None
+        if symmetric and self.symmetric_fast:
+            try:
+                fact = SymmetricFactorization(self._matrix(data.copy()))
+            except (ValueError, SingularMatrix):
+                fact = None
+        if fact is None:
+            fact = Factorization(self._matrix(data.copy()), self.backend)
+        self.stats.reference_solver = self.stats.reference_solver or fact.backend
         ps = getattr(fact, "_ps", None)
         if ps is not None:
             # PARDISO's default two steps of iterative refinement make each substitution ~7x slower
@@ -495,7 +513,7 @@ class EffectiveSolver:
         if allow_inexact and self.refs:
             self.stats.modified_solves += 1
             return self._substitute(self.refs[0], b), "modified"
-        ref = self.factorize(data, key=key)
+        ref = self.factorize(data, key=key, symmetric=key is not None)  # keys name all-stick matrices
         return self._substitute(ref, b), "factorized"
 
     def _woodbury(self, ref, J, nz, data, b):
@@ -810,12 +828,17 @@ class DynamicSolver:
             if s.integrator == "central_difference":
                 st = self._run_explicit(stage, st)
             else:
+                # "auto": the all-stick matrices get the L D L^T with fast substitutions (linear.py)
                 self.eff = EffectiveSolver(m.indptr, m.indices, self.n, self.backend, s.low_rank_max,
-                                           max_cached=MAX_CACHED, stats=self.stats)
-                ref = self.eff.factorize(self._elastic_eff(s.dt), pin=True, key=("elastic", s.dt))
+                                           max_cached=MAX_CACHED, stats=self.stats,
+                                           symmetric_fast=s.linear_solver == "auto")
+                ref = self.eff.factorize(self._elastic_eff(s.dt), pin=True, key=("elastic", s.dt), symmetric=True)
                 self._setup_joint_space(ref)
                 try:
-                    st = self._run_implicit(stage, st)
+                    # one BLAS thread: the dense LU of the joint-space solver (LAPACK) must be bitwise
+                    # reproducible, and with few cores threads only slowed these small systems down
+                    with threadpool_limits(limits=1, user_api="blas"):
+                        st = self._run_implicit(stage, st)
                 finally:
                     for js in self._js_by_h.values():
                         self.stats.joint_space_dense_factorizations += js.factorizations
@@ -855,7 +878,7 @@ class DynamicSolver:
         if js is None:
             if not any(h == self.s.dt / 2 ** k for k in range(1, self.s.max_substeps + 1)):
                 return None  # e.g. a shorter last step of the stage: not worth a set-up
-            ref = self.eff.factorize(self._elastic_eff(h), pin=True, key=("elastic", h))
+            ref = self.eff.factorize(self._elastic_eff(h), pin=True, key=("elastic", h), symmetric=True)
             js = self._new_joint_space(ref, h)
         return js
 

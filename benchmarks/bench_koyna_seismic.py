@@ -84,6 +84,7 @@ def run_one(law, steps, element_size, joint_space="auto"):
             "factorizations": int(attrs["dynamic_factorizations"]),
             "substeps": int(attrs["dynamic_substeps"]),
             "low_rank": int(attrs.get("dynamic_low_rank_solves", 0)),
+            "reference_solver": str(attrs.get("dynamic_reference_solver", "")),
             "js_size": int(attrs.get("dynamic_joint_space_size", 0)),
             "js_setup": float(attrs.get("dynamic_joint_space_setup_s", 0.0)),
             "js_steps": int(attrs.get("dynamic_joint_space_steps", 0)),
@@ -120,7 +121,8 @@ def main():
         name = law if law == "linear" else f"{law}, joint_space = {js}"
         print(f"\n[{name}] dynamic stage {r['dyn_s']:.1f} s = {r['ms_per_step']:.2f} ms/step; "
               f"{r['its_per_step']:.2f} general Newton iterations/step, {r['factorizations']} factorizations, "
-              f"{r['substeps']} sub-steps, {r['low_rank']} low-rank solves; whole run {r['wall_s']:.1f} s; "
+              f"{r['substeps']} sub-steps, {r['low_rank']} low-rank solves, all-stick matrix by "
+              f"{r['reference_solver']}; whole run {r['wall_s']:.1f} s; "
               f"final joint states stick/slip/open {r['states']}; max |u_x| at the crest {r['crest_max_ux'] * 1e3:.1f} mm")
         if r["js_size"]:
             per_step = 1e3 * (r["dyn_s"] - r["js_setup"]) / max(args.steps, 1)

@@ -274,3 +274,85 @@ def test_joint_space_key_is_checked():
     sc = _sliding_scene("sometimes")
     with pytest.raises(SceneError, match=r"stages\[1\]\.joint_space"):
         masonrydam.run(sc)
+
+
+def test_held_points_stick_whatever_their_displacement():
+    """The iteration device of ``JointSpace.solve_step``: a held point gets the elastic traction
+    ``D0 (delta - s_p)`` from its committed plastic slip and the sticking ``q = -w ks s_p``, ``qt = 0``
+    (seed eq. 11), in the residual as in the tangent, however far its displacement has gone into
+    slip or opening; the same points not held follow the Mohr-Coulomb law (seed sec. 3.4)."""
+    from masonrydam.materials import mohr_coulomb as mc
+    from masonrydam.solvers.joint_space_kernels import joint_points_evaluate
+
+    ks, kn, tan_phi, w = 2e10, 5e10, 0.6, 0.25
+    params = np.zeros((1, mc.N_JOINT_PARAMS))
+    params[0, mc.P_KS], params[0, mc.P_KN], params[0, mc.P_TAN_PHI] = ks, kn, tan_phi
+    # point 0 slides (|tau_trial| > -tan_phi sigma), point 1 opens, point 2 sticks
+    delta = np.array([[3e-5, -1e-5], [1e-6, 2e-6], [1e-7, -1e-5]])
+    base = np.zeros((3, mc.N_JOINT_STATE))
+    base[:, mc.S_PLASTIC_SLIP] = [4e-6, 0.0, -2e-7]
+    base[:, mc.S_BOND_BROKEN] = 1.0
+    weight = np.full(3, w)
+    out = {}
+    for held in (np.zeros(3, dtype=np.int8), np.ones(3, dtype=np.int8)):
+        trial, traction = np.zeros_like(base), np.zeros((3, 2))
+        q, qt, codes = np.zeros((3, 2)), np.zeros((3, 2, 2)), np.zeros(3, dtype=np.int8)
+        assert joint_points_evaluate(params, np.zeros(3, dtype=np.int64), weight, delta, base, trial, traction, q, qt,
+                                     codes, np.zeros(1, dtype=np.int64), held) == 0
+        out[int(held[0])] = (codes.copy(), traction.copy(), q.copy(), qt.copy(), trial.copy())
+    codes, traction, q, qt, trial = out[0]
+    assert codes.tolist() == [mc.SLIP, mc.OPEN, mc.STICK]
+    assert np.abs(qt[0]).max() > 0 and np.abs(qt[1]).max() > 0
+    codes, traction, q, qt, trial = out[1]
+    assert codes.tolist() == [mc.STICK] * 3
+    np.testing.assert_allclose(traction[:, 0], ks * (delta[:, 0] - base[:, mc.S_PLASTIC_SLIP]), rtol=1e-15)
+    np.testing.assert_allclose(traction[:, 1], kn * delta[:, 1], rtol=1e-15)
+    np.testing.assert_allclose(q[:, 0], -w * ks * base[:, mc.S_PLASTIC_SLIP], rtol=1e-15)
+    assert not q[:, 1].any() and not qt.any()
+    np.testing.assert_array_equal(trial[:, mc.S_PLASTIC_SLIP], base[:, mc.S_PLASTIC_SLIP])
+    # the sticking point is the same either way
+    np.testing.assert_array_equal(out[0][1][2], out[1][1][2])
+
+
+def _koyna_scene(steps, element_size=3.0):
+    """Reference problem 5 (Koyna section, Chopra & Chakrabarti 1973 profile) cut by 10 lift joints and
+    the base joint, Mohr-Coulomb joints with a brittle bond (c = ft = 1 MPa, phi = 45 deg), self-weight
+    then El Centro scaled to 0.5 g: the benchmark of benchmarks/bench_koyna_seismic.py on a coarse mesh."""
+    joint = {"normal_stiffness": 1e11, "shear_stiffness": 1e11, "friction_angle": 45.0, "cohesion": 1e6,
+             "tensile_strength": 1e6}
+    return {
+        "model": {"name": "koyna", "hypothesis": "plane_strain", "thickness": 1.0},
+        "mesh": {"generator": "gravity_dam_2d",
+                 "parameters": {"preset": "koyna", "lift_heights": [103.0 * k / 11.0 for k in range(1, 11)],
+                                "foundation_width": 140.0, "foundation_depth": 20.0, "element_size": element_size}},
+        "materials": {"dam": {"youngs_modulus": 31.0e9, "poisson_ratio": 0.2, "density": 2643.0},
+                      "foundation": {"youngs_modulus": 18.0e9, "poisson_ratio": 0.2, "density": 0.0}},
+        "joints": {"lift_joints": joint, "base_joint": joint},
+        "supports": [{"set": "foundation_bottom"}],
+        "stages": [
+            {"name": "gravity", "loads": [{"type": "self_weight"}]},
+            {"name": "el_centro", "type": "dynamic", "dt": 0.01, "steps": steps, "integrator": "hht", "alpha": -0.1,
+             "damping": {"ratio": 0.05, "frequencies": [3.0, 15.0], "exclude_joints": True},
+             "ground_motion": {"x": {"record": "elcentro_1940_ns_ngaw2", "scale_to_pga": "0.5 g"}},
+             "output": {"stride": 50, "nodes": ["crest"]}},
+        ],
+    }
+
+
+def test_holding_flipping_points_cuts_the_iterations_of_a_cracking_dam(monkeypatch):
+    """When the neck of the Koyna section cracks (first 3 s of El Centro at 0.5 g), points on the
+    stick/slip and open/closed boundaries flip state from one Newton iteration to the next. Holding
+    them sticking until the others converge, then letting the true law decide, must take far fewer
+    iterations and halved steps than plain Newton with line search (FLIPS_BEFORE_HOLD made
+    unreachable), and every step must still converge in joint space: a held state is never
+    accepted (the caller checks every step against the full residual with the true law)."""
+    import masonrydam.solvers.joint_space as js_module
+
+    held = masonrydam.run(_koyna_scene(300)).attrs
+    monkeypatch.setattr(js_module, "FLIPS_BEFORE_HOLD", 10**9)
+    plain = masonrydam.run(_koyna_scene(300)).attrs
+    assert held["dynamic_joint_space_holds"] > 0 and plain["dynamic_joint_space_holds"] == 0
+    assert held["dynamic_joint_space_fallbacks"] == 0
+    assert held["dynamic_joint_space_steps"] >= 300
+    assert held["dynamic_joint_space_iterations"] < 0.5 * plain["dynamic_joint_space_iterations"]
+    assert held["dynamic_joint_space_splits"] < plain["dynamic_joint_space_splits"]

@@ -397,6 +397,7 @@ class DynamicStats:
     joint_space_splits: int = 0
     joint_space_dense_factorizations: int = 0
     joint_space_dense_updates: int = 0
+    joint_space_holds: int = 0
     #: the solver of the first (all-stick) effective matrix: "ldlt", "pardiso" or "superlu"
     reference_solver: str = ""
     per_stage: list = field(default_factory=list)
@@ -851,6 +852,7 @@ class DynamicSolver:
                     for js in self._js_by_h.values():
                         self.stats.joint_space_dense_factorizations += js.factorizations
                         self.stats.joint_space_dense_updates += js.updates
+                        self.stats.joint_space_holds += js.hold_events
         finally:
             m.set_open_tangent(1e-6)  # the static solver's regularisation (solvers.static.OPEN_TANGENT_REGULAR)
             self.stats.wall_time_s += time.perf_counter() - t_wall

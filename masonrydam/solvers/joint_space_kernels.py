@@ -24,15 +24,18 @@ from .dynamic_kernels import lu_factor_inplace, lu_solve_inplace
 
 @numba.njit(cache=True)
 def joint_points_evaluate(params_table, param_index, weight, delta, state_base, state_trial, traction, q, qt,
-                          codes, info):
+                          codes, info, held):
     """Joint law at every point for the local relative displacements ``delta`` (P, dim), from
     ``state_base`` (P, N_JOINT_STATE; read only) into ``state_trial`` and ``traction`` (P, dim).
 
     Writes ``q`` (P, dim) N, ``qt`` (P, dim, dim) N/m and the state ``codes`` (P,) int8. A sticking point
     has ``qt = 0`` and ``q = -w ks s_p`` (shear), 0 (normal) - written from the plastic slip, not as the
     difference ``w (t - D0 delta)``, so that it is exactly the same in every iteration and step while
-    the point sticks (its correction then never enters the condensed system). Returns STATUS_OK, or
-    STATUS_NAN with the point in ``info[0]``."""
+    the point sticks (its correction then never enters the condensed system). A point with
+    ``held[p] != 0`` (P,) int8 is held sticking whatever its ``delta``: elastic traction
+    ``D0 (delta - s_p)``, committed state otherwise (an iteration device of
+    :meth:`~masonrydam.solvers.joint_space.JointSpace.solve_step`, never a converged state). Returns
+    STATUS_OK, or STATUS_NAN with the point in ``info[0]``."""
     n_pts = delta.shape[0]
     dim = delta.shape[1]
     tangent = np.zeros((dim, dim))
@@ -42,11 +45,18 @@ def joint_points_evaluate(params_table, param_index, weight, delta, state_base, 
         if st != STATUS_OK:
             info[0] = p
             return st
-        code = int(state_trial[p, S_CODE])
-        codes[p] = code
         w = weight[p]
         ks = par[P_KS]
         kn = par[P_KN]
+        if held[p] != 0:
+            for k in range(state_base.shape[1]):
+                state_trial[p, k] = state_base[p, k]
+            state_trial[p, S_CODE] = STICK
+            for c in range(dim - 1):
+                traction[p, c] = ks * (delta[p, c] - state_base[p, S_PLASTIC_SLIP + c])
+            traction[p, dim - 1] = kn * delta[p, dim - 1]
+        code = int(state_trial[p, S_CODE])
+        codes[p] = code
         if code == STICK:
             for c in range(dim - 1):
                 q[p, c] = -w * ks * state_trial[p, S_PLASTIC_SLIP + c]
@@ -334,7 +344,7 @@ def apply_correction(ST, F, rows, z, step):
 
 @numba.njit(cache=True)
 def joint_space_evaluate_residual(params_table, param_index, weight, delta, state_base, state_trial, traction, q, qt,
-                                  codes, info, ST, delta_y, q_n, wk, F, err):
+                                  codes, info, held, ST, delta_y, q_n, wk, F, err):
     """The joint law at ``delta`` (:func:`joint_points_evaluate`, same arguments and outputs) and then the
     condensed residual ``F = delta - delta_y + S (q - q_n)`` (:func:`joint_space_residual`; only the
     points whose ``q`` changed contribute) and its force norm ``err[0] = |wk * F|`` (N), in one pass
@@ -344,7 +354,7 @@ def joint_space_evaluate_residual(params_table, param_index, weight, delta, stat
     dim = q.shape[1]
     n_pts = q.shape[0]
     st = joint_points_evaluate(params_table, param_index, weight, delta.reshape(n_pts, dim), state_base, state_trial,
-                               traction, q, qt, codes, info)
+                               traction, q, qt, codes, info, held)
     if st != STATUS_OK:
         return st
     m = F.shape[0]

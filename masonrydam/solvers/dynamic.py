@@ -677,12 +677,25 @@ class DynamicSolver:
                 raise SceneError(f"{s.key}ground_motion.{'xyz'[c]}", f"component {'xyz'[c]} in a {m.dim}D model")
         self._add_cache = {}
         self._kel_cache = {}
+        self._cf_memo = []
 
     def _Mf(self, x):
         return self.mdiag * x if self.mdiag is not None else self.M_free @ x
 
     def _Cf(self, x):
-        return self.C_free @ x if self.damped else np.zeros_like(x)
+        """Damping force ``C x`` on the free DOFs. A step asks for the damping force of the same
+        velocity up to five times (the step constant, the residual at the accepted iterate, the
+        energy balance of this step and of the next), so the last two products are remembered
+        (comparing 7 500 values costs a tenth of the sparse product). The returned array is shared:
+        callers must not modify it."""
+        if not self.damped:
+            return np.zeros_like(x)
+        for xc, yc in self._cf_memo:
+            if np.array_equal(xc, x):
+                return yc
+        y = self.C_free @ x
+        self._cf_memo = [(x.copy(), y), *self._cf_memo[:1]]
+        return y
 
     def ground_at(self, tau):
         ag = np.zeros(self.model.dim)

@@ -9,12 +9,8 @@ Prints wall time, ms per step, Newton iterations per step, factorizations and th
 the end, for both runs. Target of the issue: under 5 ms per step for the nonlinear run on one core.
 A benchmark, not a test: it never fails on a slow figure.
 
-Joint data (assumed, typical of concrete lift joints; Bhattacharjee & Leger 1993 use similar
-values): kn = ks = 1e11 Pa/m, cohesion 1 MPa, tensile strength 1 MPa, friction angle 45 deg (a bond
-that is lost for good when a point opens, seed sec. 3.4);
-concrete E = 31.0 GPa, nu = 0.2, rho = 2643 kg/m3 (Chopra & Chakrabarti 1973); rock E = 18 GPa.
-Rayleigh damping 5 % at 3 and 15 Hz on the continuum only (the first mode of the section on rock is
-about 3 Hz).
+The scene is ``examples/koyna_el_centro.toml`` (its header gives the data and their sources); the
+linear run replaces every joint by a linear one with the same stiffnesses.
 """
 from __future__ import annotations
 
@@ -38,30 +34,25 @@ if str(ROOT) not in sys.path:
 from _common import cpu_model  # noqa: E402
 
 
+SCENE_FILE = ROOT / "examples" / "koyna_el_centro.toml"
+
+
 def scene(law: str, steps: int, element_size: float) -> dict:
-    mc = {"normal_stiffness": 1e11, "shear_stiffness": 1e11, "friction_angle": 45.0, "cohesion": 1e6,
-          "tensile_strength": 1e6}
-    lin = {"law": "linear", "normal_stiffness": 1e11, "shear_stiffness": 1e11}
-    joint = mc if law == "mohr_coulomb" else lin
-    height = 103.0
-    lifts = [height * k / 11.0 for k in range(1, 11)]  # 10 lift joints
-    return {
-        "model": {"name": f"koyna_{law}", "hypothesis": "plane_strain", "thickness": 1.0},
-        "mesh": {"generator": "gravity_dam_2d",
-                 "parameters": {"preset": "koyna", "lift_heights": lifts, "foundation_width": 140.0,
-                                "foundation_depth": 20.0, "element_size": element_size}},
-        "materials": {"dam": {"youngs_modulus": 31.0e9, "poisson_ratio": 0.2, "density": 2643.0},
-                      "foundation": {"youngs_modulus": 18.0e9, "poisson_ratio": 0.2, "density": 0.0}},
-        "joints": {"lift_joints": joint, "base_joint": joint},
-        "supports": [{"set": "foundation_bottom"}],
-        "stages": [
-            {"name": "gravity", "loads": [{"type": "self_weight"}]},
-            {"name": "el_centro", "type": "dynamic", "dt": 0.01, "steps": steps, "integrator": "hht", "alpha": -0.1,
-             "damping": {"ratio": 0.05, "frequencies": [3.0, 15.0], "exclude_joints": True},
-             "ground_motion": {"x": {"record": "elcentro_1940_ns_ngaw2", "scale_to_pga": "0.5 g"}},
-             "output": {"stride": 10, "nodes": ["crest"]}},
-        ],
-    }
+    """The scene of ``examples/koyna_el_centro.toml`` with ``steps`` dynamic steps, the mesh size
+    ``element_size`` (m) and, for ``law = "linear"``, every joint linear with the same stiffnesses."""
+    import tomllib
+
+    sc = tomllib.loads(SCENE_FILE.read_text())
+    sc["model"]["name"] = f"koyna_{law}"
+    sc["mesh"]["parameters"]["element_size"] = element_size
+    sc["stages"][1]["steps"] = steps
+    if law == "linear":
+        for name, joint in sc["joints"].items():
+            sc["joints"][name] = {"law": "linear", "normal_stiffness": joint["normal_stiffness"],
+                                  "shear_stiffness": joint["shear_stiffness"]}
+    elif law != "mohr_coulomb":
+        raise ValueError(f"law must be 'mohr_coulomb' or 'linear', got {law!r}")
+    return sc
 
 
 def run_one(law, steps, element_size, joint_space="auto"):

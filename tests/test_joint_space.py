@@ -315,28 +315,17 @@ def test_held_points_stick_whatever_their_displacement():
 
 
 def _koyna_scene(steps, element_size=3.0):
-    """Reference problem 5 (Koyna section, Chopra & Chakrabarti 1973 profile) cut by 10 lift joints and
-    the base joint, Mohr-Coulomb joints with a brittle bond (c = ft = 1 MPa, phi = 45 deg), self-weight
-    then El Centro scaled to 0.5 g: the benchmark of benchmarks/bench_koyna_seismic.py on a coarse mesh."""
-    joint = {"normal_stiffness": 1e11, "shear_stiffness": 1e11, "friction_angle": 45.0, "cohesion": 1e6,
-             "tensile_strength": 1e6}
-    return {
-        "model": {"name": "koyna", "hypothesis": "plane_strain", "thickness": 1.0},
-        "mesh": {"generator": "gravity_dam_2d",
-                 "parameters": {"preset": "koyna", "lift_heights": [103.0 * k / 11.0 for k in range(1, 11)],
-                                "foundation_width": 140.0, "foundation_depth": 20.0, "element_size": element_size}},
-        "materials": {"dam": {"youngs_modulus": 31.0e9, "poisson_ratio": 0.2, "density": 2643.0},
-                      "foundation": {"youngs_modulus": 18.0e9, "poisson_ratio": 0.2, "density": 0.0}},
-        "joints": {"lift_joints": joint, "base_joint": joint},
-        "supports": [{"set": "foundation_bottom"}],
-        "stages": [
-            {"name": "gravity", "loads": [{"type": "self_weight"}]},
-            {"name": "el_centro", "type": "dynamic", "dt": 0.01, "steps": steps, "integrator": "hht", "alpha": -0.1,
-             "damping": {"ratio": 0.05, "frequencies": [3.0, 15.0], "exclude_joints": True},
-             "ground_motion": {"x": {"record": "elcentro_1940_ns_ngaw2", "scale_to_pga": "0.5 g"}},
-             "output": {"stride": 50, "nodes": ["crest"]}},
-        ],
-    }
+    """``examples/koyna_el_centro.toml`` (reference problem 5: the Koyna section, Chopra & Chakrabarti
+    1973 profile, cut by 10 lift joints and the base joint, Mohr-Coulomb joints with a brittle bond,
+    self-weight then El Centro at 0.5 g) on a coarse mesh, for ``steps`` steps."""
+    import tomllib
+    from pathlib import Path
+
+    sc = tomllib.loads((Path(__file__).resolve().parents[1] / "examples" / "koyna_el_centro.toml").read_text())
+    sc["mesh"]["parameters"]["element_size"] = element_size
+    sc["stages"][1]["steps"] = steps
+    sc["stages"][1]["output"]["stride"] = 50
+    return sc
 
 
 def test_holding_flipping_points_cuts_the_iterations_of_a_cracking_dam(monkeypatch):

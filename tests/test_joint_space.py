@@ -345,3 +345,25 @@ def test_holding_flipping_points_cuts_the_iterations_of_a_cracking_dam(monkeypat
     assert held["dynamic_joint_space_steps"] >= 300
     assert held["dynamic_joint_space_iterations"] < 0.5 * plain["dynamic_joint_space_iterations"]
     assert held["dynamic_joint_space_splits"] < plain["dynamic_joint_space_splits"]
+
+
+def test_no_point_stays_held_after_a_step():
+    """Held points are an iteration device of one step: ``solve_step`` starts with none held and leaves
+    none held whatever way the step ends (here the iteration raises half-way with points held), so a
+    later step never starts from a held law."""
+    from types import SimpleNamespace
+
+    from masonrydam.solvers.joint_space import JointSpace
+
+    seen = {}
+
+    def failing_step(*args):
+        seen["held_on_entry"] = fake.held.copy()
+        fake.held[1:3] = 1
+        raise FloatingPointError("NaN in the joint-space residual")
+
+    fake = SimpleNamespace(held=np.ones(4, dtype=np.int8), _solve_step=failing_step)
+    with pytest.raises(FloatingPointError):
+        JointSpace.solve_step(fake, None, None, 1.0)
+    assert not seen["held_on_entry"].any()
+    assert not fake.held.any()

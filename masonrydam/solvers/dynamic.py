@@ -461,7 +461,9 @@ class EffectiveSolver:
                 fact = None
         if fact is None:
             fact = Factorization(self._matrix(data.copy()), self.backend)
-        self.stats.reference_solver = self.stats.reference_solver or fact.backend
+        if symmetric:
+            names = set(filter(None, self.stats.reference_solver.split(","))) | {fact.backend}
+            self.stats.reference_solver = ",".join(sorted(names))
         ps = getattr(fact, "_ps", None)
         if ps is not None:
             # PARDISO's default two steps of iterative refinement make each substitution ~7x slower

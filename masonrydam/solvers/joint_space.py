@@ -106,10 +106,10 @@ def capacitance_lu(ST, rows, qt):
     piv = piv.astype(np.int64)
     if info < 0:  # pragma: no cover - an argument error would be a bug here
         raise ValueError(f"dgetrf: illegal argument {-info}")
-    if info > 0 or not (np.abs(np.diagonal(J)).min(initial=np.inf) > SINGULAR_PIVOT * scale[0]):
-        return STATUS_SINGULAR, J, piv
     if not np.isfinite(J).all():
         return STATUS_NAN, J, piv
+    if info > 0 or not (np.abs(np.diagonal(J)).min(initial=np.inf) > SINGULAR_PIVOT * scale[0]):
+        return STATUS_SINGULAR, J, piv
     return STATUS_OK, J, piv
 
 
@@ -299,6 +299,15 @@ class JointSpace:
         return (2 * self.codes + (self.traction[:, 0] > 0.0)).astype(np.int8)
 
     def solve_step(self, u_n, R_n, force_tolerance, initial_stiffness_iterations=None):
+        """Solve one step in joint space (see :meth:`_solve_step`); no point is held on entry, and none is
+        left held on any exit (return, non-convergence, NaN or an exception)."""
+        self.held[:] = 0
+        try:
+            return self._solve_step(u_n, R_n, force_tolerance, initial_stiffness_iterations)
+        finally:
+            self.held[:] = 0
+
+    def _solve_step(self, u_n, R_n, force_tolerance, initial_stiffness_iterations=None):
         """Solve one step in joint space.
 
         u_n : (n_dof,) m — start of the step (committed state); R_n : (n_eq,) N — the step's residual
@@ -384,6 +393,11 @@ class JointSpace:
                 sig = key.tobytes()
                 prev_key = None
             if it >= MAX_JOINT_SPACE_ITERATIONS + n_fixed:
+                if self.held.any():  # hand back an iterate of the true law, not of the held problem
+                    self.held[:] = 0
+                    err = self._evaluate(delta, delta_y, q_n)
+                    if err <= force_tolerance:
+                        break
                 why = (f"joint-space iteration: force error {err:.3g} N after {it} iterations "
                        f"({MAX_JOINT_SPACE_ITERATIONS} Newton, {n_fixed} with the initial stiffness)")
                 break
@@ -406,6 +420,8 @@ class JointSpace:
                         self.held[hold] = 1
                         self.hold_events += int(hold.sum())
                         err = self._evaluate(delta, delta_y, q_n)
+                        if err <= force_tolerance:
+                            continue  # the held problem is solved already: let the true law decide
                         key = self._state_key()
                         sig = key.tobytes()
             if not stabilized and sig != prev_sig and sig in seen:

@@ -367,12 +367,18 @@ def joint_space_evaluate_residual(params_table, param_index, weight, delta, stat
                 row = ST[p * dim + c]
                 for i in range(m):
                     F[i] += row[i] * v
-    acc = 0.0
+    big = 0.0  # scaled 2-norm (no overflow of the squares for a large but finite residual)
     for i in range(m):
-        x = wk[i] * F[i]
-        acc += x * x
-    if not (acc < np.inf):
-        info[0] = -1
-        return STATUS_NAN
-    err[0] = np.sqrt(acc)
+        x = abs(wk[i] * F[i])
+        if not (x < np.inf):
+            info[0] = -1
+            return STATUS_NAN
+        if x > big:
+            big = x
+    acc = 0.0
+    if big > 0.0:
+        for i in range(m):
+            x = wk[i] * F[i] / big
+            acc += x * x
+    err[0] = big * np.sqrt(acc)
     return STATUS_OK

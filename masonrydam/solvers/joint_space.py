@@ -333,7 +333,7 @@ class JointSpace:
         go for the rest of the step (never held again, so this terminates) and Newton goes on. A
         held state is never accepted: the iterate returned as converged always satisfies the true
         law. On the Koyna benchmark this took 42 % fewer iterations (4.2 instead of 6.9 per step)
-        and 5 halved steps instead of 139 than the per-point initial stiffness it replaced. A state
+        and 4-5 halved steps instead of 139 than the per-point initial stiffness it replaced. A state
         pattern that comes back gives every open point its initial (elastic) stiffness in the
         iteration matrix and latches broken bonds (the static solver's remedy, Zienkiewicz,
         Valliappan & King 1968)."""

@@ -254,7 +254,7 @@ def _stats_attrs(solver, t_start, dyn_solvers=()):
             "dynamic_steps": steps, "dynamic_substeps": sum(x.substeps for x in d),
             "dynamic_newton_iterations": sum(x.iterations for x in d),
             "dynamic_factorizations": sum(x.factorizations for x in d),
-            "dynamic_reference_solver": ",".join(sorted({n for x in d for n in x.reference_solver.split(",") if n})),
+            "dynamic_reference_solver": ",".join(sorted(set().union(*(x.reference_solvers for x in d)))),
             "dynamic_exact_reuse_solves": sum(x.exact_solves for x in d),
             "dynamic_low_rank_solves": sum(x.low_rank_solves for x in d),
             "dynamic_low_rank_columns": sum(x.low_rank_columns for x in d),

@@ -398,8 +398,8 @@ class DynamicStats:
     joint_space_dense_factorizations: int = 0
     joint_space_dense_updates: int = 0
     joint_space_holds: int = 0
-    #: the solver of the first (all-stick) effective matrix: "ldlt", "pardiso" or "superlu"
-    reference_solver: str = ""
+    #: the solvers of the all-stick effective matrices: "ldlt", "pardiso" or "superlu"
+    reference_solvers: set = field(default_factory=set)
     per_stage: list = field(default_factory=list)
 
     def as_dict(self):
@@ -462,8 +462,7 @@ class EffectiveSolver:
         if fact is None:
             fact = Factorization(self._matrix(data.copy()), self.backend)
         if symmetric:
-            names = set(filter(None, self.stats.reference_solver.split(","))) | {fact.backend}
-            self.stats.reference_solver = ",".join(sorted(names))
+            self.stats.reference_solvers.add(fact.backend)
         ps = getattr(fact, "_ps", None)
         if ps is not None:
             # PARDISO's default two steps of iterative refinement make each substitution ~7x slower

@@ -53,8 +53,9 @@ from scipy.linalg.lapack import dgetrf
 from ..errors import STATUS_NAN, STATUS_OK
 from ..materials import mohr_coulomb as mc
 from .dynamic_kernels import STATUS_SINGULAR
-from .joint_space_kernels import (apply_correction, capacitance_assemble, capacitance_update_solve, joint_points_evaluate,
-                                  joint_space_correction, joint_space_evaluate_residual, joint_space_residual)
+from .joint_space_kernels import (add_flexibility_product, apply_correction, capacitance_assemble,
+                                  capacitance_update_solve, joint_points_evaluate, joint_space_correction,
+                                  joint_space_evaluate_residual)
 
 #: largest number of joint components (points x dim) condensed by ``joint_space = "auto"``: the dense
 #: flexibility takes 8 m^2 bytes (288 MB at 6 000) and m substitutions to set up
@@ -358,15 +359,13 @@ class JointSpace:
         if self._dq_last is not None:
             # start from the joint forces changing as in the last step (a joint sliding on keeps
             # sliding at about the same rate): delta = delta_y - S dq_last, if that is closer
-            changed = np.flatnonzero(self._dq_last.reshape(-1, dim).any(axis=1)).astype(np.int64)
-            trial = delta.copy()
-            joint_space_residual(self.ST, np.zeros_like(delta), np.zeros_like(delta), self._dq_last, changed, dim,
-                                 self.F)
-            trial -= self.F
+            s_dq = np.zeros(self.m)
+            add_flexibility_product(self.ST, self._dq_last, s_dq)
+            trial = delta - s_dq
             e_trial = self._evaluate(trial, delta_y, q_n)
             if e_trial < err:
                 delta, err = trial, e_trial
-            else:  # back to the predictor (self.F was used as work space)
+            else:  # back to the predictor (the law arrays and self.F now hold the trial's)
                 err = self._evaluate(delta, delta_y, q_n)
         flips = np.zeros(P, dtype=np.int64)
         released = np.zeros(P, dtype=bool)  # held once in this step and let go: never held again

@@ -79,26 +79,16 @@ def joint_points_evaluate(params_table, param_index, weight, delta, state_base, 
 
 
 @numba.njit(cache=True)
-def joint_space_residual(ST, delta, delta_y, dq, changed, dim, F):
-    """``F = delta - delta_y + S dq`` with ``dq`` nonzero only at the points listed in ``changed``;
-    ``delta``, ``delta_y``, ``dq``, ``F`` flat (m,), ``dim`` components per point. Returns STATUS_OK
-    or STATUS_NAN."""
+def add_flexibility_product(ST, dq, F):
+    """``F += S dq`` (both flat (m,)): one column of ``S`` (a contiguous row of ``ST``) per nonzero
+    entry of ``dq``, which is nonzero only where a point's joint force changed."""
     m = F.shape[0]
-    for i in range(m):
-        F[i] = delta[i] - delta_y[i]
-    for k in range(changed.shape[0]):
-        p = changed[k]
-        for c in range(dim):
-            j = p * dim + c
-            v = dq[j]
-            if v != 0.0:
-                row = ST[j]
-                for i in range(m):
-                    F[i] += row[i] * v
-    for i in range(m):
-        if not (abs(F[i]) < np.inf):
-            return STATUS_NAN
-    return STATUS_OK
+    for j in range(m):
+        v = dq[j]
+        if v != 0.0:
+            row = ST[j]
+            for i in range(m):
+                F[i] += row[i] * v
 
 
 @numba.njit(cache=True)
@@ -346,7 +336,7 @@ def apply_correction(ST, F, rows, z, step):
 def joint_space_evaluate_residual(params_table, param_index, weight, delta, state_base, state_trial, traction, q, qt,
                                   codes, info, held, ST, delta_y, q_n, wk, F, err):
     """The joint law at ``delta`` (:func:`joint_points_evaluate`, same arguments and outputs) and then the
-    condensed residual ``F = delta - delta_y + S (q - q_n)`` (:func:`joint_space_residual`; only the
+    condensed residual ``F = delta - delta_y + S (q - q_n)`` (:func:`add_flexibility_product`; only the
     points whose ``q`` changed contribute) and its force norm ``err[0] = |wk * F|`` (N), in one pass
     from Python. ``delta``, ``delta_y``, ``wk``, ``F`` flat (m,); ``q_n`` (P, dim). Returns the law's
     status (a NaN of the law with its point in ``info[0]``), or STATUS_NAN with ``info[0] = -1`` for a
@@ -360,13 +350,7 @@ def joint_space_evaluate_residual(params_table, param_index, weight, delta, stat
     m = F.shape[0]
     for i in range(m):
         F[i] = delta[i] - delta_y[i]
-    for p in range(n_pts):
-        for c in range(dim):
-            v = q[p, c] - q_n[p, c]
-            if v != 0.0:
-                row = ST[p * dim + c]
-                for i in range(m):
-                    F[i] += row[i] * v
+    add_flexibility_product(ST, (q - q_n).ravel(), F)
     big = 0.0  # scaled 2-norm (no overflow of the squares for a large but finite residual)
     for i in range(m):
         x = abs(wk[i] * F[i])

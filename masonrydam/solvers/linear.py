@@ -143,6 +143,23 @@ def make_solver(K: sp.csr_matrix, backend: str = "auto", near_nullspace: np.ndar
     return Factorization(K, name, residual_check)
 
 
+def _check_matrix_finite(K: sp.spmatrix) -> None:
+    if not np.isfinite(K.data).all():
+        raise SingularMatrix("stiffness matrix contains NaN or infinity")
+
+
+def _check_solution(K: sp.spmatrix, x: np.ndarray, b: np.ndarray, residual_check: float) -> None:
+    """Raise SingularMatrix when the solution of ``K x = b`` is not finite or its relative residual
+    exceeds ``residual_check``."""
+    if not np.isfinite(x).all():
+        raise SingularMatrix("solution contains NaN or infinity")
+    nb = np.linalg.norm(b)
+    if nb > 0:
+        res = np.linalg.norm(K @ x - b) / nb
+        if res > residual_check:
+            raise SingularMatrix(f"relative residual of the linear solve is {res:.2e}")
+
+
 class Factorization:
     """LU factorization of a square CSR matrix; ``solve(b)`` returns x with K x = b.
 
@@ -158,8 +175,7 @@ class Factorization:
         self.backend = resolve_backend(backend)
         self.K = K
         self.residual_check = residual_check
-        if not np.isfinite(K.data).all():
-            raise SingularMatrix("stiffness matrix contains NaN or infinity")
+        _check_matrix_finite(K)
         if self.backend == "superlu":
             try:
                 self._lu = spla.splu(K.tocsc(), permc_spec="COLAMD")  # MMD_AT_PLUS_A took minutes at 40k DOF (docs/performance.md)
@@ -188,13 +204,7 @@ class Factorization:
             x = self._lu.solve(b)
         else:
             x = self._ps.solve(self._Kcopy, b)
-        if not np.isfinite(x).all():
-            raise SingularMatrix("solution contains NaN or infinity")
-        nb = np.linalg.norm(b)
-        if nb > 0:
-            res = np.linalg.norm(self.K @ x - b) / nb
-            if res > self.residual_check:
-                raise SingularMatrix(f"relative residual of the linear solve is {res:.2e}")
+        _check_solution(self.K, x, b, self.residual_check)
         return x
 
 
@@ -221,17 +231,16 @@ class SymmetricFactorization:
     backend = "ldlt"
 
     def __init__(self, K: sp.csr_matrix, residual_check: float = 1e-6):
+        from .iterative import is_symmetric
         from .ldlt_kernels import ldlt_solve_block, ldlt_solve_vector
 
         self._vector, self._block = ldlt_solve_vector, ldlt_solve_block
         self.K = K
         self.residual_check = residual_check
-        if not np.isfinite(K.data).all():
-            raise SingularMatrix("stiffness matrix contains NaN or infinity")
+        _check_matrix_finite(K)
         if not np.diff(K.indptr).all():
             raise SingularMatrix("stiffness matrix has an empty row")
-        asym = abs(K - K.T)
-        if asym.nnz and asym.max() > 1e-12 * abs(K).max():
+        if not is_symmetric(K):
             raise ValueError("SymmetricFactorization needs a symmetric matrix")
         try:
             lu = spla.splu(K.tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
@@ -269,10 +278,6 @@ class SymmetricFactorization:
         if st != 0:
             raise SingularMatrix("solution contains NaN or infinity")
         if not self._checked:
-            nb = np.linalg.norm(b)
-            if nb > 0:
-                res = np.linalg.norm(self.K @ x - b) / nb
-                if res > self.residual_check:
-                    raise SingularMatrix(f"relative residual of the linear solve is {res:.2e}")
+            _check_solution(self.K, x, b, self.residual_check)
             self._checked = True
         return x

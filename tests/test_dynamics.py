@@ -155,6 +155,67 @@ def sdof_max_omega(omega):
     return math.sqrt(np.linalg.eigvals(K / (1000.0 / 2.0)).real.max())
 
 
+@pytest.mark.parametrize("mass_form", ["lumped", "consistent"])
+def test_step_residual_kernels_are_the_newmark_residual(mass_form):
+    """``dynamic_kernels.newmark_kinematics`` and ``newmark_residual`` against the Newmark (1959)
+    relations written out with numpy (Hughes 2000, *The Finite Element Method*, sec. 9.1; HHT weight
+    w_m): a1 = (u - u_n - h v_n - h^2 (1/2 - beta) a_n) / (beta h^2), v1 = v_n + h ((1 - gamma) a_n +
+    gamma a1), R = w_m M a1 + C v1 + f_int + const, for a lumped (diagonal) and a consistent (sparse)
+    mass; a NaN in the forces is reported."""
+    import scipy.sparse as sp
+
+    from masonrydam.solvers.dynamic_kernels import newmark_kinematics, newmark_residual
+
+    rng = np.random.default_rng(5)
+    n_dof, n = 14, 10
+    free = np.sort(rng.choice(n_dof, n, replace=False))
+    A = sp.random(n, n, density=0.3, random_state=1, format="csr") + sp.eye(n, format="csr")
+    M = (A @ A.T).tocsr()
+    C = (0.3 * M + sp.random(n, n, density=0.2, random_state=2)).tocsr()
+    u, f_int = rng.normal(size=n_dof), rng.normal(size=n_dof)
+    un, vn, an, const = (rng.normal(size=n) for _ in range(4))
+    h, beta, gamma, w_m = 0.01, 0.3025, 0.6, 1.0 / 1.1
+    mdiag = np.asarray(M.sum(axis=1)).ravel()
+    a1, v1, Ma, R = (np.full(n, np.nan) for _ in range(4))
+    newmark_kinematics(u, free, un, vn, an, h, beta, gamma, mdiag if mass_form == "lumped" else np.zeros(0), a1, v1, Ma)
+    if mass_form == "consistent":
+        assert np.isnan(Ma).all()  # left to the caller (a scipy product)
+        Ma = M @ a1
+    Cv = C @ v1
+    assert newmark_residual(Ma, w_m, Cv, f_int, free, const, R) == 0
+    a_ref = (u[free] - un - h * vn - h * h * (0.5 - beta) * an) / (beta * h * h)
+    v_ref = vn + h * ((1.0 - gamma) * an + gamma * a_ref)
+    Mx = mdiag * a_ref if mass_form == "lumped" else M @ a_ref
+    R_ref = w_m * Mx + C @ v_ref + f_int[free] + const
+    np.testing.assert_allclose(a1, a_ref, rtol=1e-13)
+    np.testing.assert_allclose(v1, v_ref, rtol=1e-13)
+    np.testing.assert_allclose(Ma, w_m * Mx, rtol=1e-13)
+    np.testing.assert_allclose(R, R_ref, rtol=1e-12, atol=1e-12 * np.abs(R_ref).max())
+    f_int[free[3]] = np.nan
+    assert newmark_residual(Ma, w_m, Cv, f_int, free, const, R) != 0
+
+
+@pytest.mark.parametrize("lumped", [True, False])
+def test_step_works_kernel_is_the_trapezoidal_rule(lumped):
+    """``dynamic_kernels.step_works`` against the trapezoidal works of a step written out with numpy
+    (energy balance of Hughes 2000, *The Finite Element Method*, sec. 9.1.4): W = du . (f0 + f1) / 2 for
+    the earthquake, damping and joint forces (fj = f_int - K_continuum u), du . fs for the constant
+    loads, and the kinetic energy v . M v / 2 with a diagonal or a full mass product."""
+    from masonrydam.solvers.dynamic_kernels import step_works
+
+    rng = np.random.default_rng(9)
+    n_dof, n = 12, 9
+    free = np.sort(rng.choice(n_dof, n, replace=False))
+    u0, u1, f0, f1, kc0, kc1 = (rng.normal(size=n_dof) for _ in range(6))
+    pg0, pg1, fs, cv0, cv1, v1, mdiag, mv1 = (rng.normal(size=n) for _ in range(8))
+    out = np.empty(5)
+    step_works(free, u0, u1, pg0, pg1, fs, cv0, cv1, f0, f1, kc0, kc1, v1, mdiag if lumped else np.zeros(0), mv1, out)
+    du = u1[free] - u0[free]
+    ref = [0.5 * (pg0 + pg1) @ du, fs @ du, 0.5 * (cv0 + cv1) @ du,
+           0.5 * ((f0 - kc0)[free] + (f1 - kc1)[free]) @ du, 0.5 * v1 @ (mdiag * v1 if lumped else mv1)]
+    np.testing.assert_allclose(out, ref, rtol=1e-12)
+
+
 def test_central_difference_refuses_an_unstable_time_step():
     """Central difference is stable for omega_max dt <= 2 (Hughes 2000, sec. 9.1.2). The solver computes
     dt_crit from the largest eigenvalue of M^-1 K and refuses dt > 0.9 dt_crit with a SceneError that

@@ -314,6 +314,62 @@ def test_held_points_stick_whatever_their_displacement():
     np.testing.assert_array_equal(out[0][1][2], out[1][1][2])
 
 
+def test_reevaluating_some_points_equals_a_full_residual_evaluation():
+    """``joint_space_reevaluate_points`` (the law again at the points whose held flag changed, the
+    condensed residual ``F = delta - delta_y + S (q - q_n)`` updated by their change of joint force)
+    equals a full ``joint_space_evaluate_residual`` with the new flags, for a mix of sliding, open and
+    sticking points (seed eqs. 11-12, sec. 3.4) and a non-symmetric S."""
+    from masonrydam.materials import mohr_coulomb as mc
+    from masonrydam.solvers.joint_space_kernels import joint_space_evaluate_residual, joint_space_reevaluate_points
+
+    rng = np.random.default_rng(11)
+    P, dim = 40, 2
+    m = P * dim
+    ks, kn, tan_phi = 2e10, 5e10, 0.6
+    params = np.zeros((1, mc.N_JOINT_PARAMS))
+    params[0, mc.P_KS], params[0, mc.P_KN], params[0, mc.P_TAN_PHI] = ks, kn, tan_phi
+    params[0, mc.P_COHESION] = 1e5
+    index = np.zeros(P, dtype=np.int64)
+    weight = rng.uniform(0.1, 0.5, P)
+    base = np.zeros((P, mc.N_JOINT_STATE))
+    base[:, mc.S_PLASTIC_SLIP] = rng.normal(0.0, 1e-6, P)
+    delta = np.column_stack([rng.normal(0.0, 2e-5, P), rng.normal(-5e-6, 8e-6, P)]).ravel()
+    delta_y = delta + rng.normal(0.0, 1e-6, m)
+    wk = np.repeat(weight, dim) * np.tile([ks, kn], P)
+    ST = rng.normal(0.0, 1e-11, (m, m))
+    q_n = rng.normal(0.0, 1e3, (P, dim))
+
+    def arrays():
+        return (np.zeros_like(base), np.zeros((P, dim)), np.zeros((P, dim)), np.zeros((P, dim, dim)),
+                np.zeros(P, dtype=np.int8), np.zeros(1, dtype=np.int64))
+
+    def full(held):
+        trial, traction, q, qt, codes, info = out = arrays()
+        F, err = np.zeros(m), np.zeros(1)
+        assert joint_space_evaluate_residual(params, index, weight, delta, base, trial, traction, q, qt, codes, info,
+                                             held, ST, delta_y, q_n, wk, F, err) == 0
+        return out, F, err[0]
+
+    held0 = np.zeros(P, dtype=np.int8)
+    held0[::5] = 1
+    (trial, traction, q, qt, codes, info), F, err = full(held0)
+    assert {mc.STICK, mc.SLIP, mc.OPEN} <= set(codes.tolist())
+    held1 = held0.copy()
+    changed = np.array([0, 3, 7, 10, 21, 33], dtype=np.int64)  # some released, some newly held
+    held1[changed] = 1 - held1[changed]
+    e1 = np.zeros(1)
+    assert joint_space_reevaluate_points(changed, params, index, weight, delta, base, trial, traction, q, qt, codes,
+                                         info, held1, ST, wk, F, e1) == 0
+    (trial_r, traction_r, q_r, qt_r, codes_r, _), F_r, err_r = full(held1)
+    assert not np.array_equal(codes_r, full(held0)[0][4])  # the flags made a difference
+    np.testing.assert_array_equal(codes, codes_r)
+    np.testing.assert_array_equal(q, q_r)
+    np.testing.assert_array_equal(qt, qt_r)
+    np.testing.assert_array_equal(traction, traction_r)
+    np.testing.assert_allclose(F, F_r, rtol=0, atol=1e-12 * np.abs(F_r).max())
+    assert e1[0] == pytest.approx(err_r, rel=1e-12)
+
+
 def _koyna_scene(steps, element_size=3.0):
     """``examples/koyna_el_centro.toml`` (reference problem 5: the Koyna section, Chopra & Chakrabarti
     1973 profile, cut by 10 lift joints and the base joint, Mohr-Coulomb joints with a brittle bond,

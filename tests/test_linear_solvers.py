@@ -471,7 +471,8 @@ def test_symmetric_factorization_equals_the_direct_solve_on_a_jointed_wall():
     assert X.shape == B.shape
     for c in range(3):
         assert rel_err(X[:, c], direct(Kf, B[:, c])) < 1e-10
-    np.testing.assert_array_equal(X[:, 0], f.solve(bf))  # same arithmetic in both kernels
+    # the same substitutions up to the order of the backward sums (four partial sums in the vector kernel)
+    assert rel_err(X[:, 0], f.solve(bf)) < 1e-13
     n = Kf.shape[0]
     assert n < f.nnz_factor < n * (n + 1) // 2
 

@@ -395,3 +395,54 @@ force = [100.0, 0.0]
     assert rc == 2
     assert "stage 'slide'" in err and str(out) in err and "Traceback" not in err
     assert open_nc(out).attrs["completed"] == "false"
+
+
+@pytest.mark.parametrize("fast", [True, False])
+def test_writer_records_read_back_exactly(tmp_path, fast):
+    """The streamed writer (masonrydam/results/writer.py) appends records through netCDF4's low-level
+    ``Variable._put`` (fast) or the public ``var[k] = x`` (its fallback); either way xarray reads back
+    exactly the values written, a static step has NaN dynamic variables, and the step count grows by
+    one per record."""
+    from masonrydam.results.writer import ENERGY_VARIABLES, ResultWriter
+
+    rng = np.random.default_rng(7)
+    n_nodes, n_out, n_jp, dim = 6, 3, 4, 2
+    jp = {"x": rng.random((n_jp, dim)), "set": np.zeros(n_jp, int), "set_names": ["bed"],
+          "element": np.arange(n_jp), "point": np.zeros(n_jp, int), "normal": np.tile([0.0, 1.0], (n_jp, 1)),
+          "shear_axes": np.tile([[[1.0, 0.0]]], (n_jp, 1, 1)), "weight": np.ones(n_jp)}
+    path = tmp_path / "w.nc"
+    w = ResultWriter(path, rng.random((n_nodes, dim)), np.array([0, 2, 5]), jp, dim, {}, dynamic=True)
+    w._fast_append = fast and w._fast_append
+    assert w._fast_append == fast
+    written = []
+    for k in range(4):
+        rec = {"u": rng.random((n_out, dim)), "r": rng.random((n_out, dim)),
+               "joints": {"opening": rng.random(n_jp), "slip": rng.random((n_jp, 1)), "plastic_slip": rng.random((n_jp, 1)),
+                          "t_normal": rng.random(n_jp), "t_shear": rng.random((n_jp, 1)),
+                          "state": rng.integers(0, 3, n_jp).astype(np.int8)},
+               "dynamic": None if k == 0 else {
+                   "time": 0.01 * k, "velocity": rng.random((n_out, dim)), "acceleration": rng.random((n_out, dim)),
+                   "acceleration_absolute": rng.random((n_out, dim)), "ground_acceleration": rng.random(dim),
+                   "energy": {name: float(rng.random()) for name in ENERGY_VARIABLES}}}
+        w.write_step(int(k > 0), 0.25 * k, k + 1, rec["u"], rec["r"], rec["joints"], rec["dynamic"])
+        written.append(rec)
+    w.close(True, "done")
+    ds = xr.load_dataset(path)
+    assert ds.sizes["step"] == 4
+    assert list(ds.stage.values) == [0, 1, 1, 1] and list(ds.iterations.values) == [1, 2, 3, 4]
+    assert np.array_equal(ds.load_factor.values, [0.0, 0.25, 0.5, 0.75])
+    assert np.isnan(ds.time.values[0]) and np.isnan(ds.velocity.values[0]).all()
+    for k, rec in enumerate(written):
+        assert np.array_equal(ds.displacement.values[k], rec["u"])
+        assert np.array_equal(ds.reaction.values[k], rec["r"])
+        assert np.array_equal(ds.joint_opening.values[k], rec["joints"]["opening"])
+        assert np.array_equal(ds.joint_slip.values[k], rec["joints"]["slip"])
+        assert np.array_equal(ds.joint_traction_shear.values[k], rec["joints"]["t_shear"])
+        assert np.array_equal(ds.joint_state.values[k], rec["joints"]["state"])
+        if rec["dynamic"] is not None:
+            d = rec["dynamic"]
+            assert ds.time.values[k] == d["time"]
+            assert np.array_equal(ds.acceleration_absolute.values[k], d["acceleration_absolute"])
+            assert np.array_equal(ds.ground_acceleration.values[k], d["ground_acceleration"])
+            for name in ENERGY_VARIABLES:
+                assert ds[f"energy_{name}"].values[k] == d["energy"][name]

@@ -134,7 +134,9 @@ class Model:
 
         Interfaces are evaluated from their committed state (trial state updated).
         """
-        f = self.K_continuum @ u
+        fc = self.K_continuum @ u
+        self._continuum_force = (u.copy(), fc)
+        f = fc.copy()
         data = self.K_linear_data.copy() if want_tangent else None
         for g in self.igroups:
             g.evaluate(self.coords, u, want_tangent)
@@ -146,6 +148,14 @@ class Model:
             n = self.dofmap.n_eq
             K = sp.csr_matrix((data, self.indices, self.indptr), shape=(n, n))
         return f, K
+
+    def continuum_force(self, u: np.ndarray) -> np.ndarray:
+        """``K_continuum @ u`` (n_dof,) N: the one :meth:`evaluate` computed if it was called last at this very
+        ``u`` (a comparison instead of a sparse product), else computed. The array is shared: do not modify."""
+        cached = getattr(self, "_continuum_force", None)
+        if cached is not None and np.array_equal(cached[0], u):
+            return cached[1]
+        return self.K_continuum @ u
 
     def set_open_tangent(self, factor: float) -> None:
         """Tangent factor of open joint points (0: consistent; 1: initial stiffness). Residuals unchanged."""

@@ -62,7 +62,10 @@ SLIP = 1
 OPEN = 2
 
 
-@njit(cache=True)
+# inlined into its callers (numba IR inlining): the call with six array arguments cost as much as the
+# law itself; inlined, the joint-space law pass over 588 points took 24 us instead of 43 us
+# (interleaved timing, min of 60 blocks)
+@njit(cache=True, inline="always")
 def mohr_coulomb_update(params, delta, state_committed, state_trial, traction, tangent):
     """Return-mapping update of the seed's Mohr-Coulomb joint at one integration point.
 

@@ -123,6 +123,10 @@ class ResultWriter:
         nc.status = "running"
         nc.sync()
         self.n = 0
+        #: the step variables, looked up once; records are appended by ``Variable._put`` (see _append)
+        self._step_vars = {name: nc[name] for name in nc.variables
+                           if nc[name].dimensions and nc[name].dimensions[0] == "step"}
+        self._fast_append = hasattr(netCDF4.Variable, "_put")
 
     def _dynamic_variables(self):
         nc = self.nc
@@ -159,41 +163,65 @@ class ResultWriter:
         v.long_name = long_name
         return v
 
+    def _append(self, name, k, value):
+        """Write record ``k`` of the step variable ``name``.
+
+        Through netCDF4-python's low-level ``Variable._put(data, start, count, stride)`` when it has one:
+        the public ``var[k] = value`` spends about 0.12 ms per call in Python (index parsing, masking)
+        around a write that takes 0.02 ms (measured with netCDF4 1.7.5), and a seismic run writes 26
+        variables per recorded step, which made the output the largest cost of a run outside the
+        solver. ``_put`` is private but has had this signature since netCDF4-python 1.0; if it is
+        missing or refuses the call, this writer switches to the public API for good (same file)."""
+        var = self._step_vars[name]
+        if self._fast_append:
+            shape = var.shape[1:]
+            data = np.ascontiguousarray(value, dtype=var.dtype).reshape((1,) + shape)
+            nd = len(shape) + 1
+            start = np.zeros(nd, dtype=np.intp)
+            start[0] = k
+            count = np.array((1,) + shape, dtype=np.intp)
+            try:
+                var._put(data, start, count, np.ones(nd, dtype=np.intp))
+                return
+            except (AttributeError, TypeError):
+                self._fast_append = False
+        var[k] = value
+
     def write_step(self, stage, load_factor, iterations, displacement, reaction, joints, dynamic=None):
         """Append one converged step. displacement, reaction: (n_out, dim);
         joints: dict opening (n_jp,), slip (n_jp, dim-1), plastic_slip, t_normal, t_shear, state;
         dynamic (time-history files, dynamic steps): dict time (s), velocity, acceleration,
         acceleration_absolute (n_out, dim), ground_acceleration (dim,), energy (dict name -> J)."""
         k = self.n
-        nc = self.nc
+        put = self._append
         if self.dynamic:
             if dynamic is None:
-                nc["time"][k] = np.nan
+                put("time", k, np.nan)
             else:
-                nc["time"][k] = dynamic["time"]
-                nc["velocity"][k] = dynamic["velocity"]
-                nc["acceleration"][k] = dynamic["acceleration"]
-                nc["acceleration_absolute"][k] = dynamic["acceleration_absolute"]
-                nc["ground_acceleration"][k] = dynamic["ground_acceleration"]
+                put("time", k, dynamic["time"])
+                put("velocity", k, dynamic["velocity"])
+                put("acceleration", k, dynamic["acceleration"])
+                put("acceleration_absolute", k, dynamic["acceleration_absolute"])
+                put("ground_acceleration", k, dynamic["ground_acceleration"])
                 for name in ENERGY_VARIABLES:
-                    nc[f"energy_{name}"][k] = dynamic["energy"][name]
+                    put(f"energy_{name}", k, dynamic["energy"][name])
         elif dynamic is not None:
             raise ValueError("this writer was created without dynamic=True")
-        nc["step"][k] = k
-        nc["load_factor"][k] = load_factor
-        nc["stage"][k] = stage
-        nc["iterations"][k] = iterations
-        nc["displacement"][k] = displacement
-        nc["reaction"][k] = reaction
+        put("step", k, k)
+        put("load_factor", k, load_factor)
+        put("stage", k, stage)
+        put("iterations", k, iterations)
+        put("displacement", k, displacement)
+        put("reaction", k, reaction)
         if len(joints["opening"]):
-            nc["joint_opening"][k] = joints["opening"]
-            nc["joint_slip"][k] = joints["slip"]
-            nc["joint_plastic_slip"][k] = joints["plastic_slip"]
-            nc["joint_traction_normal"][k] = joints["t_normal"]
-            nc["joint_traction_shear"][k] = joints["t_shear"]
-            nc["joint_state"][k] = joints["state"]
+            put("joint_opening", k, joints["opening"])
+            put("joint_slip", k, joints["slip"])
+            put("joint_plastic_slip", k, joints["plastic_slip"])
+            put("joint_traction_normal", k, joints["t_normal"])
+            put("joint_traction_shear", k, joints["t_shear"])
+            put("joint_state", k, joints["state"])
         self.n += 1
-        nc.sync()
+        self.nc.sync()
 
     def close(self, completed: bool, status: str, extra_attrs: dict | None = None):
         if not self.nc.isopen():

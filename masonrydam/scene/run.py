@@ -268,6 +268,8 @@ def _stats_attrs(solver, t_start, dyn_solvers=()):
             "dynamic_joint_space_dense_factorizations": sum(x.joint_space_dense_factorizations for x in d),
             "dynamic_joint_space_dense_updates": sum(x.joint_space_dense_updates for x in d),
             "dynamic_joint_space_holds": sum(x.joint_space_holds for x in d),
+            "dynamic_joint_space_column_recoveries": sum(x.joint_space_column_recoveries for x in d),
+            "dynamic_joint_space_column_memory_MB": round(max(x.joint_space_column_bytes for x in d) / 2**20, 2),
             "dynamic_joint_space_setup_s": round(sum(x.joint_space_setup_s for x in d), 4),
             "dynamic_wall_time_s": round(wall, 4),
             "dynamic_output_time_s": round(sum(x.output_time_s for x in d), 4),
@@ -317,7 +319,9 @@ def print_summary(sc, mesh, model, eff, solver, stats, path, ds, file=None, dyn_
                          f"solved there in {stats['dynamic_joint_space_iterations']} iterations "
                          f"({stats['dynamic_joint_space_dense_factorizations']} dense LU, "
                          f"{stats['dynamic_joint_space_dense_updates']} low-rank updates of them, "
-                         f"{stats['dynamic_joint_space_holds']} flipping points held sticking), "
+                         f"{stats['dynamic_joint_space_holds']} flipping points held sticking, "
+                         f"{stats['dynamic_joint_space_column_recoveries']} recoveries from "
+                         f"{stats['dynamic_joint_space_column_memory_MB']:.3g} MB of stored columns), "
                          f"{stats['dynamic_joint_space_splits']} halved, "
                          f"{stats['dynamic_joint_space_fallbacks']} finished by the general path")
         else:

@@ -174,7 +174,7 @@ import scipy.sparse.linalg as spla
 from threadpoolctl import threadpool_limits
 
 from ..errors import ConvergenceError, NumericalError, SceneError
-from .dynamic_kernels import woodbury_apply, woodbury_factor
+from .dynamic_kernels import newmark_kinematics, newmark_residual, step_works, woodbury_apply, woodbury_factor
 from .joint_space import (JOINT_SPACE_MAX, MAX_INITIAL_STIFFNESS_ITERATIONS, SPLIT_INITIAL_STIFFNESS_ITERATIONS, JointSpace,
                           joint_space_size)
 from .linear import DIRECT_SOLVERS, Factorization, SingularMatrix, SymmetricFactorization, resolve_backend
@@ -398,6 +398,10 @@ class DynamicStats:
     joint_space_dense_factorizations: int = 0
     joint_space_dense_updates: int = 0
     joint_space_holds: int = 0
+    #: converged joint-space steps whose displacements came from the stored columns of K_ref^-1 B^T
+    joint_space_column_recoveries: int = 0
+    #: bytes of those stored columns (all step sizes)
+    joint_space_column_bytes: int = 0
     #: the solvers of the all-stick effective matrices: "ldlt", "pardiso" or "superlu"
     reference_solvers: set = field(default_factory=set)
     per_stage: list = field(default_factory=list)
@@ -679,6 +683,12 @@ class DynamicSolver:
         self._add_cache = {}
         self._kel_cache = {}
         self._cf_memo = []
+        self._pg_memo = []
+        self._joint_compliance = None
+        # operands of the step residual kernels (dynamic_kernels.newmark_kinematics: the lumped mass
+        # diagonal, or nothing for a consistent mass; no damping: a zero damping force)
+        self._mass_diag = self.mdiag if self.mdiag is not None else np.zeros(0)
+        self._zeros_free = np.zeros(self.n)
 
     def _Mf(self, x):
         return self.mdiag * x if self.mdiag is not None else self.M_free @ x
@@ -686,17 +696,23 @@ class DynamicSolver:
     def _Cf(self, x):
         """Damping force ``C x`` on the free DOFs. A step asks for the damping force of the same
         velocity up to five times (the step constant, the residual at the accepted iterate, the
-        energy balance of this step and of the next), so the last two products are remembered
-        (comparing 7 500 values costs a tenth of the sparse product). The returned array is shared:
-        callers must not modify it."""
+        energy balance of this step and of the next), so the last three products are remembered;
+        comparing 7 500 values costs a tenth of the sparse product. (With two, a joint-space step,
+        which evaluates the residual at two velocities, lost the start-of-step one before its energy
+        balance: three products per step instead of two.) The returned array is shared: callers must
+        not modify it."""
         if not self.damped:
             return np.zeros_like(x)
         for xc, yc in self._cf_memo:
             if np.array_equal(xc, x):
                 return yc
         y = self.C_free @ x
-        self._cf_memo = [(x.copy(), y), *self._cf_memo[:1]]
+        self._remember_Cf(x, y)
         return y
+
+    def _remember_Cf(self, x, y):
+        """Remember ``y = C x`` for :meth:`_Cf` (the three most recent products)."""
+        self._cf_memo = [(x.copy(), y), *self._cf_memo[:2]]
 
     def ground_at(self, tau):
         ag = np.zeros(self.model.dim)
@@ -705,8 +721,16 @@ class DynamicSolver:
         return ag
 
     def _pg_f(self, ag):
-        """Earthquake load on the free DOFs, -sum_c (M iota_c) a_g,c."""
-        return -(ag @ self.Miota_f)
+        """Earthquake load on the free DOFs, -sum_c (M iota_c) a_g,c. A step asks for it at its two ends
+        twice (the step loads and the energy balance): the last two are remembered. Shared array: do
+        not modify."""
+        key = ag.tobytes()
+        for k, v in self._pg_memo:
+            if k == key:
+                return v
+        v = -(ag @ self.Miota_f)
+        self._pg_memo = [(key, v), *self._pg_memo[:1]]
+        return v
 
     def _elastic_eff(self, h):
         """Effective-matrix values with every joint point sticking, for step h (cached)."""
@@ -784,13 +808,16 @@ class DynamicSolver:
         hardening are counted as dissipated."""
         from ..materials import mohr_coulomb as mc
 
+        if self._joint_compliance is None:  # w / (2 kn) and w / (2 ks) per point (m^3/N), once per stage
+            self._joint_compliance = []
+            for g in self.model.igroups:
+                p = g.params_table[g.param_index]  # (ne, P)
+                w = g.jw * g.thickness[:, None]
+                self._joint_compliance.append((0.5 * w / p[:, mc.P_KN][:, None], 0.5 * w / p[:, mc.P_KS][:, None]))
         e = 0.0
-        for g in self.model.igroups:
-            p = g.params_table[g.param_index]  # (ne, P)
+        for g, (cn, cs) in zip(self.model.igroups, self._joint_compliance):
             t = g.traction
-            w = g.jw * g.thickness[:, None]
-            ks, kn = p[:, mc.P_KS][:, None], p[:, mc.P_KN][:, None]
-            e += float(np.sum(w * (0.5 * t[:, :, -1] ** 2 / kn + 0.5 * np.sum(t[:, :, :-1] ** 2, axis=2) / ks)))
+            e += float(np.sum(cn * t[:, :, -1] ** 2)) + float(np.sum(cs * np.sum(t[:, :, :-1] ** 2, axis=2)))
         return e
 
     # ------------------------------------------------------------------------------------------
@@ -867,6 +894,10 @@ class DynamicSolver:
                         self.stats.joint_space_dense_factorizations += js.factorizations
                         self.stats.joint_space_dense_updates += js.updates
                         self.stats.joint_space_holds += js.hold_events
+                        self.stats.joint_space_column_recoveries += js.column_recoveries
+                        self.stats.joint_space_column_bytes = max(
+                            self.stats.joint_space_column_bytes,
+                            sum(x.XT.nbytes for x in self._js_by_h.values() if x.XT is not None))
         finally:
             m.set_open_tangent(1e-6)  # the static solver's regularisation (solvers.static.OPEN_TANGENT_REGULAR)
             self.stats.wall_time_s += time.perf_counter() - t_wall
@@ -889,7 +920,8 @@ class DynamicSolver:
 
     def _new_joint_space(self, ref, h):
         t0 = time.perf_counter()
-        js = self._js_by_h[h] = JointSpace(self.model, ref.fact)
+        # the stored recovery columns (n_eq x m) only at the nominal step size: sub-steps are rare
+        js = self._js_by_h[h] = JointSpace(self.model, ref.fact, store_columns=h == self.s.dt)
         self.stats.joint_space_setup_s += time.perf_counter() - t0
         return js
 
@@ -910,17 +942,18 @@ class DynamicSolver:
     def _record_energy(self, st, prev):
         """Accumulate the trapezoidal works of the step prev -> st and the balance error."""
         free = self.free
-        du = st.u[free] - prev.u[free]
         e = dict(prev.energy)
-        pg0, pg1 = self._pg_f(prev.ag), self._pg_f(st.ag)
-        e["input"] += 0.5 * float((pg0 + pg1) @ du)
-        e["external"] += float(self.fs_f @ du)
-        if self.damped:
-            e["damping"] += 0.5 * float((self._Cf(prev.v[free]) + self._Cf(st.v[free])) @ du)
-        fj0 = prev.f_int[free] - prev.Kc_u[free]
-        fj1 = st.f_int[free] - st.Kc_u[free]
-        e["joint"] += 0.5 * float((fj0 + fj1) @ du)
-        e["kinetic"] = 0.5 * float(st.v[free] @ self._Mf(st.v[free])) - self._en_ref["kinetic0"]
+        v0f, v1f = prev.v[free], st.v[free]
+        cv0, cv1 = (self._Cf(v0f), self._Cf(v1f)) if self.damped else (self._zeros_free, self._zeros_free)
+        mv1 = self._zeros_free if self.mdiag is not None else self._Mf(v1f)
+        w = np.empty(5)
+        step_works(free, prev.u, st.u, self._pg_f(prev.ag), self._pg_f(st.ag), self.fs_f, cv0, cv1, prev.f_int,
+                   st.f_int, prev.Kc_u, st.Kc_u, v1f, self._mass_diag, mv1, w)
+        e["input"] += float(w[0])
+        e["external"] += float(w[1])
+        e["damping"] += float(w[2])
+        e["joint"] += float(w[3])
+        e["kinetic"] = float(w[4]) - self._en_ref["kinetic0"]
         e["strain"] = 0.5 * float(st.u @ st.Kc_u) - self._en_ref["strain0"]
         if self.model.igroups:
             e["joint_stored"] = self._joint_stored() - self._en_ref["stored0"]
@@ -1029,11 +1062,15 @@ class DynamicSolver:
             return max(ma_norm, float(np.linalg.norm(f_int[free])), p1_norm, r0, 1e-30)
 
         def residual(u, f_int):
-            a1 = (u[free] - un - h * vn - h * h * (0.5 - beta) * an) / (beta * h * h)
-            v1 = vn + h * ((1.0 - gamma) * an + gamma * a1)
-            Ma = w_m * self._Mf(a1)
-            R = Ma + self._Cf(v1) + f_int[free] + const
-            if not np.isfinite(R).all():
+            n = len(un)
+            R, a1, v1, Ma = (np.empty(n) for _ in range(4))
+            newmark_kinematics(u, free, un, vn, an, h, beta, gamma, self._mass_diag, a1, v1, Ma)
+            if self.mdiag is None:
+                Ma = self.M_free @ a1
+            Cv = self.C_free @ v1 if self.damped else self._zeros_free
+            if self.damped:
+                self._remember_Cf(v1, Cv)
+            if newmark_residual(Ma, w_m, Cv, f_int, free, const, R) != 0:
                 raise NumericalError("NaN or infinity in the dynamic residual")
             return R, a1, v1, float(np.linalg.norm(Ma))
 
@@ -1208,7 +1245,7 @@ class DynamicSolver:
                          Kdata.copy() if Kdata is not None else None, ag1)
         new.v[free] = v1
         new.a[free] = a1
-        new.Kc_u = m.K_continuum @ u
+        new.Kc_u = m.continuum_force(u)
         self._record_energy(new, st)
         if can_split and nonlinear and s.energy_growth_tolerance > 0:
             # the trapezoidal work of a joint point that opens or closes within the step is not the
@@ -1256,7 +1293,7 @@ class DynamicSolver:
             new = _StepState(st.t - st.tau + t_end, t_end, u, np.zeros_like(st.v), np.zeros_like(st.a), f_int, None, ag1)
             new.a[free] = a1
             new.v[free] = v_half + 0.5 * h * a1
-            new.Kc_u = m.K_continuum @ u
+            new.Kc_u = m.continuum_force(u)
             self._record_energy(new, st)
             self._accept_energy(new)
             st = new

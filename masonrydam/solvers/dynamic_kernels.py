@@ -130,3 +130,78 @@ def woodbury_apply(ZT, J, e_row, e_col, e_val, S, piv, y, w, x):
         if not (abs(x[j]) < np.inf):
             return STATUS_NAN
     return STATUS_OK
+
+
+@numba.njit(cache=True)
+def newmark_kinematics(u, free, un, vn, an, h, beta, gamma, mass_diag, a1, v1, Ma):
+    """End-of-step acceleration and velocity of an implicit Newmark-family step (Newmark 1959; Hughes
+    2000, *The Finite Element Method*, sec. 9.1) from the end-of-step displacements ``u`` (n_dof,) m on
+    the ``free`` (n,) DOFs, with ``un, vn, an`` (n,) the start of the step:
+
+        a1 = (u - u_n - h v_n - h^2 (1/2 - beta) a_n) / (beta h^2),   v1 = v_n + h ((1 - gamma) a_n + gamma a1)
+
+    into ``a1``, ``v1`` (n,), and ``Ma = mass_diag a1`` when ``mass_diag`` has n entries (lumped mass;
+    a consistent mass is multiplied by the caller). One pass instead of a dozen numpy temporaries;
+    the sparse products stay with scipy, whose CSR product was 1.6x faster than one written here."""
+    n = un.shape[0]
+    hh = h * h * (0.5 - beta)
+    bh2 = beta * h * h
+    for i in range(n):
+        a1[i] = (((u[free[i]] - un[i]) - h * vn[i]) - hh * an[i]) / bh2
+        v1[i] = vn[i] + h * ((1.0 - gamma) * an[i] + gamma * a1[i])
+    if mass_diag.shape[0] == n:
+        for i in range(n):
+            Ma[i] = mass_diag[i] * a1[i]
+
+
+@numba.njit(cache=True)
+def newmark_residual(Ma, w_m, Cv, f_int, free, const, R):
+    """Step residual ``R = w_m M a1 + C v1 + f_int + const`` (N) on the ``free`` (n,) DOFs from the
+    products ``Ma = M a1`` (scaled by ``w_m`` in place: the HHT/generalized-alpha weight) and ``Cv``
+    (n,), the internal forces ``f_int`` (n_dof,) and the step's constant part ``const`` (n,) (loads,
+    alpha-weighted terms). Returns STATUS_OK, or STATUS_NAN when R is not finite."""
+    status = STATUS_OK
+    for i in range(R.shape[0]):
+        m = w_m * Ma[i]
+        Ma[i] = m
+        r = ((m + Cv[i]) + f_int[free[i]]) + const[i]
+        R[i] = r
+        if not (abs(r) < np.inf):
+            status = STATUS_NAN
+    return status
+
+
+@numba.njit(cache=True)
+def step_works(free, u0, u1, pg0, pg1, fs, cv0, cv1, f0, f1, kc0, kc1, v1, mass_diag, mv1, out):
+    """Trapezoidal works of one step on the ``free`` (n,) DOFs (the energy balance of
+    :meth:`~masonrydam.solvers.dynamic.DynamicSolver._record_energy`; Hughes 2000, sec. 9.1.4), with
+    ``du = u1 - u0`` (n_dof arrays ``u0, u1, f0, f1, kc0, kc1``; (n,) arrays ``pg*, fs, cv*, v1``):
+
+        out[0] = du . (pg0 + pg1) / 2          work of the earthquake loads (J)
+        out[1] = du . fs                       work of the constant loads
+        out[2] = du . (cv0 + cv1) / 2          damping work (C v at both ends)
+        out[3] = du . (fj0 + fj1) / 2          joint work, fj = f_int - K_continuum u
+        out[4] = v1 . M v1 / 2                 kinetic energy at the end (M = diag(mass_diag) when it has
+                                               n entries, else ``mv1`` = M v1 from the caller)
+
+    One pass instead of a dozen indexed copies."""
+    n = free.shape[0]
+    w_in = 0.0
+    w_ext = 0.0
+    w_damp = 0.0
+    w_joint = 0.0
+    kin = 0.0
+    lumped = mass_diag.shape[0] == n
+    for i in range(n):
+        j = free[i]
+        du = u1[j] - u0[j]
+        w_in += (pg0[i] + pg1[i]) * du
+        w_ext += fs[i] * du
+        w_damp += (cv0[i] + cv1[i]) * du
+        w_joint += ((f0[j] - kc0[j]) + (f1[j] - kc1[j])) * du
+        kin += v1[i] * (mass_diag[i] * v1[i] if lumped else mv1[i])
+    out[0] = 0.5 * w_in
+    out[1] = w_ext
+    out[2] = 0.5 * w_damp
+    out[3] = 0.5 * w_joint
+    out[4] = 0.5 * kin

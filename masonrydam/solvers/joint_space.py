@@ -23,12 +23,14 @@ the ``na`` components where ``Qt`` has a nonzero row (two per open point, one pe
 without hardening in 2D), the correction is ``D = -F - S_:a z`` with ``(I + Qt_a S_:a) z = -Qt_a F``:
 one dense LU of size ``na``, kept while the active rows and their values repeat and updated by
 Sherman-Morrison-Woodbury while only a few of them change. When ``delta`` has
-converged the displacements are ``u = y - K_ref^-1 B^T (q - q_n)`` (a second substitution, skipped
-when no point left its elastic state, i.e. ``q = q_n``). A step whose joints all stick therefore
-costs one substitution, like a linear step; a step with sliding or opening points costs two
-substitutions plus the dense work, whatever the number of iterations.
+converged the displacements are ``u = y - X (q - q_n)`` with ``X = K_ref^-1 B_f^T``: from the stored
+columns of ``X`` for the few nonzero entries of ``q - q_n`` (the points that left their elastic
+state), else by a second substitution; nothing when ``q = q_n``. A step whose joints all stick
+therefore costs one substitution, like a linear step; a step with sliding or opening points costs
+one substitution, the dense work, whatever the number of iterations, and the recovery.
 
-Cost of the set-up: ``m`` substitutions for ``S`` (done in blocks of columns) and ``8 m^2`` bytes.
+Cost of the set-up: ``m`` substitutions for ``S`` (done in blocks of columns), ``8 m^2`` bytes, and
+``8 n_eq m`` bytes for ``X`` where that is at most :data:`RECOVERY_MEMORY_MAX`.
 :func:`joint_space_size` counts ``m``; the dynamic solver uses this path for a scene whose nonlinear
 joints have at most :data:`JOINT_SPACE_MAX` components (``joint_space = "auto"``), at the nominal
 step size and at the halved sizes of sub-steps (one system per size, set up when first needed).
@@ -55,7 +57,8 @@ from ..materials import mohr_coulomb as mc
 from .dynamic_kernels import STATUS_SINGULAR
 from .joint_space_kernels import (add_flexibility_product, apply_correction, capacitance_assemble,
                                   capacitance_update_solve, joint_points_evaluate, joint_space_correction,
-                                  joint_space_evaluate_residual)
+                                  joint_space_evaluate_residual, joint_space_reevaluate_points,
+                                  subtract_columns_product)
 
 #: largest number of joint components (points x dim) condensed by ``joint_space = "auto"``: the dense
 #: flexibility takes 8 m^2 bytes (288 MB at 6 000) and m substitutions to set up
@@ -79,6 +82,15 @@ UPDATE_CHANGE_FRACTION = 40
 LINE_SEARCH_STEPS = (1.0, 0.5, 0.25)
 #: columns of ``K_ref^-1 B^T`` computed per multi-right-hand-side substitution while setting up S
 _COLUMN_BLOCK = 256
+#: the columns ``X = K_ref^-1 B_f^T`` (n_eq, m) of the set-up are kept (as ``XT``, 8 n_eq m bytes) when
+#: they take at most this many bytes: then a converged step recovers its displacements as
+#: ``u = y - X dq`` from the few nonzero entries of ``dq`` instead of a second substitution
+RECOVERY_MEMORY_MAX = 256 * 2**20
+#: ... while ``dq`` has at most this many nonzero entries per ``nnz(L) / n_eq`` of the factor: a column
+#: costs ``2 n_eq`` flops streamed from memory, a substitution ``4 nnz(L)`` indexed ones. On the Koyna
+#: matrix (n_eq = 7 464, nnz(L) / n_eq = 41) one substitution took as long as about 190 columns
+#: (benchmarks/bench_koyna_seismic.py; 4.6 per unit of the ratio)
+RECOVERY_COLUMNS_PER_FILL = 4.0
 
 
 #: a pivot of the capacitance LU below this fraction of max |J| is a singular matrix
@@ -107,9 +119,12 @@ def capacitance_lu(ST, rows, qt):
     piv = piv.astype(np.int64)
     if info < 0:  # pragma: no cover - an argument error would be a bug here
         raise ValueError(f"dgetrf: illegal argument {-info}")
-    if not np.isfinite(J).all():
+    # J was finite on entry (checked while assembling), so an overflow in the elimination shows in the
+    # pivots; anything else non-finite is caught by the correction kernels' checks of their results
+    pivots = np.abs(np.diagonal(J))
+    if not np.isfinite(pivots).all():
         return STATUS_NAN, J, piv
-    if info > 0 or not (np.abs(np.diagonal(J)).min(initial=np.inf) > SINGULAR_PIVOT * scale[0]):
+    if info > 0 or not (pivots.min(initial=np.inf) > SINGULAR_PIVOT * scale[0]):
         return STATUS_SINGULAR, J, piv
     return STATUS_OK, J, piv
 
@@ -163,10 +178,13 @@ class JointSpace:
     """The condensed joint-space system of one reference factorization (one step size).
 
     model : the :class:`~masonrydam.assembly.model.Model` (constraints set); factorization : an object
-    with ``solve(b)`` for ``K_ref`` on the free DOFs (a vector or an (n_eq, k) block).
+    with ``solve(b)`` for ``K_ref`` on the free DOFs (a vector or an (n_eq, k) block) and, to allow the
+    recovery from stored columns, ``nnz_factor`` (entries of its triangular factor);
+    store_columns : keep ``X = K_ref^-1 B_f^T`` for the recovery of the displacements of a step (see
+    :data:`RECOVERY_MEMORY_MAX`; the dynamic solver asks for it at the nominal step size only).
     """
 
-    def __init__(self, model, factorization):
+    def __init__(self, model, factorization, store_columns=True):
         self.model = model
         self.dim = dim = model.dim
         self.groups = [g for g in model.igroups if g.nonlinear]
@@ -180,11 +198,24 @@ class JointSpace:
         # ST[j] = column j of S = B_f K_ref^-1 B_f^T (K_ref is symmetric, so S is too; ST is kept as
         # the transpose anyway, so that nothing depends on it)
         self.ST = np.empty((m, m))
+        n_eq = len(free)
+        nnz_factor = getattr(factorization, "nnz_factor", 0)
+        #: (m, n_eq) the transpose of X = K_ref^-1 B_f^T, or None (not kept: too big, not asked for, or a
+        #: factorization that does not report its fill)
+        self.XT = None
+        #: largest number of nonzero entries of dq recovered from XT (above it: a substitution)
+        self.recovery_columns_max = 0
+        if store_columns and nnz_factor and 8 * n_eq * m <= RECOVERY_MEMORY_MAX:
+            self.XT = np.empty((m, n_eq))
+            self.recovery_columns_max = int(RECOVERY_COLUMNS_PER_FILL * nnz_factor / max(n_eq, 1))
         Bf = self.B[:, free].tocsr()
         for j0 in range(0, m, _COLUMN_BLOCK):
             j1 = min(m, j0 + _COLUMN_BLOCK)
-            X = np.asarray(factorization.solve(Bf_T[:, j0:j1].toarray(order="F"))).reshape(len(free), j1 - j0)
+            X = np.asarray(factorization.solve(Bf_T[:, j0:j1].toarray(order="F"))).reshape(n_eq, j1 - j0)
             self.ST[j0:j1] = (Bf @ X).T
+            if self.XT is not None:
+                self.XT[j0:j1] = X.T
+        self._u_free = np.empty(n_eq)
         self.Bf_T = Bf_T.tocsr()
         P, ns = self.n_points, mc.N_JOINT_STATE
         self.base = np.zeros((P, ns))
@@ -211,6 +242,8 @@ class JointSpace:
         self.updates = 0
         #: points held sticking within a step because their state kept flipping (statistics)
         self.hold_events = 0
+        #: converged steps whose displacements came from the stored columns, not a substitution (statistics)
+        self.column_recoveries = 0
         self.params_table[:, mc.P_OPEN_TANGENT] = 0.0
         k0 = np.empty((P, dim))
         k0[:] = self.params_table[self.param_index, mc.P_KS][:, None]
@@ -245,6 +278,27 @@ class JointSpace:
         if st != STATUS_OK:
             raise FloatingPointError(f"joint point {int(self.info[0])} returned status {st}")
         return float(self._err[0])
+
+    def _reevaluate(self, points, delta):
+        """The law again at ``points`` only (their held flag changed; ``delta`` unchanged), ``self.F`` updated
+        by the change of their joint forces; returns the force error (see :meth:`_evaluate`)."""
+        st = joint_space_reevaluate_points(points.astype(np.int64), self.params_table, self.param_index, self.weight,
+                                           delta, self.base, self.trial, self.traction, self.q, self.qt, self.codes,
+                                           self.info, self.held, self.ST, self.wk, self.F, self._err)
+        if st == STATUS_NAN and self.info[0] < 0:
+            raise FloatingPointError("NaN in the joint-space residual")
+        if st != STATUS_OK:
+            raise FloatingPointError(f"joint point {int(self.info[0])} returned status {st}")
+        return float(self._err[0])
+
+    def _snapshot(self):
+        """Copies of the arrays :meth:`_evaluate` writes (law state, tractions, q, Qt, codes, residual)."""
+        return tuple(x.copy() for x in (self.trial, self.traction, self.q, self.qt, self.codes, self.F))
+
+    def _restore(self, snapshot):
+        """Put back what :meth:`_snapshot` saved (instead of evaluating the law again at the same point)."""
+        for dst, src in zip((self.trial, self.traction, self.q, self.qt, self.codes, self.F), snapshot):
+            dst[...] = src
 
     def _line_search(self, delta, delta_y, q_n, err):
         """``delta += lam * step`` with the first ``lam`` of :data:`LINE_SEARCH_STEPS` that does not raise the
@@ -362,11 +416,12 @@ class JointSpace:
             s_dq = np.zeros(self.m)
             add_flexibility_product(self.ST, self._dq_last, s_dq)
             trial = delta - s_dq
+            at_predictor = self._snapshot()
             e_trial = self._evaluate(trial, delta_y, q_n)
             if e_trial < err:
                 delta, err = trial, e_trial
-            else:  # back to the predictor (the law arrays and self.F now hold the trial's)
-                err = self._evaluate(delta, delta_y, q_n)
+            else:  # back to the predictor: its law arrays and residual, saved above
+                self._restore(at_predictor)
         flips = np.zeros(P, dtype=np.int64)
         released = np.zeros(P, dtype=bool)  # held once in this step and let go: never held again
         self.held[:] = 0
@@ -383,7 +438,7 @@ class JointSpace:
                 # step is done; otherwise the held points are let go (for good) and Newton goes on
                 was_held = self.held != 0
                 self.held[:] = 0
-                err = self._evaluate(delta, delta_y, q_n)
+                err = self._reevaluate(np.flatnonzero(was_held), delta)
                 if err <= force_tolerance:
                     break
                 released |= was_held
@@ -418,7 +473,7 @@ class JointSpace:
                         # the others converge
                         self.held[hold] = 1
                         self.hold_events += int(hold.sum())
-                        err = self._evaluate(delta, delta_y, q_n)
+                        err = self._reevaluate(np.flatnonzero(hold), delta)
                         if err <= force_tolerance:
                             continue  # the held problem is solved already: let the true law decide
                         key = self._state_key()
@@ -446,8 +501,18 @@ class JointSpace:
         dq = (self.q - q_n).ravel()
         self._dq_last = dq.copy() if not why else None
         u = u_y
-        if dq.any():
+        nz = np.flatnonzero(dq)
+        if len(nz):
             u = u_y.copy()
-            u[free] -= self.fact.solve(self.Bf_T @ dq)
+            if len(nz) <= self.recovery_columns_max:
+                # u = y - X dq from the stored columns of X (cheaper than a substitution for a few)
+                uf = self._u_free
+                uf[:] = u_y[free]
+                if subtract_columns_product(self.XT, nz, dq[nz], uf) != STATUS_OK:
+                    return None, it, False, "NaN in the recovered displacements"
+                u[free] = uf
+                self.column_recoveries += 1
+            else:
+                u[free] -= self.fact.solve(self.Bf_T @ dq)
         self._store_latched_bonds()
         return u, it, not why, why

@@ -11,7 +11,7 @@ tangent of the joint law.
 All kernels are single-threaded and deterministic (docs/architecture.md) and return a status code.
 The LU of the capacitance matrix is LAPACK's ``getrf`` (called from :mod:`.joint_space`, pinned to
 one BLAS thread); the substitutions with its factors and the small LU of a Woodbury update are
-written out here (:func:`.dynamic_kernels.lu_solve_inplace`).
+written out here (:func:`lu_solve_colmajor`, :func:`.dynamic_kernels.lu_solve_inplace`).
 """
 from __future__ import annotations
 
@@ -21,6 +21,48 @@ import numpy as np
 from ..errors import STATUS_NAN, STATUS_OK
 from ..materials.mohr_coulomb import P_KN, P_KS, S_CODE, S_PLASTIC_SLIP, STICK, mohr_coulomb_update
 from .dynamic_kernels import lu_factor_inplace, lu_solve_inplace
+
+@numba.njit(cache=True, inline="always")
+def _evaluate_point(p, params_table, param_index, weight, delta, state_base, state_trial, traction, q, qt, codes,
+                    held, tangent):
+    """The joint law at point ``p`` (see :func:`joint_points_evaluate`; ``tangent`` (dim, dim) work space).
+    Returns a status."""
+    dim = delta.shape[1]
+    par = params_table[param_index[p]]
+    st = mohr_coulomb_update(par, delta[p], state_base[p], state_trial[p], traction[p], tangent)
+    if st != STATUS_OK:
+        return st
+    w = weight[p]
+    ks = par[P_KS]
+    kn = par[P_KN]
+    if held[p] != 0:
+        for k in range(state_base.shape[1]):
+            state_trial[p, k] = state_base[p, k]
+        state_trial[p, S_CODE] = STICK
+        for c in range(dim - 1):
+            traction[p, c] = ks * (delta[p, c] - state_base[p, S_PLASTIC_SLIP + c])
+        traction[p, dim - 1] = kn * delta[p, dim - 1]
+    code = int(state_trial[p, S_CODE])
+    codes[p] = code
+    if code == STICK:
+        for c in range(dim - 1):
+            q[p, c] = -w * ks * state_trial[p, S_PLASTIC_SLIP + c]
+        q[p, dim - 1] = 0.0
+        for c in range(dim):
+            for d in range(dim):
+                qt[p, c, d] = 0.0
+        return STATUS_OK
+    for c in range(dim):
+        k0 = kn if c == dim - 1 else ks
+        q[p, c] = w * (traction[p, c] - k0 * delta[p, c])
+        for d in range(dim):
+            qt[p, c, d] = w * tangent[c, d]
+        qt[p, c, c] -= w * k0
+    for c in range(dim):
+        if not (abs(q[p, c]) < np.inf):
+            return STATUS_NAN
+    return STATUS_OK
+
 
 @numba.njit(cache=True)
 def joint_points_evaluate(params_table, param_index, weight, delta, state_base, state_trial, traction, q, qt,
@@ -40,42 +82,64 @@ def joint_points_evaluate(params_table, param_index, weight, delta, state_base, 
     dim = delta.shape[1]
     tangent = np.zeros((dim, dim))
     for p in range(n_pts):
-        par = params_table[param_index[p]]
-        st = mohr_coulomb_update(par, delta[p], state_base[p], state_trial[p], traction[p], tangent)
+        st = _evaluate_point(p, params_table, param_index, weight, delta, state_base, state_trial, traction, q, qt,
+                             codes, held, tangent)
         if st != STATUS_OK:
             info[0] = p
             return st
-        w = weight[p]
-        ks = par[P_KS]
-        kn = par[P_KN]
-        if held[p] != 0:
-            for k in range(state_base.shape[1]):
-                state_trial[p, k] = state_base[p, k]
-            state_trial[p, S_CODE] = STICK
-            for c in range(dim - 1):
-                traction[p, c] = ks * (delta[p, c] - state_base[p, S_PLASTIC_SLIP + c])
-            traction[p, dim - 1] = kn * delta[p, dim - 1]
-        code = int(state_trial[p, S_CODE])
-        codes[p] = code
-        if code == STICK:
-            for c in range(dim - 1):
-                q[p, c] = -w * ks * state_trial[p, S_PLASTIC_SLIP + c]
-            q[p, dim - 1] = 0.0
-            for c in range(dim):
-                for d in range(dim):
-                    qt[p, c, d] = 0.0
-            continue
-        for c in range(dim):
-            k0 = kn if c == dim - 1 else ks
-            q[p, c] = w * (traction[p, c] - k0 * delta[p, c])
-            for d in range(dim):
-                qt[p, c, d] = w * tangent[c, d]
-            qt[p, c, c] -= w * k0
-        for c in range(dim):
-            if not (abs(q[p, c]) < np.inf):
-                info[0] = p
-                return STATUS_NAN
     return STATUS_OK
+
+
+@numba.njit(cache=True)
+def _force_norm(wk, F, err, info):
+    """``err[0] = |wk * F|`` (N), a scaled 2-norm (no overflow of the squares for a large but finite
+    residual); STATUS_NAN with ``info[0] = -1`` for a non-finite residual."""
+    m = F.shape[0]
+    big = 0.0
+    for i in range(m):
+        x = abs(wk[i] * F[i])
+        if not (x < np.inf):
+            info[0] = -1
+            return STATUS_NAN
+        if x > big:
+            big = x
+    acc = 0.0
+    if big > 0.0:
+        for i in range(m):
+            x = wk[i] * F[i] / big
+            acc += x * x
+    err[0] = big * np.sqrt(acc)
+    return STATUS_OK
+
+
+@numba.njit(cache=True)
+def joint_space_reevaluate_points(points, params_table, param_index, weight, delta, state_base, state_trial, traction,
+                                  q, qt, codes, info, held, ST, wk, F, err):
+    """The joint law again at the listed ``points`` (k,) int64 only - the others and ``delta`` unchanged,
+    e.g. after their ``held`` flag changed - with the condensed residual updated by the change of
+    their joint forces, ``F += S (q_new - q_old)`` (columns of those points), and its norm ``err[0]``.
+    Equals :func:`joint_space_evaluate_residual` at the same arguments up to round-off, at the cost
+    of ``k`` points instead of all. Same arguments and statuses."""
+    dim = q.shape[1]
+    m = F.shape[0]
+    tangent = np.zeros((dim, dim))
+    q_old = np.empty(dim)
+    for k in range(points.shape[0]):
+        p = points[k]
+        for c in range(dim):
+            q_old[c] = q[p, c]
+        st = _evaluate_point(p, params_table, param_index, weight, delta.reshape(-1, dim), state_base, state_trial,
+                             traction, q, qt, codes, held, tangent)
+        if st != STATUS_OK:
+            info[0] = p
+            return st
+        for c in range(dim):
+            v = q[p, c] - q_old[c]
+            if v != 0.0:
+                row = ST[p * dim + c]
+                for i in range(m):
+                    F[i] += row[i] * v
+    return _force_norm(wk, F, err, info)
 
 
 @numba.njit(cache=True)
@@ -92,9 +156,28 @@ def add_flexibility_product(ST, dq, F):
 
 
 @numba.njit(cache=True)
+def subtract_columns_product(XT, cols, vals, out):
+    """``out -= X[:, cols] @ vals`` with ``X`` given by its transpose ``XT`` (m, n) (a column of ``X`` is a
+    contiguous row of ``XT``); ``cols`` (k,) int64, ``vals`` (k,), ``out`` (n,). Costs ``2 k n`` flops
+    streamed from memory, against ``4 nnz(L)`` indexed ones for a sparse substitution. Returns
+    STATUS_OK, or STATUS_NAN when ``out`` is not finite."""
+    n = out.shape[0]
+    for k in range(cols.shape[0]):
+        v = vals[k]
+        row = XT[cols[k]]
+        for i in range(n):
+            out[i] -= row[i] * v
+    for i in range(n):
+        if not (abs(out[i]) < np.inf):
+            return STATUS_NAN
+    return STATUS_OK
+
+
+@numba.njit(cache=True)
 def capacitance_assemble(ST, rows, qt, J, scale):
-    """The capacitance matrix ``I + Qt_a S_:a`` into ``J`` (na, na), ``na = len(rows)`` (any layout;
-    the caller passes a Fortran-ordered array that LAPACK then factorizes in place).
+    """The capacitance matrix ``I + Qt_a S_:a`` into ``J`` (na, na), ``na = len(rows)``, Fortran order
+    (LAPACK then factorizes it in place; a column of ``J`` is filled contiguously from one contiguous
+    row of ``ST``).
 
     ``rows`` (na,) int64 are the flat components ``p * dim + c`` whose row of ``Qt`` is not zero (a point
     that slides without hardening has a zero normal row, so in 2D it adds one row, not two);
@@ -102,25 +185,58 @@ def capacitance_assemble(ST, rows, qt, J, scale):
     (the reference of the singularity test). Returns STATUS_OK or STATUS_NAN."""
     dim = qt.shape[1]
     na = rows.shape[0]
-    big = 0.0
+    base = np.empty(na, dtype=np.int64)  # first component of the point of row i
+    qa = np.empty((na, dim))  # the Qt row of row i
+    for i in range(na):
+        p = rows[i] // dim
+        c = rows[i] - p * dim
+        base[i] = p * dim
+        for d in range(dim):
+            qa[i, d] = qt[p, c, d]
     for j in range(na):
         rj = ST[rows[j]]
         for i in range(na):
-            p = rows[i] // dim
-            c = rows[i] % dim
+            b = base[i]
             acc = 0.0
             for d in range(dim):
-                acc += qt[p, c, d] * rj[p * dim + d]
-            if i == j:
-                acc += 1.0
+                acc += qa[i, d] * rj[b + d]
             J[i, j] = acc
-            a = abs(acc)
+        J[j, j] += 1.0
+    big = 0.0
+    for j in range(na):
+        for i in range(na):
+            a = abs(J[i, j])
             if not (a < np.inf):
                 return STATUS_NAN
             if a > big:
                 big = a
     scale[0] = big
     return STATUS_OK
+
+
+@numba.njit(cache=True)
+def lu_solve_colmajor(A, piv, w):
+    """Solve ``A x = w`` in place with LAPACK ``getrf`` factors ``A`` (n, n) in Fortran order and the
+    0-based sequential row swaps ``piv`` (n,): both triangular passes run down the columns of ``A``,
+    which are contiguous (Golub & Van Loan 2013, Alg. 3.1.3 and 3.1.4, column versions)."""
+    n = A.shape[0]
+    for col in range(n):
+        p = piv[col]
+        if p != col:
+            t = w[col]
+            w[col] = w[p]
+            w[p] = t
+    for col in range(n):
+        wc = w[col]
+        if wc != 0.0:
+            for r in range(col + 1, n):
+                w[r] -= A[r, col] * wc
+    for col in range(n - 1, -1, -1):
+        wc = w[col] / A[col, col]
+        w[col] = wc
+        if wc != 0.0:
+            for r in range(col):
+                w[r] -= A[r, col] * wc
 
 
 @numba.njit(cache=True)
@@ -142,7 +258,7 @@ def joint_space_correction(ST, F, rows, qt, J, piv, z, step):
         for d in range(dim):
             acc += qt[p, c, d] * F[p * dim + d]
         w[i] = -acc
-    lu_solve_inplace(J[:na, :na], piv[:na], w)
+    lu_solve_colmajor(J, piv, w)
     return apply_correction(ST, F, rows, w, step)
 
 
@@ -168,7 +284,7 @@ def _apply_ref_inverse(Jref, piv, ref_rows_n, JRN, posR, nN_idx, v, x):
         if vn != 0.0:
             for i in range(nr):
                 t[i] -= JRN[i, k] * vn
-    lu_solve_inplace(Jref[:nr, :nr], piv[:nr], t)
+    lu_solve_colmajor(Jref, piv, t)
     for u in range(nU):
         if posR[u] >= 0:
             x[u] = t[posR[u]]
@@ -245,13 +361,13 @@ def capacitance_update_solve(ST, ref_rows, ref_qt, Jref, piv, rows, qt_rows, F, 
             N_idx[k] = u
             k += 1
     JRN = np.empty((nr, nN))
-    for ii in range(nr):
-        p = ref_rows[ii] // dim
-        for kk in range(nN):
-            col = ST[U[N_idx[kk]]]
+    for kk in range(nN):  # one contiguous row of ST per column, read in increasing order
+        col = ST[U[N_idx[kk]]]
+        for ii in range(nr):
+            b = (ref_rows[ii] // dim) * dim
             acc = 0.0
             for d in range(dim):
-                acc += ref_qt[ii, d] * col[p * dim + d]
+                acc += ref_qt[ii, d] * col[b + d]
             JRN[ii, kk] = acc
     # right-hand side b = -Qt_c F on U
     b = np.zeros(nU)
@@ -275,13 +391,13 @@ def capacitance_update_solve(ST, ref_rows, ref_qt, Jref, piv, rows, qt_rows, F, 
         for u in range(nU):
             Y[kk, u] = col_out[u]
     W = np.empty((nd, nU))
-    for kk in range(nd):
-        p = U[D[kk]] // dim
-        for u in range(nU):
-            col = ST[U[u]]
+    for u in range(nU):  # one contiguous row of ST per column of W
+        col = ST[U[u]]
+        for kk in range(nd):
+            b = (U[D[kk]] // dim) * dim
             acc = 0.0
             for d in range(dim):
-                acc += dq[kk, d] * col[p * dim + d]
+                acc += dq[kk, d] * col[b + d]
             W[kk, u] = acc
     Cm = np.empty((nd, nd))
     for a in range(nd):
@@ -351,18 +467,4 @@ def joint_space_evaluate_residual(params_table, param_index, weight, delta, stat
     for i in range(m):
         F[i] = delta[i] - delta_y[i]
     add_flexibility_product(ST, (q - q_n).ravel(), F)
-    big = 0.0  # scaled 2-norm (no overflow of the squares for a large but finite residual)
-    for i in range(m):
-        x = abs(wk[i] * F[i])
-        if not (x < np.inf):
-            info[0] = -1
-            return STATUS_NAN
-        if x > big:
-            big = x
-    acc = 0.0
-    if big > 0.0:
-        for i in range(m):
-            x = wk[i] * F[i] / big
-            acc += x * x
-    err[0] = big * np.sqrt(acc)
-    return STATUS_OK
+    return _force_norm(wk, F, err, info)

@@ -67,13 +67,13 @@ def lu_factor_inplace(A, piv):
     return STATUS_OK
 
 
-@numba.njit(cache=True)
-def lu_solve_inplace(A, piv, w):
-    """Solve with the factors of :func:`lu_factor_inplace`; ``w`` is the right-hand side on entry and
-    the solution on exit."""
+@numba.njit(cache=True, inline="always")
+def lu_forward_inplace(A, piv, w):
+    """``w := L^-1 P w`` with the factors of :func:`lu_factor_inplace` or LAPACK's ``getrf`` (0-based
+    sequential row swaps ``piv``): the factorization swaps whole rows (multipliers included), so
+    ``P A = L U`` with P the product of all the swaps: apply them all to w first, then solve with the
+    unit lower triangle, column by column."""
     m = A.shape[0]
-    # the factorization swaps whole rows (multipliers included, as LAPACK's getrf does), so
-    # P A = L U with P the product of all the swaps: apply them all to w first, then solve L
     for col in range(m):
         p = piv[col]
         if p != col:
@@ -84,6 +84,14 @@ def lu_solve_inplace(A, piv, w):
         wc = w[col]
         for r in range(col + 1, m):
             w[r] -= A[r, col] * wc
+
+
+@numba.njit(cache=True)
+def lu_solve_inplace(A, piv, w):
+    """Solve with the factors of :func:`lu_factor_inplace`; ``w`` is the right-hand side on entry and
+    the solution on exit (row-oriented back substitution: for row-major factors)."""
+    m = A.shape[0]
+    lu_forward_inplace(A, piv, w)
     for col in range(m - 1, -1, -1):
         acc = w[col]
         for j in range(col + 1, m):

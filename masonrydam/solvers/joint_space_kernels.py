@@ -20,7 +20,7 @@ import numpy as np
 
 from ..errors import STATUS_NAN, STATUS_OK
 from ..materials.mohr_coulomb import P_KN, P_KS, S_CODE, S_PLASTIC_SLIP, STICK, mohr_coulomb_update
-from .dynamic_kernels import lu_factor_inplace, lu_solve_inplace
+from .dynamic_kernels import lu_factor_inplace, lu_forward_inplace, lu_solve_inplace
 
 @numba.njit(cache=True, inline="always")
 def _evaluate_point(p, params_table, param_index, weight, delta, state_base, state_trial, traction, q, qt, codes,
@@ -220,17 +220,7 @@ def lu_solve_colmajor(A, piv, w):
     0-based sequential row swaps ``piv`` (n,): both triangular passes run down the columns of ``A``,
     which are contiguous (Golub & Van Loan 2013, Alg. 3.1.3 and 3.1.4, column versions)."""
     n = A.shape[0]
-    for col in range(n):
-        p = piv[col]
-        if p != col:
-            t = w[col]
-            w[col] = w[p]
-            w[p] = t
-    for col in range(n):
-        wc = w[col]
-        if wc != 0.0:
-            for r in range(col + 1, n):
-                w[r] -= A[r, col] * wc
+    lu_forward_inplace(A, piv, w)
     for col in range(n - 1, -1, -1):
         wc = w[col] / A[col, col]
         w[col] = wc

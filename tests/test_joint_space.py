@@ -224,6 +224,28 @@ def test_sliding_block_same_history_as_the_general_path_and_newmark_slip():
     np.testing.assert_allclose(hist["on"], hist["off"], rtol=0, atol=1e-6 * slip)
 
 
+def test_recovery_from_stored_columns_equals_the_substitution(monkeypatch):
+    """The displacements of a converged joint-space step, ``u = y - K_ref^-1 B^T (q - q_n)``, recovered
+    from the stored columns of ``K_ref^-1 B^T`` (the default) equal those of a second substitution
+    (columns not stored) to round-off, on the sliding block of reference problem 1 (every step of the
+    pulse slides); the run reports the recoveries and the memory of the columns."""
+    from masonrydam.solvers import joint_space as js
+
+    hist, attrs = {}, {}
+    for stored in (True, False):
+        if not stored:
+            monkeypatch.setattr(js, "RECOVERY_MEMORY_MAX", 0)
+        ds = masonrydam.run(_sliding_scene("on", duration=0.3))
+        hist[stored] = ds.displacement.values
+        attrs[stored] = ds.attrs
+    assert int(attrs[True]["dynamic_joint_space_column_recoveries"]) > 50
+    assert float(attrs[True]["dynamic_joint_space_column_memory_MB"]) > 0
+    assert int(attrs[False]["dynamic_joint_space_column_recoveries"]) == 0
+    assert float(attrs[False]["dynamic_joint_space_column_memory_MB"]) == 0
+    scale = np.abs(hist[False]).max()
+    np.testing.assert_allclose(hist[True], hist[False], rtol=0, atol=1e-9 * scale)
+
+
 def test_sticking_steps_take_no_joint_space_iteration():
     """Below the sliding threshold (A = 0.1 g < mu g) every point sticks: each step is the elastic
     predictor (one substitution), with no iteration and the single factorization of the stage."""

@@ -90,6 +90,7 @@ class Model:
         self.n_nodes = len(self.coords)
         self.n_dof = self.n_nodes * self.dim
         self.cgroups, self.igroups = cgroups, igroups
+        self._continuum_force = None  # (u, K_continuum @ u) of the last evaluate (see continuum_force)
         used = np.zeros(self.n_nodes, dtype=bool)
         for g in list(cgroups) + list(igroups):
             used[g.conn.ravel()] = True
@@ -152,7 +153,7 @@ class Model:
     def continuum_force(self, u: np.ndarray) -> np.ndarray:
         """``K_continuum @ u`` (n_dof,) N: the one :meth:`evaluate` computed if it was called last at this very
         ``u`` (a comparison instead of a sparse product), else computed. The array is shared: do not modify."""
-        cached = getattr(self, "_continuum_force", None)
+        cached = self._continuum_force
         if cached is not None and np.array_equal(cached[0], u):
             return cached[1]
         return self.K_continuum @ u

@@ -585,6 +585,24 @@ class EffectiveSolver:
         return x
 
 
+class _RecentProducts:
+    """The last ``size`` results ``y = A x`` of a linear map, found again by the value of ``x`` (comparing
+    a few thousand values costs a tenth of a sparse product)."""
+
+    def __init__(self, size: int):
+        self.size = size
+        self.items = []
+
+    def get(self, x):
+        for xc, yc in self.items:
+            if np.array_equal(xc, x):
+                return yc
+        return None
+
+    def put(self, x, y):
+        self.items = [(x.copy(), y), *self.items[:self.size - 1]]
+
+
 def critical_time_step(K: sp.csr_matrix, mass_diag: np.ndarray | None = None, M: sp.csr_matrix | None = None,
                        damping: RayleighDamping | None = None, omega_crit: float = 2.0, linear_solver="auto"):
     """(dt_crit, omega_max): largest circular frequency of ``K phi = omega^2 M phi`` (Lanczos, ARPACK
@@ -682,8 +700,12 @@ class DynamicSolver:
                 raise SceneError(f"{s.key}ground_motion.{'xyz'[c]}", f"component {'xyz'[c]} in a {m.dim}D model")
         self._add_cache = {}
         self._kel_cache = {}
-        self._cf_memo = []
-        self._pg_memo = []
+        # a step asks for the damping force of the same velocity up to five times (the step constant,
+        # the residual at the accepted iterate, the energy balance of this step and of the next; the
+        # joint-space path evaluates the residual at two velocities, so two remembered products would
+        # lose the start-of-step one), and for the ground load of its two ends twice
+        self._recent_Cv = _RecentProducts(3)
+        self._recent_pg = _RecentProducts(2)
         self._joint_compliance = None
         # operands of the step residual kernels (dynamic_kernels.newmark_kinematics: the lumped mass
         # diagonal, or nothing for a consistent mass; no damping: a zero damping force)
@@ -694,25 +716,15 @@ class DynamicSolver:
         return self.mdiag * x if self.mdiag is not None else self.M_free @ x
 
     def _Cf(self, x):
-        """Damping force ``C x`` on the free DOFs. A step asks for the damping force of the same
-        velocity up to five times (the step constant, the residual at the accepted iterate, the
-        energy balance of this step and of the next), so the last three products are remembered;
-        comparing 7 500 values costs a tenth of the sparse product. (With two, a joint-space step,
-        which evaluates the residual at two velocities, lost the start-of-step one before its energy
-        balance: three products per step instead of two.) The returned array is shared: callers must
-        not modify it."""
+        """Damping force ``C x`` on the free DOFs (the last three remembered, see :meth:`_setup`). The
+        returned array is shared: callers must not modify it."""
         if not self.damped:
             return np.zeros_like(x)
-        for xc, yc in self._cf_memo:
-            if np.array_equal(xc, x):
-                return yc
-        y = self.C_free @ x
-        self._remember_Cf(x, y)
+        y = self._recent_Cv.get(x)
+        if y is None:
+            y = self.C_free @ x
+            self._recent_Cv.put(x, y)
         return y
-
-    def _remember_Cf(self, x, y):
-        """Remember ``y = C x`` for :meth:`_Cf` (the three most recent products)."""
-        self._cf_memo = [(x.copy(), y), *self._cf_memo[:2]]
 
     def ground_at(self, tau):
         ag = np.zeros(self.model.dim)
@@ -721,15 +733,12 @@ class DynamicSolver:
         return ag
 
     def _pg_f(self, ag):
-        """Earthquake load on the free DOFs, -sum_c (M iota_c) a_g,c. A step asks for it at its two ends
-        twice (the step loads and the energy balance): the last two are remembered. Shared array: do
-        not modify."""
-        key = ag.tobytes()
-        for k, v in self._pg_memo:
-            if k == key:
-                return v
-        v = -(ag @ self.Miota_f)
-        self._pg_memo = [(key, v), *self._pg_memo[:1]]
+        """Earthquake load on the free DOFs, -sum_c (M iota_c) a_g,c (the last two remembered). Shared
+        array: do not modify."""
+        v = self._recent_pg.get(ag)
+        if v is None:
+            v = -(ag @ self.Miota_f)
+            self._recent_pg.put(ag, v)
         return v
 
     def _elastic_eff(self, h):
@@ -895,9 +904,9 @@ class DynamicSolver:
                         self.stats.joint_space_dense_updates += js.updates
                         self.stats.joint_space_holds += js.hold_events
                         self.stats.joint_space_column_recoveries += js.column_recoveries
-                        self.stats.joint_space_column_bytes = max(
-                            self.stats.joint_space_column_bytes,
-                            sum(x.XT.nbytes for x in self._js_by_h.values() if x.XT is not None))
+                    self.stats.joint_space_column_bytes = max(
+                        self.stats.joint_space_column_bytes,
+                        sum(js.XT.nbytes for js in self._js_by_h.values() if js.XT is not None))
         finally:
             m.set_open_tangent(1e-6)  # the static solver's regularisation (solvers.static.OPEN_TANGENT_REGULAR)
             self.stats.wall_time_s += time.perf_counter() - t_wall
@@ -1067,9 +1076,11 @@ class DynamicSolver:
             newmark_kinematics(u, free, un, vn, an, h, beta, gamma, self._mass_diag, a1, v1, Ma)
             if self.mdiag is None:
                 Ma = self.M_free @ a1
-            Cv = self.C_free @ v1 if self.damped else self._zeros_free
-            if self.damped:
-                self._remember_Cf(v1, Cv)
+            if self.damped:  # a new velocity: the product without looking it up, then remembered
+                Cv = self.C_free @ v1
+                self._recent_Cv.put(v1, Cv)
+            else:
+                Cv = self._zeros_free
             if newmark_residual(Ma, w_m, Cv, f_int, free, const, R) != 0:
                 raise NumericalError("NaN or infinity in the dynamic residual")
             return R, a1, v1, float(np.linalg.norm(Ma))

@@ -270,34 +270,38 @@ class JointSpace:
     def _evaluate(self, delta, delta_y, q_n):
         """The joint law at ``delta`` (into the point arrays), the condensed residual ``self.F`` there and
         its force error ``|W D0 F|`` (N), which is returned."""
-        st = joint_space_evaluate_residual(self.params_table, self.param_index, self.weight, delta, self.base,
-                                           self.trial, self.traction, self.q, self.qt, self.codes, self.info,
-                                           self.held, self.ST, delta_y, q_n, self.wk, self.F, self._err)
-        if st == STATUS_NAN and self.info[0] < 0:
-            raise FloatingPointError("NaN in the joint-space residual")
-        if st != STATUS_OK:
-            raise FloatingPointError(f"joint point {int(self.info[0])} returned status {st}")
+        self._raise_on(joint_space_evaluate_residual(
+            self.params_table, self.param_index, self.weight, delta, self.base, self.trial, self.traction, self.q,
+            self.qt, self.codes, self.info, self.held, self.ST, delta_y, q_n, self.wk, self.F, self._err))
         return float(self._err[0])
 
     def _reevaluate(self, points, delta):
         """The law again at ``points`` only (their held flag changed; ``delta`` unchanged), ``self.F`` updated
         by the change of their joint forces; returns the force error (see :meth:`_evaluate`)."""
-        st = joint_space_reevaluate_points(points.astype(np.int64), self.params_table, self.param_index, self.weight,
-                                           delta, self.base, self.trial, self.traction, self.q, self.qt, self.codes,
-                                           self.info, self.held, self.ST, self.wk, self.F, self._err)
-        if st == STATUS_NAN and self.info[0] < 0:
-            raise FloatingPointError("NaN in the joint-space residual")
-        if st != STATUS_OK:
-            raise FloatingPointError(f"joint point {int(self.info[0])} returned status {st}")
+        self._raise_on(joint_space_reevaluate_points(
+            points.astype(np.int64), self.params_table, self.param_index, self.weight, delta, self.base, self.trial,
+            self.traction, self.q, self.qt, self.codes, self.info, self.held, self.ST, self.wk, self.F, self._err))
         return float(self._err[0])
 
+    def _raise_on(self, status):
+        """FloatingPointError for a status of the law and residual kernels other than STATUS_OK (the point
+        in ``self.info[0]``, or -1 for a non-finite residual)."""
+        if status == STATUS_NAN and self.info[0] < 0:
+            raise FloatingPointError("NaN in the joint-space residual")
+        if status != STATUS_OK:
+            raise FloatingPointError(f"joint point {int(self.info[0])} returned status {status}")
+
+    def _law_arrays(self):
+        """The arrays :meth:`_evaluate` writes: law state, tractions, q, Qt, codes, residual."""
+        return self.trial, self.traction, self.q, self.qt, self.codes, self.F
+
     def _snapshot(self):
-        """Copies of the arrays :meth:`_evaluate` writes (law state, tractions, q, Qt, codes, residual)."""
-        return tuple(x.copy() for x in (self.trial, self.traction, self.q, self.qt, self.codes, self.F))
+        """Copies of :meth:`_law_arrays`."""
+        return tuple(x.copy() for x in self._law_arrays())
 
     def _restore(self, snapshot):
         """Put back what :meth:`_snapshot` saved (instead of evaluating the law again at the same point)."""
-        for dst, src in zip((self.trial, self.traction, self.q, self.qt, self.codes, self.F), snapshot):
+        for dst, src in zip(self._law_arrays(), snapshot):
             dst[...] = src
 
     def _line_search(self, delta, delta_y, q_n, err):
@@ -399,11 +403,9 @@ class JointSpace:
         u_y[free] -= self.fact.solve(R_n)
         delta_n = self.B @ u_n
         delta_y = self.B @ u_y
-        st = joint_points_evaluate(self.params_table, self.param_index, self.weight, delta_n.reshape(-1, dim),
-                                   self.base, self.trial, self.traction, self.q, self.qt, self.codes, self.info,
-                                   self._none_held)
-        if st != STATUS_OK:
-            raise FloatingPointError(f"joint point {int(self.info[0])} returned status {st}")
+        self._raise_on(joint_points_evaluate(
+            self.params_table, self.param_index, self.weight, delta_n.reshape(-1, dim), self.base, self.trial,
+            self.traction, self.q, self.qt, self.codes, self.info, self._none_held))
         q_n = self.q.copy()
         delta = delta_y.copy()
         err = self._evaluate(delta, delta_y, q_n)
@@ -424,7 +426,6 @@ class JointSpace:
                 self._restore(at_predictor)
         flips = np.zeros(P, dtype=np.int64)
         released = np.zeros(P, dtype=bool)  # held once in this step and let go: never held again
-        self.held[:] = 0
         seen, prev_sig, prev_key, stabilized, same = set(), None, None, False, 0
         it, why = 0, ""
         n_fixed = MAX_INITIAL_STIFFNESS_ITERATIONS if initial_stiffness_iterations is None else initial_stiffness_iterations

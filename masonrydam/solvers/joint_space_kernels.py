@@ -23,6 +23,22 @@ from ..materials.mohr_coulomb import P_KN, P_KS, S_CODE, S_PLASTIC_SLIP, STICK, 
 from .dynamic_kernels import lu_factor_inplace, lu_forward_inplace, lu_solve_inplace
 
 @numba.njit(cache=True, inline="always")
+def _add_scaled(out, row, v):
+    """``out += v row`` (both (n,)): one column of S or X (a contiguous row of its transpose)."""
+    for i in range(out.shape[0]):
+        out[i] += row[i] * v
+
+
+@numba.njit(cache=True, inline="always")
+def _finite_status(x):
+    """STATUS_OK when every entry of ``x`` is finite, else STATUS_NAN."""
+    for i in range(x.shape[0]):
+        if not (abs(x[i]) < np.inf):
+            return STATUS_NAN
+    return STATUS_OK
+
+
+@numba.njit(cache=True, inline="always")
 def _evaluate_point(p, params_table, param_index, weight, delta, state_base, state_trial, traction, q, qt, codes,
                     held, tangent):
     """The joint law at point ``p`` (see :func:`joint_points_evaluate`; ``tangent`` (dim, dim) work space).
@@ -121,7 +137,6 @@ def joint_space_reevaluate_points(points, params_table, param_index, weight, del
     Equals :func:`joint_space_evaluate_residual` at the same arguments up to round-off, at the cost
     of ``k`` points instead of all. Same arguments and statuses."""
     dim = q.shape[1]
-    m = F.shape[0]
     tangent = np.zeros((dim, dim))
     q_old = np.empty(dim)
     for k in range(points.shape[0]):
@@ -136,9 +151,7 @@ def joint_space_reevaluate_points(points, params_table, param_index, weight, del
         for c in range(dim):
             v = q[p, c] - q_old[c]
             if v != 0.0:
-                row = ST[p * dim + c]
-                for i in range(m):
-                    F[i] += row[i] * v
+                _add_scaled(F, ST[p * dim + c], v)
     return _force_norm(wk, F, err, info)
 
 
@@ -146,13 +159,9 @@ def joint_space_reevaluate_points(points, params_table, param_index, weight, del
 def add_flexibility_product(ST, dq, F):
     """``F += S dq`` (both flat (m,)): one column of ``S`` (a contiguous row of ``ST``) per nonzero
     entry of ``dq``, which is nonzero only where a point's joint force changed."""
-    m = F.shape[0]
-    for j in range(m):
-        v = dq[j]
-        if v != 0.0:
-            row = ST[j]
-            for i in range(m):
-                F[i] += row[i] * v
+    for j in range(F.shape[0]):
+        if dq[j] != 0.0:
+            _add_scaled(F, ST[j], dq[j])
 
 
 @numba.njit(cache=True)
@@ -161,16 +170,9 @@ def subtract_columns_product(XT, cols, vals, out):
     contiguous row of ``XT``); ``cols`` (k,) int64, ``vals`` (k,), ``out`` (n,). Costs ``2 k n`` flops
     streamed from memory, against ``4 nnz(L)`` indexed ones for a sparse substitution. Returns
     STATUS_OK, or STATUS_NAN when ``out`` is not finite."""
-    n = out.shape[0]
     for k in range(cols.shape[0]):
-        v = vals[k]
-        row = XT[cols[k]]
-        for i in range(n):
-            out[i] -= row[i] * v
-    for i in range(n):
-        if not (abs(out[i]) < np.inf):
-            return STATUS_NAN
-    return STATUS_OK
+        _add_scaled(out, XT[cols[k]], -vals[k])
+    return _finite_status(out)
 
 
 @numba.njit(cache=True)
@@ -423,19 +425,12 @@ def capacitance_update_solve(ST, ref_rows, ref_qt, Jref, piv, rows, qt_rows, F, 
 @numba.njit(cache=True)
 def apply_correction(ST, F, rows, z, step):
     """``step = -F - S_:a z`` (m,) for the components ``rows`` and their ``z``; STATUS_OK or STATUS_NAN."""
-    m = F.shape[0]
-    for i in range(m):
+    for i in range(F.shape[0]):
         step[i] = -F[i]
     for j in range(rows.shape[0]):
-        v = z[j]
-        if v != 0.0:
-            row = ST[rows[j]]
-            for i in range(m):
-                step[i] -= row[i] * v
-    for i in range(m):
-        if not (abs(step[i]) < np.inf):
-            return STATUS_NAN
-    return STATUS_OK
+        if z[j] != 0.0:
+            _add_scaled(step, ST[rows[j]], -z[j])
+    return _finite_status(step)
 
 
 @numba.njit(cache=True)

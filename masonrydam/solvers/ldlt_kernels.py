@@ -58,6 +58,13 @@ def ldlt_solve_vector(Lp, Li, Lx, d, perm, b, x, w):
     return STATUS_OK
 
 
+@numba.njit(cache=True, inline="always")
+def _subtract_scaled_row(dst, src, l):
+    """``dst -= l src`` for two rows (k,) of a block of right-hand sides."""
+    for c in range(dst.shape[0]):
+        dst[c] -= l * src[c]
+
+
 @numba.njit(cache=True)
 def ldlt_solve_block(Lp, Li, Lx, d, perm, B, X, W):
     """``X = A^-1 B`` for a block of right-hand sides: B, X, W (work space) (n, k), C order (the k
@@ -68,25 +75,17 @@ def ldlt_solve_block(Lp, Li, Lx, d, perm, B, X, W):
         dst = W[i]
         for c in range(nr):
             dst[c] = src[c]
-    for j in range(n):
-        wj = W[j]
+    for j in range(n):  # forward: row j updates the rows below it
         for k in range(Lp[j], Lp[j + 1]):
-            l = Lx[k]
-            wi = W[Li[k]]
-            for c in range(nr):
-                wi[c] -= l * wj[c]
+            _subtract_scaled_row(W[Li[k]], W[j], Lx[k])
     for j in range(n):
         dj = d[j]
         wj = W[j]
         for c in range(nr):
             wj[c] /= dj
-    for j in range(n - 1, -1, -1):
-        wj = W[j]
+    for j in range(n - 1, -1, -1):  # backward: row j gathers from the rows below it
         for k in range(Lp[j], Lp[j + 1]):
-            l = Lx[k]
-            wi = W[Li[k]]
-            for c in range(nr):
-                wj[c] -= l * wi[c]
+            _subtract_scaled_row(W[j], W[Li[k]], Lx[k])
     for i in range(n):
         src = W[i]
         dst = X[perm[i]]

@@ -41,7 +41,9 @@ import numpy as np
 from numba import njit
 
 from ..errors import STATUS_BAD_GEOMETRY, STATUS_NAN, STATUS_OK
-from ..materials.mohr_coulomb import mohr_coulomb_update
+from ..materials.mohr_coulomb import (P_COHESION, P_KN, P_KS, P_KS_RESIDUAL, P_OPEN_TANGENT, P_TAN_PHI,
+                                      P_TENSILE_STRENGTH, S_BACK_STRESS, S_BOND_BROKEN, S_CODE, S_PLASTIC_SLIP,
+                                      mohr_coulomb_point)
 from .quadrature import QUADRATURE_SCHEMES, line_rule, tensor_rule, triangle_rule
 from .shapes import ELEMENT_TYPES, reference_nodes, shape_functions
 
@@ -347,17 +349,40 @@ def interface_evaluate(
                     s += R[r, k] * Dug[k]
                 delta_out[e, g, r] = s
 
-            status = mohr_coulomb_update(
-                params_table[pidx],
-                delta_out[e, g],
-                state_committed[e, g],
-                state_trial[e, g],
-                traction_out[e, g],
-                C,
-            )
+            # the law on scalars (row views per point cost more than the law: see mohr_coulomb_point)
+            (status, code, broken, slip1, slip2, back1, back2, tau1, tau2, t_n, C11, C12, C21, C22, C1n, C2n,
+             Cnn) = mohr_coulomb_point(
+                params_table[pidx, P_KS], params_table[pidx, P_KN], params_table[pidx, P_COHESION],
+                params_table[pidx, P_TAN_PHI], params_table[pidx, P_TENSILE_STRENGTH],
+                params_table[pidx, P_KS_RESIDUAL], params_table[pidx, P_OPEN_TANGENT], dim - 1,
+                delta_out[e, g, 0], delta_out[e, g, 1] if dim == 3 else 0.0, delta_out[e, g, dim - 1],
+                state_committed[e, g, S_CODE], state_committed[e, g, S_BOND_BROKEN],
+                state_committed[e, g, S_PLASTIC_SLIP], state_committed[e, g, S_PLASTIC_SLIP + 1],
+                state_committed[e, g, S_BACK_STRESS], state_committed[e, g, S_BACK_STRESS + 1])
             if status != STATUS_OK:
                 info[0] = e
                 return status
+            state_trial[e, g, S_CODE] = code
+            state_trial[e, g, S_BOND_BROKEN] = broken
+            state_trial[e, g, S_PLASTIC_SLIP] = slip1
+            state_trial[e, g, S_PLASTIC_SLIP + 1] = slip2
+            state_trial[e, g, S_BACK_STRESS] = back1
+            state_trial[e, g, S_BACK_STRESS + 1] = back2
+            traction_out[e, g, 0] = tau1
+            if dim == 3:
+                traction_out[e, g, 1] = tau2
+            traction_out[e, g, dim - 1] = t_n
+            for r in range(dim):
+                for k in range(dim):
+                    C[r, k] = 0.0
+            C[0, 0] = C11
+            C[0, dim - 1] = C1n
+            if dim == 3:
+                C[0, 1] = C12
+                C[1, 0] = C21
+                C[1, 1] = C22
+                C[1, 2] = C2n
+            C[dim - 1, dim - 1] = Cnn
 
             jwh = j * weights[g] * h
             # global traction R^T t

@@ -55,10 +55,10 @@ from scipy.linalg.lapack import dgetrf
 from ..errors import STATUS_NAN, STATUS_OK
 from ..materials import mohr_coulomb as mc
 from .dynamic_kernels import STATUS_SINGULAR
-from .joint_space_kernels import (add_flexibility_product, apply_correction, capacitance_assemble,
+from .joint_space_kernels import (active_components, add_flexibility_product, apply_correction, capacitance_assemble,
                                   capacitance_update_solve, joint_points_evaluate, joint_space_correction,
                                   joint_space_evaluate_residual, joint_space_reevaluate_points,
-                                  subtract_columns_product)
+                                  state_key, subtract_columns_product)
 
 #: largest number of joint components (points x dim) condensed by ``joint_space = "auto"``: the dense
 #: flexibility takes 8 m^2 bytes (288 MB at 6 000) and m substitutions to set up
@@ -355,7 +355,9 @@ class JointSpace:
     def _state_key(self):
         """Per point: state code and the sign of the first shear traction (a friction direction that
         flips is a state change too)."""
-        return (2 * self.codes + (self.traction[:, 0] > 0.0)).astype(np.int8)
+        key = np.empty(self.n_points, dtype=np.int8)
+        state_key(self.codes, self.traction, key)
+        return key
 
     def solve_step(self, u_n, R_n, force_tolerance, initial_stiffness_iterations=None):
         """Solve one step in joint space (see :meth:`_solve_step`); no point is held on entry, and none is
@@ -486,13 +488,12 @@ class JointSpace:
                 err = self._evaluate(delta, delta_y, q_n)
             seen.add(sig)
             prev_sig, prev_key = sig, key
-            qt = self.qt.reshape(P * dim, dim)
             if stabilized:
                 self.qt[self.codes == mc.OPEN] = 0.0
             if fixed_point:
                 self.qt[:] = 0.0
-            rows = np.flatnonzero(qt.any(axis=1)).astype(np.int64)
-            st = self._correction(rows, np.ascontiguousarray(qt[rows]))
+            rows, qt_rows = active_components(self.qt)
+            st = self._correction(rows, qt_rows)
             if st == STATUS_SINGULAR:
                 return None, it, False, f"singular joint-space iteration matrix ({len(rows)} active components)"
             it += 1

@@ -190,6 +190,41 @@ def joint_space_reevaluate_points(points, params_table, param_index, weight, del
 
 
 @numba.njit(cache=True)
+def active_components(qt):
+    """``(rows, qt_rows)``: the flat components ``p * dim + c`` (na,) int64, ascending, whose row of ``qt``
+    (P, dim, dim) is not zero, and those rows (na, dim) - the active set of the capacitance matrix
+    (:func:`capacitance_assemble`)."""
+    P, dim = qt.shape[0], qt.shape[1]
+    flags = np.zeros(P * dim, dtype=np.bool_)
+    na = 0
+    for p in range(P):
+        for c in range(dim):
+            for d in range(dim):
+                if qt[p, c, d] != 0.0:
+                    flags[p * dim + c] = True
+                    na += 1
+                    break
+    rows = np.empty(na, dtype=np.int64)
+    qt_rows = np.empty((na, dim))
+    k = 0
+    for r in range(P * dim):
+        if flags[r]:
+            rows[k] = r
+            for d in range(dim):
+                qt_rows[k, d] = qt[r // dim, r % dim, d]
+            k += 1
+    return rows, qt_rows
+
+
+@numba.njit(cache=True)
+def state_key(codes, traction, key):
+    """``key[p] = 2 codes[p] + (first shear traction > 0)`` (P,) int8: the state of every point with its
+    friction direction (a point whose friction direction flips changes its key)."""
+    for p in range(codes.shape[0]):
+        key[p] = 2 * codes[p] + (1 if traction[p, 0] > 0.0 else 0)
+
+
+@numba.njit(cache=True)
 def add_flexibility_product(ST, dq, F):
     """``F += S dq`` (both flat (m,)): one column of ``S`` (a contiguous row of ``ST``) per nonzero
     entry of ``dq``, which is nonzero only where a point's joint force changed."""

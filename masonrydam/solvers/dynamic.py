@@ -174,7 +174,8 @@ import scipy.sparse.linalg as spla
 from threadpoolctl import threadpool_limits
 
 from ..errors import ConvergenceError, NumericalError, SceneError
-from .dynamic_kernels import newmark_kinematics, newmark_residual, step_works, woodbury_apply, woodbury_factor
+from .dynamic_kernels import (joint_stored_energy, newmark_kinematics, newmark_residual, step_works, woodbury_apply,
+                              woodbury_factor)
 from .joint_space import (JOINT_SPACE_MAX, MAX_INITIAL_STIFFNESS_ITERATIONS, SPLIT_INITIAL_STIFFNESS_ITERATIONS, JointSpace,
                           joint_space_size)
 from .linear import DIRECT_SOLVERS, Factorization, SingularMatrix, SymmetricFactorization, resolve_backend
@@ -822,12 +823,10 @@ class DynamicSolver:
             for g in self.model.igroups:
                 p = g.params_table[g.param_index]  # (ne, P)
                 w = g.jw * g.thickness[:, None]
-                self._joint_compliance.append((0.5 * w / p[:, mc.P_KN][:, None], 0.5 * w / p[:, mc.P_KS][:, None]))
-        e = 0.0
-        for g, (cn, cs) in zip(self.model.igroups, self._joint_compliance):
-            t = g.traction
-            e += float(np.sum(cn * t[:, :, -1] ** 2)) + float(np.sum(cs * np.sum(t[:, :, :-1] ** 2, axis=2)))
-        return e
+                self._joint_compliance.append((np.ascontiguousarray(0.5 * w / p[:, mc.P_KN][:, None]),
+                                                np.ascontiguousarray(0.5 * w / p[:, mc.P_KS][:, None])))
+        return sum(joint_stored_energy(g.traction, cn, cs) for g, (cn, cs) in zip(self.model.igroups,
+                                                                                  self._joint_compliance))
 
     # ------------------------------------------------------------------------------------------
     def run(self, stage: DynamicStage, u0=None, v0=None, a0=None, f_static=None, equilibrate=True, t0=0.0,

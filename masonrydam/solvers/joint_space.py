@@ -88,9 +88,12 @@ _COLUMN_BLOCK = 256
 RECOVERY_MEMORY_MAX = 256 * 2**20
 #: ... while ``dq`` has at most this many nonzero entries per ``nnz(L) / n_eq`` of the factor: a column
 #: costs ``2 n_eq`` flops streamed from memory, a substitution ``4 nnz(L)`` indexed ones. On the Koyna
-#: matrix (n_eq = 7 464, nnz(L) / n_eq = 41) one substitution took as long as about 190 columns
-#: (benchmarks/bench_koyna_seismic.py; 4.6 per unit of the ratio)
-RECOVERY_COLUMNS_PER_FILL = 4.0
+#: matrix (n_eq = 7 464, nnz(L) / n_eq = 41) a column took about 6 us and a substitution 0.31 ms (about
+#: 50 columns; benchmarks/bench_koyna_seismic.py)
+RECOVERY_COLUMNS_PER_FILL = 1.5
+#: ... and at least this many (on a small model the columns stay in cache and a substitution costs mostly
+#: its call; on Koyna both bounds give about 60)
+RECOVERY_COLUMNS_MIN = 64
 
 
 #: a pivot of the capacitance LU below this fraction of max |J| is a singular matrix
@@ -207,7 +210,8 @@ class JointSpace:
         self.recovery_columns_max = 0
         if store_columns and nnz_factor and 8 * n_eq * m <= RECOVERY_MEMORY_MAX:
             self.XT = np.empty((m, n_eq))
-            self.recovery_columns_max = int(RECOVERY_COLUMNS_PER_FILL * nnz_factor / max(n_eq, 1))
+            self.recovery_columns_max = max(RECOVERY_COLUMNS_MIN,
+                                            int(RECOVERY_COLUMNS_PER_FILL * nnz_factor / max(n_eq, 1)))
         Bf = self.B[:, free].tocsr()
         for j0 in range(0, m, _COLUMN_BLOCK):
             j1 = min(m, j0 + _COLUMN_BLOCK)

@@ -295,6 +295,65 @@ def test_processing_steps_are_recorded(elcentro, tmp_path):
         assert json.loads(nc.record_provenance)[-1]["parameters"]["target"] == 0.3
 
 
+def _block_on_ground_scene(ground_x):
+    """A small elastic block on a linear joint over a fixed base, shaken by ``ground_x``: 60 steps of 0.01 s."""
+    return {
+        "model": {"name": "processed_record", "thickness": 1.0},
+        "mesh": {"generator": "blocks_2d", "parameters": {"blocks": [
+            {"x0": 0, "y0": 0, "x1": 1, "y1": 0.5, "group": "base"},
+            {"x0": 0, "y0": 0.5, "x1": 1, "y1": 1.0, "group": "block"}], "element_size": 0.5}},
+        "materials": {g: {"youngs_modulus": 30e9, "poisson_ratio": 0.2, "density": 2400} for g in ("base", "block")},
+        "joints": {"joints": {"law": "linear", "normal_stiffness": 1e10, "shear_stiffness": 1e10}},
+        "supports": [{"set": "base", "components": ["x", "y"]}],
+        "stages": [{"name": "shake", "type": "dynamic", "dt": 0.01, "steps": 60, "ground_motion": {"x": ground_x}}],
+    }
+
+
+def test_scene_processing_steps_reach_the_result_attributes(tmp_path):
+    """A scene's ground motion processed in the scene (baseline, taper, band-pass, resampling, D5-95 trim,
+    then scaling to a target Sa(T)): the run shakes the model with the same record as the Python API
+    gives for the same steps, the file's provenance attribute lists every step in order, and the record
+    hits its Sa target (the response spectrum is linear in the record: Chopra 2012, sec. 6.6)."""
+    import masonrydam
+
+    steps = [{"step": "baseline", "method": "linear"}, {"step": "taper", "max_percentage": 0.05},
+             {"step": "bandpass", "freqmin": 0.1, "freqmax": 20.0, "corners": 4}, {"step": "resample", "dt": 0.01},
+             {"step": "trim", "start": 0.05, "end": 0.95, "pad": 1.0}]
+    target = {"sa": "0.6 g", "period": 0.3, "damping": 0.05}
+    ds = masonrydam.run(_block_on_ground_scene({"record": "elcentro_1940_ns_peknold", "processing": steps,
+                                                "scale_to_sa": target}), output=tmp_path / "p.nc")
+    prov = json.loads(ds.attrs["stage0_ground_motion_x_provenance"])
+    assert [p["step"] for p in prov] == ["read", "baseline_correction", "taper", "bandpass", "resample",
+                                         "trim_significant_duration", "scale_to_sa"]
+    tr = rec.load_record("elcentro_1940_ns_peknold")
+    tr = proc.trim_significant_duration(proc.resample(proc.bandpass(proc.taper(proc.baseline_correct(tr, "linear"),
+                                                                                 0.05), 0.1, 20.0, 4), 0.01), pad=1.0)
+    tr = proc.scale_to_sa(tr, 0.6, 0.3, 0.05, units="g")
+    assert measures.spectral_acceleration(tr, None, 0.3, 0.05) == pytest.approx(0.6 * G, rel=1e-9)
+    # the file records the ground acceleration at every step: the processed record's first samples
+    ag = ds.ground_acceleration.sel(component="x").values
+    np.testing.assert_allclose(ag[:50], tr.data[:50], rtol=0, atol=1e-9 * np.abs(tr.data).max())
+    assert prov[-1]["parameters"]["period"] == 0.3
+
+
+@pytest.mark.parametrize("ground, key, words", [
+    ({"record": "elcentro_1940_ns_peknold", "processing": [{"step": "smooth"}]}, "processing[0].step", "must be one of"),
+    ({"record": "elcentro_1940_ns_peknold", "processing": [{"step": "bandpass", "fmin": 1.0}]}, "processing[0]", "fmin"),
+    ({"record": "elcentro_1940_ns_peknold", "processing": [{"step": "bandpass", "freqmin": 80.0}]}, "processing[0]",
+     "Nyquist"),
+    ({"record": "elcentro_1940_ns_peknold", "scale_to_pga": "0.3 g", "scale_to_sa": {"sa": "0.5 g", "period": 0.2}},
+     "scale_to_sa", "not"),
+    ({"record": "elcentro_1940_ns_peknold", "scale_to_sa": {"sa": "0.5 g"}}, "scale_to_sa.period", "required"),
+])
+def test_scene_processing_errors_name_the_key(ground, key, words):
+    import masonrydam
+    from masonrydam.errors import SceneError
+
+    with pytest.raises(SceneError) as exc:
+        masonrydam.run(_block_on_ground_scene(ground))
+    assert key in str(exc.value) and words in str(exc.value)
+
+
 def test_scaling_hits_targets_exactly(elcentro):
     tr = proc.scale_to_pga(elcentro, 2.5)
     assert rec.pga(tr) == pytest.approx(2.5, rel=1e-14)

@@ -153,9 +153,17 @@ def pulse_samples(shape: str, amplitude: float, duration: float, dt: float) -> n
     return vals
 
 
+#: scene processing step -> the function of masonrydam.records that does it (each records itself in
+#: the trace's provenance, which the result attributes carry)
+_PROCESSING = {"baseline": "baseline_correct", "taper": "taper", "bandpass": "bandpass", "resample": "resample",
+               "trim": "trim_significant_duration"}
+
+
 def build_ground_motion(spec: dict, component: int, key: str, stage_dt: float, base_dir: Path | None = None):
     """A :class:`GroundMotion` from a normalised ground-motion component (record, file, values or pulse),
-    scaled as asked; its ``attrs`` hold the record's provenance (``records.provenance_attrs``)."""
+    processed (baseline, taper, band-pass, resampling, significant-duration trim, in the scene's order)
+    and scaled as asked; its ``attrs`` hold the record's provenance with every step
+    (``records.provenance_attrs``)."""
     from .. import records as rec
     from ..records import RecordError
     from ..solvers.dynamic import GroundMotion
@@ -185,10 +193,21 @@ def build_ground_motion(spec: dict, component: int, key: str, stage_dt: float, b
             tr = _synthetic_trace(pulse_samples(p["shape"], p["amplitude"], p["duration"], dt), dt,
                                   f"{p['shape']} pulse", dict(p, dt=dt))
             name = f"{p['shape']}_pulse"
+        for j, step in enumerate(spec.get("processing", [])):
+            params = {k: v for k, v in step.items() if k != "step"}
+            if step["step"] == "bandpass":  # a low- or high-pass: the other corner is None
+                params = {"freqmin": None, "freqmax": None, **params}
+            try:
+                tr = getattr(rec, _PROCESSING[step["step"]])(tr, **params)
+            except RecordError as exc:
+                raise SceneError(f"{key}.processing[{j}]", str(exc)) from None
         if spec["scale"] is not None:
             tr = rec.scale(tr, spec["scale"], reason="scene")
         elif spec["scale_to_pga"] is not None:
             tr = rec.scale_to_pga(tr, spec["scale_to_pga"], units="m/s2")
+        elif spec.get("scale_to_sa") is not None:
+            t = spec["scale_to_sa"]
+            tr = rec.scale_to_sa(tr, t["sa"], t["period"], t["damping"], units="m/s2")
     except RecordError as exc:
         raise SceneError(key, str(exc)) from None
     attrs = rec.provenance_attrs(tr, prefix="")

@@ -292,10 +292,52 @@ def _time(value, key):
     return _number(value, key, 0.0, open_min=True)
 
 
+#: processing steps of a ground-motion component (``processing = [{ step = "...", ... }, ...]``, applied in
+#: order before the scaling) and the keys each takes: those of :mod:`masonrydam.records.processing`
+PROCESSING_STEPS = {
+    "baseline": {"method", "order"},            # records.baseline_correct
+    "taper": {"max_percentage", "side", "max_length"},  # records.taper
+    "bandpass": {"freqmin", "freqmax", "corners"},     # records.bandpass (zero-phase Butterworth)
+    "resample": {"dt", "method"},               # records.resample
+    "trim": {"start", "end", "pad"},            # records.trim_significant_duration (Husid fractions)
+}
+
+
+def _processing(steps, key):
+    """The normalised list of processing steps (each a dict with 'step' and its parameters; the values
+    are checked by the processing functions when the record is built, with this key in the error)."""
+    if not isinstance(steps, list):
+        raise SceneError(key, "expected a list of tables such as { step = \"bandpass\", freqmin = 0.1, freqmax = 25 }")
+    out = []
+    for j, st in enumerate(steps):
+        k = f"{key}[{j}]"
+        if not isinstance(st, dict) or "step" not in st:
+            raise SceneError(k, f"expected a table with 'step' (one of {sorted(PROCESSING_STEPS)})")
+        name = _choice(st["step"], tuple(PROCESSING_STEPS), f"{k}.step")
+        _check_keys(st, PROCESSING_STEPS[name] | {"step"}, k)
+        params = {}
+        for p, v in st.items():
+            if p == "step":
+                continue
+            if p in ("method", "side"):
+                if not isinstance(v, str):
+                    raise SceneError(f"{k}.{p}", f"expected a string, got {v!r}")
+                params[p] = v
+            elif p == "dt":
+                params[p] = _time(v, f"{k}.{p}")
+            elif p in ("order", "corners"):
+                params[p] = _int(v, f"{k}.{p}", 0)
+            else:
+                params[p] = _number(v, f"{k}.{p}")
+        out.append({"step": name, **params})
+    return out
+
+
 def _ground_component(d, key):
-    """One ground-motion component: exactly one source (record, file, values, pulse) and an optional
-    scaling (scale or scale_to_pga)."""
-    _check_keys(d, {"record", "file", "format", "units", "dt", "values", "pulse", "scale", "scale_to_pga"}, key)
+    """One ground-motion component: exactly one source (record, file, values, pulse), optional
+    processing steps, and an optional scaling (scale, scale_to_pga or scale_to_sa)."""
+    _check_keys(d, {"record", "file", "format", "units", "dt", "values", "pulse", "processing", "scale",
+                    "scale_to_pga", "scale_to_sa"}, key)
     sources = [k for k in ("record", "file", "values", "pulse") if k in d]
     if len(sources) != 1:
         raise SceneError(key, "give exactly one of 'record' (a bundled record, `masonrydam records list`), "
@@ -339,11 +381,24 @@ def _ground_component(d, key):
         for k in ("format", "units"):
             if k in d:
                 raise SceneError(f"{key}.{k}", "has no meaning for a pulse")
-    if "scale" in d and "scale_to_pga" in d:
-        raise SceneError(f"{key}.scale", "give 'scale' or 'scale_to_pga', not both")
+    scalings = [k for k in ("scale", "scale_to_pga", "scale_to_sa") if k in d]
+    if len(scalings) > 1:
+        raise SceneError(f"{key}.{scalings[1]}", f"give one of 'scale', 'scale_to_pga', 'scale_to_sa', not {scalings}")
+    out["processing"] = _processing(d["processing"], f"{key}.processing") if "processing" in d else []
     out["scale"] = None if "scale" not in d else _number(d["scale"], f"{key}.scale")
     out["scale_to_pga"] = None if "scale_to_pga" not in d else _positive(d["scale_to_pga"], "acceleration",
                                                                           f"{key}.scale_to_pga")
+    out["scale_to_sa"] = None
+    if "scale_to_sa" in d:
+        sk = f"{key}.scale_to_sa"
+        t = d["scale_to_sa"]
+        _check_keys(t, {"sa", "period", "damping"}, sk)
+        for req in ("sa", "period"):
+            if req not in t:
+                raise SceneError(f"{sk}.{req}", "is required (target pseudo-spectral acceleration and its period)")
+        out["scale_to_sa"] = {"sa": _positive(t["sa"], "acceleration", f"{sk}.sa"),
+                              "period": _time(t["period"], f"{sk}.period"),
+                              "damping": _number(t.get("damping", 0.05), f"{sk}.damping", 0.0, 1.0, open_min=True)}
     return out
 
 

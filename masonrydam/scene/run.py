@@ -102,10 +102,17 @@ class _Progress:
             self.bar.close()
 
 
+#: a kept result file larger than this (bytes) is returned opened lazily instead of loaded (see :func:`run`)
+LOAD_IN_MEMORY_MAX = 256 * 2**20
+
+
 def run(scene, output: str | os.PathLike | None = None, progress: bool = False, summary: bool = False):
     """Run ``scene`` (a :class:`Scene`, a dict or a TOML path) and return the results as an
-    ``xarray.Dataset`` (loaded in memory). With ``output`` the netCDF file is kept there; a run
-    that fails keeps every converged step in that file (``completed = "false"``) and re-raises.
+    ``xarray.Dataset``. With ``output`` the netCDF file is kept there; a run that fails keeps every
+    converged step in that file (``completed = "false"``) and re-raises. The dataset is loaded in
+    memory, except a kept file larger than :data:`LOAD_IN_MEMORY_MAX` bytes, which is opened lazily
+    (values read when used; close it with ``ds.close()`` before writing the same file again), so
+    that the memory of a long time history does not grow with the record.
     """
     import xarray as xr
 
@@ -175,7 +182,10 @@ def run(scene, output: str | os.PathLike | None = None, progress: bool = False, 
     bar.close()
     stats = _stats_attrs(solver, t_start, dyn_solvers)
     writer.close(True, "completed", stats)
-    ds = xr.load_dataset(path)
+    if tmp is None and os.path.getsize(path) > LOAD_IN_MEMORY_MAX:
+        ds = xr.open_dataset(path)
+    else:
+        ds = xr.load_dataset(path)
     if tmp is not None:
         os.unlink(tmp)
     if summary:

@@ -271,12 +271,14 @@ def measured_root(u):
 
 @pytest.mark.parametrize("integrator, param", [("newmark_average", None), ("newmark_linear", None),
                                                ("hht", -0.1), ("hht", -0.3), ("generalized_alpha", 0.8),
-                                               ("generalized_alpha", 0.5)])
+                                               ("generalized_alpha", 0.5), ("central_difference", None)])
 def test_period_elongation_and_algorithmic_damping(integrator, param):
     """Free vibration of the SDOF at Omega = omega h = 0.3: the numerical frequency and damping measured
     from the FE history equal those of the published algorithm's amplification matrix (to 1e-6), and
     - trapezoidal rule: Tbar/T = Omega / (2 atan(Omega/2)), no damping (Hughes 2000, sec. 9.3);
     - linear acceleration: cos(Omega_bar) = 1 - Omega^2 / (2 (1 + Omega^2/6)), no damping (Newmark 1959);
+    - central difference: Omega_bar = 2 asin(Omega / 2) (period shortening), no damping (Hughes 2000,
+      sec. 9.3; Newmark beta = 0, gamma = 1/2);
     - HHT and generalized-alpha: positive algorithmic damping that grows with -alpha (HHT 1977) or with
       1 - rho_inf (Chung & Hulbert 1993), and a period error below 1 %."""
     omega = 2 * math.pi
@@ -289,7 +291,9 @@ def test_period_elongation_and_algorithmic_damping(integrator, param):
     s = DynamicSettings(integrator=integrator, dt=Om / omega, **kw)
     _, u, _ = run_sdof(omega, s, [GroundMotion(0, np.zeros(2), 1.0)], 60 * s.dt, u0=1e-3)
     lam = measured_root(u)
-    lam_ref = principal_root(np.linalg.eigvals(amplification(*s.coefficients(), Om)))
+    # central difference is Newmark's beta = 0, gamma = 1/2 (Hughes 2000, sec. 9.1)
+    coefficients = (0.0, 0.5, 0.0, 0.0) if integrator == "central_difference" else s.coefficients()
+    lam_ref = principal_root(np.linalg.eigvals(amplification(*coefficients, Om)))
     assert abs(lam - lam_ref) <= 1e-6 * abs(lam_ref)
     Om_bar = abs(np.angle(lam))
     xi_bar = -math.log(abs(lam)) / Om_bar
@@ -299,6 +303,9 @@ def test_period_elongation_and_algorithmic_damping(integrator, param):
         assert abs(xi_bar) < 1e-9
     elif integrator == "newmark_linear":
         assert Om_bar == pytest.approx(math.acos(1 - Om**2 / (2 * (1 + Om**2 / 6))), rel=1e-9)
+        assert abs(xi_bar) < 1e-9
+    elif integrator == "central_difference":
+        assert Om_bar == pytest.approx(2 * math.asin(Om / 2), rel=1e-9)
         assert abs(xi_bar) < 1e-9
     else:
         assert 0 < xi_bar < 0.05 and 1.0 < elong < 1.02
@@ -374,10 +381,10 @@ def test_cantilever_modal_frequencies_converge_to_beam_theory():
       (frequency equation solved in the test): the two lowest bending frequencies; the consistent-mass
       FE converges monotonically from above (Rayleigh-Ritz upper bound) to within 1e-4;
     - Euler-Bernoulli (f = lambda^2 / (2 pi L^2) sqrt(EI / (rho A)), lambda_1 = 1.8751, lambda_2 =
-      4.6941; Chopra 2012 sec. 16.3): 0.16 % and 1.1 % above, the shear and rotary-inertia corrections;
+      4.6941; Chopra 2012 sec. 16.3): 0.16 % and 1.1 % below, the shear and rotary-inertia corrections;
     - the first axial mode of a bar, f = sqrt(E / rho) / (4 L), within 1e-6 (exact for nu = 0);
     - the effective modal mass of the first bending mode, 0.613 of the beam mass for Euler-Bernoulli
-      (Chopra 2012, sec. 17.x), within 1 %."""
+      (Chopra 2012, ch. 17, effective modal mass of the first mode of a uniform cantilever), within 1 %."""
     L, H, E, rho, t = 2.0, 0.1, 30e9, 2500.0, 0.2
     EI, mA = E * t * H**3 / 12, rho * t * H
     f_eb = [lam**2 / (2 * math.pi * L**2) * math.sqrt(EI / mA) for lam in (1.87510407, 4.69409113)]

@@ -602,6 +602,22 @@ def test_cli_records_list_and_show(tmp_path, capsys):
     assert "did you mean" in capsys.readouterr().err
 
 
+def test_cli_records_show_a_text_file_with_declared_units(tmp_path, capsys):
+    """`records show FILE --units g --dt 0.01` reads a one-column text file (units and step declared, as
+    the file cannot state them) and prints its PGA: 0.25 g for a file whose largest value is 0.25; without
+    --units the error says what is missing."""
+    f = tmp_path / "motion.txt"
+    f.write_text("\n".join(f"{v:.6f}" for v in 0.25 * np.sin(np.linspace(0, 6 * np.pi, 300))))
+    png = tmp_path / "motion.png"
+    assert cli_main(["records", "show", str(f), "--units", "g", "--dt", "0.01", "-o", str(png)]) == 0
+    out = capsys.readouterr().out
+    assert "(0.2500 g)" in out and png.is_file()
+    assert cli_main(["records", "show", str(f), "--dt", "0.01", "-o", str(png)]) == 2
+    assert "units" in capsys.readouterr().err
+    assert cli_main(["records", "show", "elcentro_1940_ns_peknold", "--units", "g"]) == 2
+    assert "--units applies to a record file" in capsys.readouterr().err
+
+
 def test_pyproject_lists_every_package():
     """pyproject.toml lists packages explicitly (to map records/ to masonrydam._bundled_records); a new
     sub-package that is not listed would be missing from `pip install .`."""

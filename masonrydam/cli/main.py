@@ -83,9 +83,12 @@ def _cmd_records(args):
 
     name = args.name
     if name in rec.record_names() or not Path(name).is_file():
+        for opt in ("format", "units", "dt"):
+            if getattr(args, opt) is not None:
+                raise MasonrydamError(f"--{opt} applies to a record file; {name!r} is a bundled record (it knows it)")
         tr = rec.load_record(name)
     else:
-        tr = rec.read_trace(name)
+        tr = rec.read_trace(name, format=args.format, units=args.units, dt=args.dt)
     m = rec.summary(tr)
     meta = tr.stats.masonrydam
     print(f"{name}: {meta.get('event', '?')}, {meta.get('station', '?')}, component {meta.get('component', '?')}")
@@ -204,6 +207,9 @@ def main(argv=None) -> int:
     rs.add_argument("name", help="record name from `masonrydam records list` (or a PEER AT2 file)")
     rs.add_argument("-o", "--output", help="PNG file (default: NAME.png in the current folder)")
     rs.add_argument("--damping", type=float, default=0.05, help="damping ratio of the spectrum (default 0.05)")
+    rs.add_argument("--format", help="format of a record file (AT2, TEXT, or an obspy format such as SAC, MSEED)")
+    rs.add_argument("--units", help="units of the values in a record file that does not state them (g, m/s2, cm/s2)")
+    rs.add_argument("--dt", type=float, help="time step (s) of a one-column text file")
     rc.set_defaults(func=_cmd_records)
     pl = sub.add_parser("plot", help="plot histories from a result file (netCDF) to PNG")
     pl.add_argument("result", help="result file written by `masonrydam run`")

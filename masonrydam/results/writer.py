@@ -92,7 +92,8 @@ class ResultWriter:
         v[:] = jp["shear_axes"]
         self._var("joint_weight", "f8", ("joint_point",), "m2",
                   "joint area represented by the integration point (length x thickness in 2D)")[:] = jp["weight"]
-        self._var("displacement", "f8", ("step", "node", "component"), "m", "nodal displacement")
+        self._var("displacement", "f8", ("step", "node", "component"), "m",
+                  "nodal displacement relative to the moving ground" if self.dynamic else "nodal displacement")
         self._var("reaction", "f8", ("step", "node", "component"), "N",
                   "reaction force at constrained DOFs (zero elsewhere)")
         self._var("joint_opening", "f8", ("step", "joint_point"), "m",

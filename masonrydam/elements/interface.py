@@ -43,7 +43,7 @@ from numba import njit
 from ..errors import STATUS_BAD_GEOMETRY, STATUS_NAN, STATUS_OK
 from ..materials.mohr_coulomb import (P_COHESION, P_KN, P_KS, P_KS_RESIDUAL, P_OPEN_TANGENT, P_TAN_PHI,
                                       P_TENSILE_STRENGTH, S_BACK_STRESS, S_BOND_BROKEN, S_CODE, S_PLASTIC_SLIP,
-                                      mohr_coulomb_point)
+                                      mohr_coulomb_point, write_tangent)
 from .quadrature import QUADRATURE_SCHEMES, line_rule, tensor_rule, triangle_rule
 from .shapes import ELEMENT_TYPES, reference_nodes, shape_functions
 
@@ -372,17 +372,7 @@ def interface_evaluate(
             if dim == 3:
                 traction_out[e, g, 1] = tau2
             traction_out[e, g, dim - 1] = t_n
-            for r in range(dim):
-                for k in range(dim):
-                    C[r, k] = 0.0
-            C[0, 0] = C11
-            C[0, dim - 1] = C1n
-            if dim == 3:
-                C[0, 1] = C12
-                C[1, 0] = C21
-                C[1, 1] = C22
-                C[1, 2] = C2n
-            C[dim - 1, dim - 1] = Cnn
+            write_tangent(C, dim - 1, C11, C12, C21, C22, C1n, C2n, Cnn)
 
             jwh = j * weights[g] * h
             # global traction R^T t

@@ -1,8 +1,9 @@
 """Mohr-Coulomb joint law of the seed paper (Tzamtzis & Asteris, sec. 3.4, eqs. 11-12).
 
-One numba kernel, :func:`mohr_coulomb_update`, evaluates the law at one integration point of a
+One numba kernel, :func:`mohr_coulomb_point`, evaluates the law at one integration point of a
 zero-thickness interface, in 2D (2 local components ``[s, n]``) or 3D (3 components
-``[s1, s2, n]``). Conventions (docs/architecture.md): ``delta`` is the relative displacement top minus
+``[s1, s2, n]``), on scalars; :func:`mohr_coulomb_update` is the same law on the arrays of one point
+(parameter, displacement, state, traction and tangent vectors). Conventions (docs/architecture.md): ``delta`` is the relative displacement top minus
 bottom in the local frame (m), the normal component ``delta_n`` is positive in opening; tractions
 (Pa) are positive in tension, so the contact pressure is ``-t_n``; stiffnesses are per unit area (Pa/m).
 
@@ -170,7 +171,24 @@ def mohr_coulomb_point(ks, kn, c, tan_phi, ft, ks_r, open_tangent, ns, d_s1, d_s
     return (status, code, broken0, slip1, slip2, back1, back2, tau1, tau2, t_n, C11, C12, C21, C22, C1n, C2n, kn)
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
+def write_tangent(tangent, ns, C11, C12, C21, C22, C1n, C2n, Cnn):
+    """Write the tangent entries returned by :func:`mohr_coulomb_point` into ``tangent`` (ns+1, ns+1) Pa/m
+    (zero elsewhere: the normal row is ``[0, .., Cnn]``)."""
+    for i in range(ns + 1):
+        for j in range(ns + 1):
+            tangent[i, j] = 0.0
+    tangent[0, 0] = C11
+    tangent[0, ns] = C1n
+    if ns == 2:
+        tangent[0, 1] = C12
+        tangent[1, 0] = C21
+        tangent[1, 1] = C22
+        tangent[1, ns] = C2n
+    tangent[ns, ns] = Cnn
+
+
+@njit(cache=True)
 def mohr_coulomb_update(params, delta, state_committed, state_trial, traction, tangent):
     """Return-mapping update of the seed's Mohr-Coulomb joint at one integration point.
 
@@ -248,19 +266,10 @@ def mohr_coulomb_update(params, delta, state_committed, state_trial, traction, t
     if ns == 2:
         traction[1] = tau2
     traction[ns] = t_n
-    for i in range(ncomp):
-        for j in range(ncomp):
-            tangent[i, j] = 0.0
     if status != STATUS_OK and not math.isfinite(t_n):  # a non-finite input: NaN tractions, zero tangent
+        write_tangent(tangent, ns, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
         return status
-    tangent[0, 0] = C11
-    tangent[0, ns] = C1n
-    if ns == 2:
-        tangent[0, 1] = C12
-        tangent[1, 0] = C21
-        tangent[1, 1] = C22
-        tangent[1, ns] = C2n
-    tangent[ns, ns] = Cnn
+    write_tangent(tangent, ns, C11, C12, C21, C22, C1n, C2n, Cnn)
     return status
 
 

@@ -21,7 +21,7 @@ import numpy as np
 from ..errors import STATUS_NAN, STATUS_OK
 from ..materials.mohr_coulomb import (P_COHESION, P_KN, P_KS, P_KS_RESIDUAL, P_OPEN_TANGENT, P_TAN_PHI,
                                       P_TENSILE_STRENGTH, S_BACK_STRESS, S_BOND_BROKEN, S_CODE, S_PLASTIC_SLIP,
-                                      STICK, mohr_coulomb_point)
+                                      STICK, mohr_coulomb_point, write_tangent)
 from .dynamic_kernels import lu_factor_inplace, lu_forward_inplace, lu_solve_inplace
 from .ldlt_kernels import _U
 
@@ -99,17 +99,7 @@ def _law_at_points(points, n, params_table, param_index, weight, delta, state_ba
                 for d in range(dim):
                     qt[p, c, d] = 0.0
             continue
-        for c in range(dim):
-            for d in range(dim):
-                tangent[c, d] = 0.0
-        tangent[0, 0] = C11
-        tangent[0, ns] = C1n
-        if ns == 2:
-            tangent[0, 1] = C12
-            tangent[1, 0] = C21
-            tangent[1, 1] = C22
-            tangent[1, ns] = C2n
-        tangent[ns, ns] = Cnn
+        write_tangent(tangent, ns, C11, C12, C21, C22, C1n, C2n, Cnn)
         for c in range(dim):
             k0 = kn if c == ns else ks
             q[p, c] = w * (traction[p, c] - k0 * delta[p, c])

@@ -84,7 +84,7 @@ def _cmd_records(args):
     name = args.name
     if name in rec.record_names() or not Path(name).is_file():
         for opt in ("format", "units", "dt"):
-            if getattr(args, opt) is not None:
+            if getattr(args, opt) is not None and name in rec.record_names():
                 raise MasonrydamError(f"--{opt} applies to a record file; {name!r} is a bundled record (it knows it)")
         tr = rec.load_record(name)
     else:

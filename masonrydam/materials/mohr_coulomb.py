@@ -266,7 +266,7 @@ def mohr_coulomb_update(params, delta, state_committed, state_trial, traction, t
     if ns == 2:
         traction[1] = tau2
     traction[ns] = t_n
-    if status != STATUS_OK and not math.isfinite(t_n):  # a non-finite input: NaN tractions, zero tangent
+    if status != STATUS_OK and not math.isfinite(t_n):  # a non-finite input or t_n: NaN tractions, zero tangent
         write_tangent(tangent, ns, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
         return status
     write_tangent(tangent, ns, C11, C12, C21, C22, C1n, C2n, Cnn)

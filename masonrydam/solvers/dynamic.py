@@ -825,8 +825,8 @@ class DynamicSolver:
                 w = g.jw * g.thickness[:, None]
                 self._joint_compliance.append((np.ascontiguousarray(0.5 * w / p[:, mc.P_KN][:, None]),
                                                 np.ascontiguousarray(0.5 * w / p[:, mc.P_KS][:, None])))
-        return sum(joint_stored_energy(g.traction, cn, cs) for g, (cn, cs) in zip(self.model.igroups,
-                                                                                  self._joint_compliance))
+        return sum((joint_stored_energy(g.traction, cn, cs) for g, (cn, cs) in zip(self.model.igroups,
+                                                                                   self._joint_compliance)), 0.0)
 
     # ------------------------------------------------------------------------------------------
     def run(self, stage: DynamicStage, u0=None, v0=None, a0=None, f_static=None, equilibrate=True, t0=0.0,

@@ -92,7 +92,7 @@ RECOVERY_MEMORY_MAX = 256 * 2**20
 #: 50 columns; benchmarks/bench_koyna_seismic.py)
 RECOVERY_COLUMNS_PER_FILL = 1.5
 #: ... and at least this many (on a small model the columns stay in cache and a substitution costs mostly
-#: its call; on Koyna both bounds give about 60)
+#: its call; on Koyna this floor applies: 1.5 x 41 = 61 < 64)
 RECOVERY_COLUMNS_MIN = 64
 
 

@@ -156,7 +156,7 @@ def _force_norm(wk, F, err, info):
 @numba.njit(cache=True)
 def joint_space_reevaluate_points(points, params_table, param_index, weight, delta, state_base, state_trial, traction,
                                   q, qt, codes, info, held, ST, wk, F, err):
-    """The joint law again at the listed ``points`` (k,) int64 only - the others and ``delta`` unchanged,
+    """The joint law again at the listed ``points`` (k,) int64, distinct, only - the others and ``delta`` unchanged,
     e.g. after their ``held`` flag changed - with the condensed residual updated by the change of
     their joint forces, ``F += S (q_new - q_old)`` (columns of those points), and its norm ``err[0]``.
     Equals :func:`joint_space_evaluate_residual` at the same arguments up to round-off, at the cost

@@ -43,7 +43,7 @@ from numba import njit
 from ..errors import STATUS_BAD_GEOMETRY, STATUS_NAN, STATUS_OK
 from ..materials.mohr_coulomb import (P_COHESION, P_KN, P_KS, P_KS_RESIDUAL, P_OPEN_TANGENT, P_TAN_PHI,
                                       P_TENSILE_STRENGTH, S_BACK_STRESS, S_BOND_BROKEN, S_CODE, S_PLASTIC_SLIP,
-                                      mohr_coulomb_point, write_tangent)
+                                      mohr_coulomb_point, write_tangent, write_trial)
 from .quadrature import QUADRATURE_SCHEMES, line_rule, tensor_rule, triangle_rule
 from .shapes import ELEMENT_TYPES, reference_nodes, shape_functions
 
@@ -362,16 +362,8 @@ def interface_evaluate(
             if status != STATUS_OK:
                 info[0] = e
                 return status
-            state_trial[e, g, S_CODE] = code
-            state_trial[e, g, S_BOND_BROKEN] = broken
-            state_trial[e, g, S_PLASTIC_SLIP] = slip1
-            state_trial[e, g, S_PLASTIC_SLIP + 1] = slip2
-            state_trial[e, g, S_BACK_STRESS] = back1
-            state_trial[e, g, S_BACK_STRESS + 1] = back2
-            traction_out[e, g, 0] = tau1
-            if dim == 3:
-                traction_out[e, g, 1] = tau2
-            traction_out[e, g, dim - 1] = t_n
+            write_trial(state_trial[e, g], traction_out[e, g], dim - 1, code, broken, slip1, slip2, back1, back2,
+                        tau1, tau2, t_n)
             write_tangent(C, dim - 1, C11, C12, C21, C22, C1n, C2n, Cnn)
 
             jwh = j * weights[g] * h

@@ -172,6 +172,22 @@ def mohr_coulomb_point(ks, kn, c, tan_phi, ft, ks_r, open_tangent, ns, d_s1, d_s
 
 
 @njit(cache=True)
+def write_trial(state_trial, traction, ns, code, broken, slip1, slip2, back1, back2, tau1, tau2, t_n):
+    """Write the trial state and tractions returned by :func:`mohr_coulomb_point` into one point's
+    ``state_trial`` (N_JOINT_STATE,) and ``traction`` (ns+1,) Pa."""
+    state_trial[S_CODE] = code
+    state_trial[S_BOND_BROKEN] = broken
+    state_trial[S_PLASTIC_SLIP] = slip1
+    state_trial[S_PLASTIC_SLIP + 1] = slip2
+    state_trial[S_BACK_STRESS] = back1
+    state_trial[S_BACK_STRESS + 1] = back2
+    traction[0] = tau1
+    if ns == 2:
+        traction[1] = tau2
+    traction[ns] = t_n
+
+
+@njit(cache=True)
 def write_tangent(tangent, ns, C11, C12, C21, C22, C1n, C2n, Cnn):
     """Write the tangent entries returned by :func:`mohr_coulomb_point` into ``tangent`` (ns+1, ns+1) Pa/m
     (zero elsewhere: the normal row is ``[0, .., Cnn]``)."""
@@ -256,16 +272,7 @@ def mohr_coulomb_update(params, delta, state_committed, state_trial, traction, t
                            params[P_TENSILE_STRENGTH], params[P_KS_RESIDUAL], params[P_OPEN_TANGENT], ns,
                            delta[0], delta[1] if ns == 2 else 0.0, delta[ns], sc[S_CODE], sc[S_BOND_BROKEN],
                            sc[S_PLASTIC_SLIP], sc[S_PLASTIC_SLIP + 1], sc[S_BACK_STRESS], sc[S_BACK_STRESS + 1])
-    state_trial[S_CODE] = code
-    state_trial[S_BOND_BROKEN] = broken
-    state_trial[S_PLASTIC_SLIP] = slip1
-    state_trial[S_PLASTIC_SLIP + 1] = slip2
-    state_trial[S_BACK_STRESS] = back1
-    state_trial[S_BACK_STRESS + 1] = back2
-    traction[0] = tau1
-    if ns == 2:
-        traction[1] = tau2
-    traction[ns] = t_n
+    write_trial(state_trial, traction, ns, code, broken, slip1, slip2, back1, back2, tau1, tau2, t_n)
     if status != STATUS_OK and not math.isfinite(t_n):  # a non-finite input or t_n: NaN tractions, zero tangent
         write_tangent(tangent, ns, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
         return status

@@ -21,7 +21,7 @@ import numpy as np
 from ..errors import STATUS_NAN, STATUS_OK
 from ..materials.mohr_coulomb import (P_COHESION, P_KN, P_KS, P_KS_RESIDUAL, P_OPEN_TANGENT, P_TAN_PHI,
                                       P_TENSILE_STRENGTH, S_BACK_STRESS, S_BOND_BROKEN, S_CODE, S_PLASTIC_SLIP,
-                                      STICK, mohr_coulomb_point, write_tangent)
+                                      STICK, mohr_coulomb_point, write_tangent, write_trial)
 from .dynamic_kernels import lu_factor_inplace, lu_forward_inplace, lu_solve_inplace
 from .ldlt_kernels import _U
 
@@ -79,16 +79,7 @@ def _law_at_points(points, n, params_table, param_index, weight, delta, state_ba
             traction[p, ns] = kn * delta[p, ns]
             code = STICK
         else:
-            state_trial[p, S_CODE] = code
-            state_trial[p, S_BOND_BROKEN] = broken
-            state_trial[p, S_PLASTIC_SLIP] = slip1
-            state_trial[p, S_PLASTIC_SLIP + 1] = slip2
-            state_trial[p, S_BACK_STRESS] = back1
-            state_trial[p, S_BACK_STRESS + 1] = back2
-            traction[p, 0] = tau1
-            if ns == 2:
-                traction[p, 1] = tau2
-            traction[p, ns] = t_n
+            write_trial(state_trial[p], traction[p], ns, code, broken, slip1, slip2, back1, back2, tau1, tau2, t_n)
         icode = int(code)
         codes[p] = icode
         if icode == STICK:

@@ -23,7 +23,7 @@ from ..materials.mohr_coulomb import (P_COHESION, P_KN, P_KS, P_KS_RESIDUAL, P_O
                                       P_TENSILE_STRENGTH, S_BACK_STRESS, S_BOND_BROKEN, S_CODE, S_PLASTIC_SLIP,
                                       STICK, mohr_coulomb_point, write_tangent, write_trial)
 from .dynamic_kernels import lu_factor_inplace, lu_forward_inplace, lu_solve_inplace
-from .ldlt_kernels import _U
+from .ldlt_kernels import UNSIGNED
 
 @numba.njit(cache=True, inline="always")
 def _add_scaled(out, row, v):
@@ -252,7 +252,7 @@ def capacitance_assemble(ST, rows, qt, J, scale):
             b = base[i]
             acc = 0.0
             for d in range(dim):
-                acc += qa[i, d] * rj[_U(b + d)]
+                acc += qa[i, d] * rj[UNSIGNED(b + d)]
             J[i, j] = acc
         J[j, j] += 1.0
     big = 0.0
@@ -410,7 +410,7 @@ def capacitance_update_solve(ST, ref_rows, ref_qt, Jref, piv, rows, qt_rows, F, 
             b = (ref_rows[ii] // dim) * dim
             acc = 0.0
             for d in range(dim):
-                acc += ref_qt[ii, d] * col[_U(b + d)]
+                acc += ref_qt[ii, d] * col[UNSIGNED(b + d)]
             JRN[ii, kk] = acc
     # right-hand side b = -Qt_c F on U
     b = np.zeros(nU)
@@ -440,7 +440,7 @@ def capacitance_update_solve(ST, ref_rows, ref_qt, Jref, piv, rows, qt_rows, F, 
             b = (U[D[kk]] // dim) * dim
             acc = 0.0
             for d in range(dim):
-                acc += dq[kk, d] * col[_U(b + d)]
+                acc += dq[kk, d] * col[UNSIGNED(b + d)]
             W[kk, u] = acc
     Cm = np.empty((nd, nd))
     for a in range(nd):

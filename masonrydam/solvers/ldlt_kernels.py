@@ -7,7 +7,7 @@ fill-reducing order: ``A[perm][:, perm] = L D L^T``. A solve of ``A x = b`` is `
 column of L, backwards, summed in four interleaved partial sums), ``x[perm] = z`` (Golub & Van Loan
 2013, sec. 4.1.2 and 3.1). Both passes read each stored entry once, so a solve costs ``4 nnz(L)``
 flops and two sweeps over the factor. Subscripts taken from the index arrays are cast to unsigned
-(``_U``), which halves the time of a solve (0.31 ms on the Koyna factor). A supernodal copy of the
+(``UNSIGNED``), which halves the time of a solve (0.31 ms on the Koyna factor). A supernodal copy of the
 factor (relaxed supernodes of up to 8 columns, unsigned subscripts; Liu, Ng & Peyton 1993, Ashcraft &
 Grimes 1989) took 0.16 ms; it was not adopted for its size: a written-out branch per supernode width.
 Single-threaded and deterministic; return STATUS_OK, or STATUS_NAN when the result is not finite.
@@ -23,7 +23,7 @@ from ..errors import STATUS_NAN, STATUS_OK
 #: for negative values (a compare and a conditional move) to every subscript of a signed integer,
 #: which made the substitution about twice as slow (0.69 against 0.31 ms on the Koyna factor, the
 #: same bits); the indices of a factor are never negative
-_U = np.uint64
+UNSIGNED = np.uint64
 
 
 @numba.njit(cache=True)
@@ -31,12 +31,12 @@ def ldlt_solve_vector(Lp, Li, Lx, d, perm, b, x, w):
     """``x = A^-1 b`` for one right-hand side: b, x, w (work space) (n,)."""
     n = b.shape[0]
     for i in range(n):
-        w[i] = b[_U(perm[i])]
+        w[i] = b[UNSIGNED(perm[i])]
     for j in range(n):
         wj = w[j]
         if wj != 0.0:
             for k in range(Lp[j], Lp[j + 1]):
-                w[_U(Li[_U(k)])] -= Lx[_U(k)] * wj
+                w[UNSIGNED(Li[UNSIGNED(k)])] -= Lx[UNSIGNED(k)] * wj
     for j in range(n):
         w[j] /= d[j]
     for j in range(n - 1, -1, -1):
@@ -49,17 +49,17 @@ def ldlt_solve_vector(Lp, Li, Lx, d, perm, b, x, w):
         k = Lp[j]
         end = Lp[j + 1]
         while k + 3 < end:
-            a0 += Lx[_U(k)] * w[_U(Li[_U(k)])]
-            a1 += Lx[_U(k + 1)] * w[_U(Li[_U(k + 1)])]
-            a2 += Lx[_U(k + 2)] * w[_U(Li[_U(k + 2)])]
-            a3 += Lx[_U(k + 3)] * w[_U(Li[_U(k + 3)])]
+            a0 += Lx[UNSIGNED(k)] * w[UNSIGNED(Li[UNSIGNED(k)])]
+            a1 += Lx[UNSIGNED(k + 1)] * w[UNSIGNED(Li[UNSIGNED(k + 1)])]
+            a2 += Lx[UNSIGNED(k + 2)] * w[UNSIGNED(Li[UNSIGNED(k + 2)])]
+            a3 += Lx[UNSIGNED(k + 3)] * w[UNSIGNED(Li[UNSIGNED(k + 3)])]
             k += 4
         while k < end:
-            a0 += Lx[_U(k)] * w[_U(Li[_U(k)])]
+            a0 += Lx[UNSIGNED(k)] * w[UNSIGNED(Li[UNSIGNED(k)])]
             k += 1
         w[j] -= (a0 + a1) + (a2 + a3)
     for i in range(n):
-        x[_U(perm[i])] = w[i]
+        x[UNSIGNED(perm[i])] = w[i]
     for i in range(n):
         if not (abs(x[i]) < np.inf):
             return STATUS_NAN
@@ -79,13 +79,13 @@ def ldlt_solve_block(Lp, Li, Lx, d, perm, B, X, W):
     columns of a row are contiguous, so every entry of L updates k values at once)."""
     n, nr = B.shape
     for i in range(n):
-        src = B[_U(perm[i])]
+        src = B[UNSIGNED(perm[i])]
         dst = W[i]
         for c in range(nr):
             dst[c] = src[c]
     for j in range(n):  # forward: row j updates the rows below it
         for k in range(Lp[j], Lp[j + 1]):
-            _subtract_scaled_row(W[_U(Li[_U(k)])], W[j], Lx[_U(k)])
+            _subtract_scaled_row(W[UNSIGNED(Li[UNSIGNED(k)])], W[j], Lx[UNSIGNED(k)])
     for j in range(n):
         dj = d[j]
         wj = W[j]
@@ -93,10 +93,10 @@ def ldlt_solve_block(Lp, Li, Lx, d, perm, B, X, W):
             wj[c] /= dj
     for j in range(n - 1, -1, -1):  # backward: row j gathers from the rows below it
         for k in range(Lp[j], Lp[j + 1]):
-            _subtract_scaled_row(W[j], W[_U(Li[_U(k)])], Lx[_U(k)])
+            _subtract_scaled_row(W[j], W[UNSIGNED(Li[UNSIGNED(k)])], Lx[UNSIGNED(k)])
     for i in range(n):
         src = W[i]
-        dst = X[_U(perm[i])]
+        dst = X[UNSIGNED(perm[i])]
         for c in range(nr):
             dst[c] = src[c]
     for i in range(n):

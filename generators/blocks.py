@@ -7,9 +7,15 @@ import math
 import numpy as np
 
 from masonrydam.errors import SceneError
+from masonrydam.scene.units import quantity
 
 from .grid import Rect, rectangles_to_mesh
 from .grid3d import Box, boxes_to_mesh, rotation_matrix
+
+
+def _coordinate(block: dict, name: str, key: str) -> float:
+    """A block coordinate (m, or a length with its unit): finite and plausible, errors name the key."""
+    return quantity(block[name], "length", f"{key}.{name}")
 
 
 def blocks_2d(
@@ -38,7 +44,8 @@ def blocks_2d(
             if k not in ("x0", "y0", "x1", "y1", "group"):
                 raise SceneError(f"{key}.blocks[{i}].{k}", "unknown key (use x0, y0, x1, y1, group)")
         try:
-            r = Rect(float(b["x0"]), float(b["y0"]), float(b["x1"]), float(b["y1"]), str(b.get("group", "blocks")), f"b{i}")
+            r = Rect(*(_coordinate(b, k, f"{key}.blocks[{i}]") for k in ("x0", "y0", "x1", "y1")),
+                     str(b.get("group", "blocks")), f"b{i}")
         except KeyError as exc:
             raise SceneError(f"{key}.blocks[{i}].{exc.args[0]}", "is required") from None
         if not (r.x1 > r.x0 and r.y1 > r.y0):
@@ -84,7 +91,8 @@ def blocks_3d(
             if k not in _BOX_KEYS:
                 raise SceneError(f"{key}.blocks[{i}].{k}", f"unknown key (use {', '.join(_BOX_KEYS)})")
         try:
-            box = Box(*(float(b[k]) for k in _BOX_KEYS[:6]), str(b.get("group", "blocks")), f"b{i}")
+            box = Box(*(_coordinate(b, k, f"{key}.blocks[{i}]") for k in _BOX_KEYS[:6]), str(b.get("group", "blocks")),
+                      f"b{i}")
         except KeyError as exc:
             raise SceneError(f"{key}.blocks[{i}].{exc.args[0]}", "is required") from None
         if not all(h > lo for lo, h in zip(box.lo(), box.hi())):
@@ -96,6 +104,6 @@ def blocks_3d(
     if rotation_deg is not None:
         if not isinstance(rotation_deg, (list, tuple)) or len(rotation_deg) != 3:
             raise SceneError(f"{key}.rotation_deg", f"expected [about_x, about_y, about_z] in degrees, got {rotation_deg!r}")
-        R = rotation_matrix(rotation_deg)
+        R = rotation_matrix([quantity(a, "angle", f"{key}.rotation_deg[{j}]") for j, a in enumerate(rotation_deg)])
         mesh.points = np.ascontiguousarray(mesh.points @ R.T)
     return mesh

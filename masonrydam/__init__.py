@@ -8,7 +8,8 @@ residual shear stiffness) and open (no tension) and close again, after Tzamtzis 
 """
 from ._version import __version__
 from .errors import ConvergenceError, MasonrydamError, MechanismError, MeshError, NumericalError, SceneError
+from .results.files import open_result
 from .scene import Scene, run
 
-__all__ = ["__version__", "Scene", "run", "MasonrydamError", "SceneError", "MeshError", "MechanismError",
+__all__ = ["__version__", "Scene", "run", "open_result", "MasonrydamError", "SceneError", "MeshError", "MechanismError",
            "ConvergenceError", "NumericalError"]

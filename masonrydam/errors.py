@@ -59,3 +59,35 @@ STATUS_OK = 0
 STATUS_BAD_JACOBIAN = 1  # non-positive or tiny Jacobian determinant; info[0] = element index
 STATUS_NAN = 2  # NaN/inf produced; info[0] = element index
 STATUS_BAD_GEOMETRY = 3  # degenerate interface (zero length / area); info[0] = element index
+
+
+class OutputError(MasonrydamError, OSError):
+    """An output file or folder that cannot be written (a folder where a file is expected, a missing or
+    read-only folder), or an input file that is not what it should be. Raised before any work is done."""
+
+
+class RunStopped(KeyboardInterrupt):
+    """A run stopped on request: Ctrl-C (SIGINT) or SIGTERM, at the end of a converged step, or at once
+    on a second request. Every converged step is kept (see :func:`masonrydam.run`).
+
+    Derived from ``KeyboardInterrupt``, not from :class:`MasonrydamError`, so that a loop that catches
+    analysis errors (``except MasonrydamError``) still stops when the user asks it to.
+
+    status: ``"interrupted"`` (SIGINT) or ``"terminated"`` (SIGTERM); exit_code: 130 or 143 (128 + the
+    signal number, the shell's convention); where: the step it stopped at, in words; kept: the file
+    that holds the converged steps (None for a run without an output file); steps: how many.
+    """
+
+    def __init__(self, status: str, where: str, kept=None, steps: int = 0):
+        self.status, self.where, self.kept, self.steps = status, where, kept, steps
+        self.exit_code = 143 if status == "terminated" else 130
+        super().__init__(self.message())
+
+    def message(self) -> str:
+        text = f"stopped {self.where}"
+        if self.kept is not None:
+            text += f"; {self.steps} recorded step{'s' if self.steps != 1 else ''} kept in {self.kept}"
+        return text
+
+    def __str__(self) -> str:
+        return self.message()

@@ -718,21 +718,24 @@ def test_non_converging_step_raises_with_time_and_keeps_the_file(tmp_path):
     import xarray as xr
 
     ds = xr.load_dataset(out)
-    assert ds.attrs["completed"] == "false" and "ConvergenceError" in ds.attrs["status"]
+    assert ds.attrs["completed"] == "false" and ds.attrs["status"] == "failed"
+    assert "ConvergenceError" in ds.attrs["status_reason"]
     assert ds.sizes["step"] >= 2 and np.isfinite(ds.displacement.values).all()
 
 
 def test_killed_run_leaves_a_readable_incomplete_file(tmp_path):
-    """A run killed halfway (SIGKILL) leaves a netCDF file that xarray reads, with the steps written
-    (each one flushed) and completed = false."""
+    """A run killed halfway (SIGKILL) leaves its working file (killed.partial.nc) that xarray reads,
+    with the steps written (each one flushed) and completed = false, status = running; the target
+    file is never created by an unfinished run."""
     out = tmp_path / "killed.nc"
+    work = tmp_path / "killed.partial.nc"
     code = ("import sys; sys.path.insert(0, %r); import masonrydam; from test_dynamics import sliding_scene; "
             "masonrydam.run(sliding_scene(duration=60.0, dt=0.002, integrator='newmark_average'), output=%r)"
             % (os.path.dirname(os.path.abspath(__file__)), str(out)))
     proc = subprocess.Popen([sys.executable, "-c", code])
     try:
         deadline = time.time() + 90
-        while time.time() < deadline and (not out.exists() or out.stat().st_size < 200_000):
+        while time.time() < deadline and (not work.exists() or work.stat().st_size < 200_000):
             assert proc.poll() is None, "the run stopped by itself"
             time.sleep(0.2)
     finally:
@@ -740,7 +743,8 @@ def test_killed_run_leaves_a_readable_incomplete_file(tmp_path):
         proc.wait()
     import xarray as xr
 
-    ds = xr.load_dataset(out)
+    assert not out.exists()
+    ds = xr.load_dataset(work)
     assert ds.attrs["completed"] == "false" and ds.attrs["status"] == "running"
     n = ds.sizes["step"]
     assert n >= 5 and np.isfinite(ds.displacement.values).all()

@@ -230,11 +230,11 @@ def test_text_errors_say_what_was_found(tmp_path):
         rec.read_record(uneven, units="g")
     three = tmp_path / "three.txt"
     np.savetxt(three, np.ones((4, 3)))
-    with pytest.raises(rec.RecordError, match="3 columns"):
-        rec.read_record(three, units="g", dt=0.01)
-    prose = tmp_path / "notes.txt"
-    prose.write_text("Station: somewhere\nsampling unknown\n0.1\n0.2\n")
-    with pytest.raises(rec.RecordError, match="not a recognised record format.*Station: somewhere"):
+    with pytest.raises(rec.RecordError, match="3 value columns found.*column=N"):  # one trace asked for
+        rec.read_trace(three, units="g", dt=0.01)
+    prose = tmp_path / "notes.txt"  # free text after the data began (before it, it is a header)
+    prose.write_text("0.1\nStation: somewhere\nsampling unknown\n0.2\n")
+    with pytest.raises(rec.RecordError, match="line 2 'Station: somewhere' is not a row of numbers.*line 1"):
         rec.read_record(prose, units="g", dt=0.01)
     binary = tmp_path / "blob.bin"
     binary.write_bytes(bytes(range(256)) * 4)

@@ -15,7 +15,7 @@ import sys
 from importlib import resources
 from pathlib import Path
 
-from ..errors import MasonrydamError
+from ..errors import MasonrydamError, RunStopped
 
 
 def default_scene_path() -> Path:
@@ -29,10 +29,11 @@ def _scene_arg(args):
 
 
 def _cmd_run(args):
+    from ..results.files import check_output_path
     from ..scene.run import run
 
     scene = _scene_arg(args)
-    out = args.output or (scene.stem + ".nc")
+    out = check_output_path(args.output or (scene.stem + ".nc"), "-o")
     run(scene, output=out, progress=not args.no_progress, summary=True)
     return 0
 
@@ -40,11 +41,13 @@ def _cmd_run(args):
 def _cmd_check(args):
     from ..scene.build import build_mesh, build_model, build_stages, effects
     from ..scene.scene import Scene
+    from ..solvers.static import check_mechanisms
 
     sc = Scene.from_toml(_scene_arg(args))
     mesh = build_mesh(sc.normalized, sc.base_dir)
     model = build_model(sc.normalized, mesh)
-    build_stages(sc.normalized, mesh, model, sc.base_dir)
+    stages = build_stages(sc.normalized, mesh, model, sc.base_dir)
+    check_mechanisms(model, stages)  # the solver's own check before each static stage (MechanismError)
     print(f"scene '{sc.name}' is valid: {model.n_nodes} nodes, {model.n_dof} DOFs, "
           f"{mesh.n_elements()} elements, {mesh.n_interfaces()} interfaces")
     for e in effects(sc.normalized, model):
@@ -53,10 +56,11 @@ def _cmd_check(args):
 
 
 def _cmd_export(args):
-    from ..mesh.io import write_mesh
+    from ..mesh.io import check_mesh_output, write_mesh
     from ..scene.build import build_mesh
     from ..scene.scene import Scene
 
+    check_mesh_output(args.output, "-o")  # an extension meshio writes, an existing folder: before any work
     sc = Scene.from_toml(_scene_arg(args))
     mesh = build_mesh(sc.normalized, sc.base_dir)
     write_mesh(mesh, args.output)
@@ -80,15 +84,18 @@ def _cmd_records(args):
             print("  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip())
         return 0
     from ..records.plotting import plot_record
+    from ..results.files import check_output_path
 
     name = args.name
+    out = check_output_path(args.output or f"{Path(name).stem}.png", "-o")
     if name in rec.record_names() or not Path(name).is_file():
-        for opt in ("format", "units", "dt"):
+        for opt in ("format", "units", "dt", "column"):
             if getattr(args, opt) is not None and name in rec.record_names():
                 raise MasonrydamError(f"--{opt} applies to a record file; {name!r} is a bundled record (it knows it)")
         tr = rec.load_record(name)
-    else:
-        tr = rec.read_trace(name, format=args.format, units=args.units, dt=args.dt)
+    else:  # errors name the command-line options (--units, --dt, --column), not the Python arguments
+        tr = rec.read_trace(name, format=args.format, units=args.units, dt=args.dt, column=args.column,
+                            option_names=rec.readers.CLI_OPTION_NAMES)
     m = rec.summary(tr)
     meta = tr.stats.masonrydam
     print(f"{name}: {meta.get('event', '?')}, {meta.get('station', '?')}, component {meta.get('component', '?')}")
@@ -99,7 +106,6 @@ def _cmd_records(args):
     print(f"  Arias  {m['arias_intensity']:.4g} m/s")
     print(f"  D5-95  {m['d5_95']:.3f} s  ({m['t5']:.2f} s to {m['t95']:.2f} s)")
     print(f"  CAV    {m['cav']:.4g} m/s")
-    out = args.output or f"{Path(name).stem}.png"
     plot_record(tr, out, damping=args.damping, title=f"{name} ({100 * args.damping:g} % damping)")
     print(f"wrote {out}")
     return 0
@@ -109,15 +115,24 @@ def _cmd_plot(args):
     """Time histories (dynamic results) or step histories (static results) of a result file, as PNG:
     ground acceleration, relative displacement of the chosen nodes, slip and opening of the chosen
     joint points, and the energy balance."""
+    import warnings
+
     import numpy as np
-    import xarray as xr
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
+    from ..results.files import IncompleteResultWarning, check_output_path, open_result
+
     path = Path(args.result)
-    if not path.is_file():
-        raise MasonrydamError(f"result file '{path}' does not exist")
-    ds = xr.load_dataset(path)
+    out = check_output_path(args.output or f"{path.stem}.png", "-o")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", IncompleteResultWarning)
+        ds = open_result(path)
+    for w in caught:
+        print(f"masonrydam: note: {w.message}", file=sys.stderr)
+    if not ds.sizes["step"]:
+        raise MasonrydamError(f"'{path}' has no steps to plot (status '{ds.attrs.get('status', '?')}': the run "
+                              "stopped before its first converged step)")
     comp = args.component
     if comp not in ds.component.values:
         raise MasonrydamError(f"--component must be one of {list(ds.component.values)}, got {comp!r}")
@@ -176,14 +191,16 @@ def _cmd_plot(args):
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=7, loc="best")
     fig.suptitle(f"{path.name}: {ds.attrs.get('scene_name', '')} (completed = {ds.attrs.get('completed', '?')})")
-    out = args.output or f"{path.stem}.png"
     fig.savefig(out, dpi=110)
     print(f"wrote {out}")
     return 0
 
 
 def main(argv=None) -> int:
+    from .._version import __version__
+
     p = argparse.ArgumentParser(prog="masonrydam", description="Nonlinear analysis of jointed masonry and block dams")
+    p.add_argument("--version", action="version", version=f"masonrydam {__version__}")
     sub = p.add_subparsers(dest="command", required=True)
     r = sub.add_parser("run", help="run a scene and write results to netCDF")
     r.add_argument("scene", nargs="?", help="scene TOML file (default: the bundled wall_push scene)")
@@ -204,12 +221,17 @@ def main(argv=None) -> int:
     rsub = rc.add_subparsers(dest="records_command", required=True)
     rsub.add_parser("list", help="table of the bundled records")
     rs = rsub.add_parser("show", help="print a record's measures and plot it to PNG")
-    rs.add_argument("name", help="record name from `masonrydam records list` (or a PEER AT2 file)")
+    rs.add_argument("name", help="record name from `masonrydam records list`, or a record file (PEER AT2, SAC, "
+                                 "MiniSEED, text: header lines, an optional time column, value columns)")
     rs.add_argument("-o", "--output", help="PNG file (default: NAME.png in the current folder)")
     rs.add_argument("--damping", type=float, default=0.05, help="damping ratio of the spectrum (default 0.05)")
     rs.add_argument("--format", help="format of a record file (AT2, TEXT, or an obspy format such as SAC, MSEED)")
-    rs.add_argument("--units", help="units of the values in a record file that does not state them (g, m/s2, cm/s2)")
-    rs.add_argument("--dt", type=float, help="time step (s) of a one-column text file")
+    rs.add_argument("--units", help="units of the values in a record file whose header does not state them "
+                                    "(g, m/s2, cm/s2, gal); checked against the header where it does")
+    rs.add_argument("--dt", type=float, help="time step (s) of a text file without a time column; checked "
+                                             "against the time column where there is one")
+    rs.add_argument("--column", type=int, help="which value column of a text file with several, counted from 0 "
+                                               "without the time column (or which trace of a SAC/MiniSEED file)")
     rc.set_defaults(func=_cmd_records)
     pl = sub.add_parser("plot", help="plot histories from a result file (netCDF) to PNG")
     pl.add_argument("result", help="result file written by `masonrydam run`")
@@ -226,6 +248,12 @@ def main(argv=None) -> int:
         for note in getattr(exc, "__notes__", []):
             print(f"masonrydam: {note}", file=sys.stderr)
         return 2
+    except RunStopped as exc:  # Ctrl-C or SIGTERM during a run: the converged steps are kept
+        print(f"masonrydam: {exc}", file=sys.stderr)
+        return exc.exit_code
+    except KeyboardInterrupt:  # Ctrl-C outside a run's steps (reading, meshing, plotting): nothing is kept
+        print("masonrydam: interrupted", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":

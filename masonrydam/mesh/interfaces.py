@@ -31,7 +31,7 @@ from scipy.sparse.csgraph import connected_components
 
 from ..elements.shapes import ELEMENT_TYPES
 from ..errors import MeshError
-from .model import INTERFACE_OF_FACE, CellBlock, FacetSet, Mesh
+from .model import INTERFACE_FACE_TYPE, INTERFACE_OF_FACE, CellBlock, FacetSet, Mesh
 
 #: number of corner nodes of each facet type
 _FACET_CORNERS = {"line2": 2, "line3": 2, "tri3": 3, "tri6": 3, "quad4": 4, "quad8": 4}
@@ -360,3 +360,74 @@ def insert_interfaces(mesh: Mesh, joint_facets: dict[str, np.ndarray]) -> Mesh:
     out_mesh = Mesh(points, new_blocks, joints, node_sets, facet_sets)
     out_mesh.check()
     return out_mesh
+
+
+def remove_interfaces(mesh: Mesh) -> tuple[Mesh, list[tuple[str, FacetSet]]]:
+    """The conformal mesh before interface insertion: the inverse of :func:`insert_interfaces`.
+
+    Every node copy that an interface joins to another (bottom face node k with top face node k) is
+    merged back into one node, by the interface connectivity (not by coordinates; the copies of a
+    zero-thickness joint coincide in the undeformed configuration, which is checked). A merged node
+    takes the smallest index among its copies and the nodes keep their order, so a mesh made by
+    :func:`insert_interfaces` gets its original numbering back. Continuum blocks, node sets and facet
+    sets are mapped onto the merged numbering (a node set holding one copy of a split node holds
+    the merged node).
+
+    Returns the mesh without joints and, for each interface block, ``(joint set name, FacetSet)``:
+    the joint facets (edges in 2D, faces in 3D) in the face order of the interface, which
+    :func:`insert_interfaces` takes back.
+    """
+    new, keep = merge_map(mesh)
+    points = mesh.points[keep]
+    blocks = [CellBlock(blk.type, new[blk.cells], blk.name) for blk in mesh.blocks]
+    node_sets = {name: new[np.asarray(ids, dtype=np.int64)] for name, ids in mesh.node_sets.items()}
+    facet_sets = {name: FacetSet(fs.type, new[fs.facets]) for name, fs in mesh.facet_sets.items()}
+    faces = []
+    for j in mesh.joints:
+        nfn = j.cells.shape[1] // 2
+        faces.append((j.name, FacetSet(INTERFACE_FACE_TYPE[j.type], new[j.cells[:, :nfn]])))
+    return Mesh(points, blocks, [], node_sets, facet_sets), faces
+
+
+def merge_map(mesh: Mesh) -> tuple[np.ndarray, np.ndarray]:
+    """``(new, keep)``: the merged index of every node when the node copies joined by interfaces are
+    merged (see :func:`remove_interfaces`), and the node kept for each merged node (its smallest copy).
+    Raises :class:`MeshError` when joined copies do not coincide."""
+    mesh.check()
+    n = mesh.n_nodes
+    a, b = [], []
+    for j in mesh.joints:
+        nfn = j.cells.shape[1] // 2
+        a.append(j.cells[:, :nfn].ravel())
+        b.append(j.cells[:, nfn:].ravel())
+    a = np.concatenate(a) if a else np.zeros(0, dtype=np.int64)
+    b = np.concatenate(b) if b else np.zeros(0, dtype=np.int64)
+    graph = coo_matrix((np.ones(len(a)), (a, b)), shape=(n, n))
+    n_comp, comp = connected_components(graph, directed=False)
+    rep = np.full(n_comp, n, dtype=np.int64)
+    np.minimum.at(rep, comp, np.arange(n, dtype=np.int64))  # smallest node of each component
+    keep = np.sort(rep)
+    rank = np.empty(n_comp, dtype=np.int64)
+    rank[np.argsort(rep)] = np.arange(n_comp)
+    new = rank[comp]
+    if n:
+        extent = float(np.ptp(mesh.points, axis=0).max())
+        gap = np.linalg.norm(mesh.points - mesh.points[keep[new]], axis=1)
+        if gap.max() > 1e-9 * max(extent, 1e-300):
+            i = int(np.argmax(gap))
+            raise MeshError(f"node {i} and its interface partner {int(keep[new[i]])} are {gap[i]:.3g} m apart: "
+                            "only zero-thickness joints (coincident faces) can be merged into a conformal mesh")
+    return new, keep
+
+
+def partial_node_sets(mesh: Mesh, new: np.ndarray) -> list[str]:
+    """Names of the node sets that hold some but not all copies of a node split by joints (``new``
+    from :func:`merge_map`): merged, such a set holds the whole node, and insertion gives it every copy."""
+    copies = np.bincount(new, minlength=int(new.max(initial=-1)) + 1)
+    out = []
+    for name, ids in mesh.node_sets.items():
+        ids = np.unique(np.asarray(ids, dtype=np.int64))
+        held = np.bincount(new[ids], minlength=len(copies))
+        if ((held > 0) & (held < copies)).any():
+            out.append(name)
+    return sorted(out)

@@ -124,7 +124,7 @@ def husid_times(acc, dt=None, fractions=(0.05, 0.95)) -> np.ndarray:
     a, dt = as_series(acc, dt)
     f = np.atleast_1d(np.asarray(fractions, dtype=np.float64))
     if np.any(~np.isfinite(f)) or np.any(f < 0.0) or np.any(f > 1.0):
-        raise RecordError(f"Husid fractions must lie in [0, 1], got {list(f)}")
+        raise RecordError(f"Husid fractions must lie in [0, 1], got {f.tolist()}")
     h = husid(a, dt)
     out = np.empty_like(f)
     for k, fk in enumerate(f):
@@ -275,7 +275,7 @@ def response_spectrum(acc, dt=None, periods=None, dampings=0.05, *, min_samples_
     if status != STATUS_OK:
         j, k = int(info[0]), int(info[1])
         what = "a non-finite response" if status == STATUS_NAN else "invalid input"
-        raise RecordError(f"response spectrum: {what} for period {Tp[k]!r} s, damping {Z[j]!r}")
+        raise RecordError(f"response spectrum: {what} for period {float(Tp[k]):g} s, damping {float(Z[j]):g}")
     Sd = np.zeros((Z.size, T.size))
     Sd[:, pos] = sd_pos
     w = np.zeros(T.size)

@@ -187,7 +187,7 @@ def _target_in_si(value, units: str, what: str) -> float:
         raise RecordError(f"{what} units must be an acceleration unit, got {units!r}")
     v = float(value)
     if not (math.isfinite(v) and v > 0):
-        raise RecordError(f"{what} must be a positive acceleration, got {value!r}")
+        raise RecordError(f"{what} must be a positive acceleration, got {v!r}")
     return v * factor
 
 

@@ -2,7 +2,10 @@
 
 The file is created before the first step with an unlimited ``step`` dimension; every converged
 step is appended and flushed (``sync``), so a run that stops (non-convergence, a mechanism, a kill)
-leaves a readable file with every finished step, marked ``completed = "false"`` with the reason.
+leaves a readable file with every finished step, marked ``completed = "false"`` with a ``status``
+(``running`` until the file is closed; ``failed``, ``interrupted`` or ``terminated``) and a
+``status_reason``. Where the file goes (a working file beside the target, renamed over it when the
+run completes) is :mod:`masonrydam.results.files`.
 ``xarray.open_dataset`` reads it; every variable carries ``units`` and ``long_name``.
 
 Time histories (scenes with a dynamic stage, ``dynamic=True``): the same unlimited ``step``
@@ -224,11 +227,16 @@ class ResultWriter:
         self.n += 1
         self.nc.sync()
 
-    def close(self, completed: bool, status: str, extra_attrs: dict | None = None):
+    def close(self, completed: bool, status: str, extra_attrs: dict | None = None, reason: str | None = None):
+        """Finish the file: ``completed`` ("true"/"false"), ``status`` (``"completed"``, ``"failed"``,
+        ``"interrupted"``, ``"terminated"``; a file never closed keeps ``"running"``) and, for a run
+        that ended early, ``status_reason`` (the error or the step it stopped at)."""
         if not self.nc.isopen():
             return
         for k, val in (extra_attrs or {}).items():
             self.nc.setncattr(k, val if isinstance(val, (str, int, float)) else json.dumps(val))
         self.nc.completed = "true" if completed else "false"
         self.nc.status = status
+        if reason is not None:
+            self.nc.status_reason = reason
         self.nc.close()

@@ -177,9 +177,11 @@ def build_ground_motion(spec: dict, component: int, key: str, stage_dt: float, b
             path = Path(spec["file"])
             if not path.is_absolute() and base_dir is not None:
                 path = Path(base_dir) / path
-            st = rec.read_record(path, format=spec["format"], units=spec["units"], dt=spec["dt"])
-            tr = st[0]
-            name = str(spec["file"])
+            # one trace: a file with several value columns needs the component's 'column' (0-based, the
+            # time column not counted); errors name the scene keys (stages[i].ground_motion.x.units)
+            tr = rec.read_trace(path, format=spec["format"], units=spec["units"], dt=spec["dt"],
+                                column=spec.get("column"), option_names=rec.readers.scene_option_names(key))
+            name = str(spec["file"]) if spec.get("column") is None else f"{spec['file']} column {spec['column']}"
         elif src == "values":
             q, unit, factor = rec.parse_units(spec["units"], f"{key}.units")
             if q != "acceleration":
@@ -209,7 +211,7 @@ def build_ground_motion(spec: dict, component: int, key: str, stage_dt: float, b
             t = spec["scale_to_sa"]
             tr = rec.scale_to_sa(tr, t["sa"], t["period"], t["damping"], units="m/s2")
     except RecordError as exc:
-        raise SceneError(key, str(exc)) from None
+        raise SceneError(key if exc.option is None else f"{key}.{exc.option}", str(exc)) from None
     attrs = rec.provenance_attrs(tr, prefix="")
     return GroundMotion(component, np.asarray(tr.data, dtype=np.float64), float(tr.stats.delta), name, attrs)
 

@@ -11,14 +11,16 @@ from pathlib import Path
 import numpy as np
 
 from .._version import __version__
-from ..errors import MasonrydamError
+from ..errors import OutputError, RunStopped
 from ..materials import mohr_coulomb as mc
+from ..results.files import check_output_path, claim_working_file, partial_path, settle_partial
 from ..results.writer import ResultWriter
 from ..solvers.linear import resolve_backend
 from ..solvers.dynamic import DynamicStage
 from ..solvers.static import SolverSettings, StaticSolver
 from .build import build_mesh, build_model, build_stages, effects
 from .scene import as_scene
+from .stopping import StopRequests
 
 
 def _output_selection(scene, mesh, model):
@@ -108,15 +110,26 @@ LOAD_IN_MEMORY_MAX = 256 * 2**20
 
 def run(scene, output: str | os.PathLike | None = None, progress: bool = False, summary: bool = False):
     """Run ``scene`` (a :class:`Scene`, a dict or a TOML path) and return the results as an
-    ``xarray.Dataset``. With ``output`` the netCDF file is kept there; a run that fails keeps every
-    converged step in that file (``completed = "false"``) and re-raises. The dataset is loaded in
-    memory, except a kept file larger than :data:`LOAD_IN_MEMORY_MAX` bytes, which is opened lazily
-    (values read when used; close it with ``ds.close()`` before writing the same file again), so
-    that the memory of a long time history does not grow with the record.
+    ``xarray.Dataset``.
+
+    With ``output`` the netCDF file is kept there. The run writes to ``NAME.partial.nc`` beside it
+    and moves that file over ``output`` (an atomic rename) only when it completes, so an earlier
+    result is never truncated and a reader holding it open keeps its contents. A run that ends early
+    keeps every converged step, marked ``completed = "false"`` with a ``status`` (``"failed: ..."``,
+    ``"interrupted"`` for Ctrl-C, ``"terminated"`` for SIGTERM): at ``output`` when no file was
+    there, in ``NAME.partial.nc`` otherwise (the earlier result stays byte for byte); the error says
+    where. Ctrl-C or SIGTERM stops the run at the end of the current step with
+    :class:`~masonrydam.errors.RunStopped`; a second one stops it at once. A killed process leaves
+    ``NAME.partial.nc`` with ``status = "running"``.
+
+    The dataset is loaded in memory, except a kept file larger than :data:`LOAD_IN_MEMORY_MAX` bytes,
+    which is opened lazily (values read when used; close it with ``ds.close()`` before writing the
+    same file again), so that the memory of a long time history does not grow with the record.
     """
     import xarray as xr
 
     t_start = time.perf_counter()
+    target = None if output is None else check_output_path(output, "output")
     sc = as_scene(scene)
     s = sc.normalized
     mesh = build_mesh(s, sc.base_dir)
@@ -129,14 +142,12 @@ def run(scene, output: str | os.PathLike | None = None, progress: bool = False, 
     eff = effects(s, model)
     nodes, jgroups, set_names = _output_selection(s, mesh, model)
     dim = mesh.dim
-    tmp = None
-    if output is None:
+    if target is None:
         fd, tmp = tempfile.mkstemp(suffix=".nc", prefix="masonrydam_")
         os.close(fd)
-        path = tmp
+        work = Path(tmp)
     else:
-        path = str(output)
-        Path(path).parent.mkdir(parents=True, exist_ok=True)
+        work = partial_path(target)
     solver_attrs = dict(settings.as_dict(), linear_solver_backend=backend)
     attrs = {
         "title": f"masonrydam: {sc.name}",
@@ -153,44 +164,101 @@ def run(scene, output: str | os.PathLike | None = None, progress: bool = False, 
     }
     if dyn_stages:
         attrs.update(_dynamic_attrs(stages))
-    writer = ResultWriter(path, mesh.points, nodes, _joint_points(jgroups, set_names, dim), dim, attrs,
-                          dynamic=bool(dyn_stages))
+    target_existed = target is not None and target.exists()
+    if target is not None:
+        claim_working_file(work)
+    try:
+        writer = ResultWriter(work, mesh.points, nodes, _joint_points(jgroups, set_names, dim), dim, attrs,
+                              dynamic=bool(dyn_stages))
+    except OSError as exc:  # e.g. another run holds the working file (HDF5 file lock), disk full
+        raise OutputError(f"cannot write the result file '{work}': {exc.strerror or exc}") from None
     bar = _Progress(len(stages), progress)
     last_iters = {"n": 0}
+    stopper = StopRequests().install()
+    n_static = len(static_stages)
 
     def on_step(si, st, lam, u, f_int, f_ext):
         r = f_int - f_ext
         r[~(st.supports | st.prescribed)] = 0.0
         iters = solver.stats.iterations - last_iters["n"]
         last_iters["n"] = solver.stats.iterations
-        writer.write_step(si, lam, iters, u.reshape(-1, dim)[nodes], r.reshape(-1, dim)[nodes], _joint_results(jgroups, dim))
+        with stopper.writing():
+            writer.write_step(si, lam, iters, u.reshape(-1, dim)[nodes], r.reshape(-1, dim)[nodes],
+                              _joint_results(jgroups, dim))
+        status = stopper.requested()
+        end_of_run = si == n_static - 1 and lam >= 1.0 - 1e-12 and not dyn_stages
+        if status is not None and not end_of_run:
+            raise RunStopped(status, f"at step {writer.n} (load factor {lam:.4g} of stage '{st.name}')")
 
     solver = StaticSolver(model, settings, on_step=on_step, progress=bar)
     dyn_solvers = []
     try:
         u = solver.run(static_stages) if static_stages else np.zeros(model.n_dof)
         if dyn_stages:
-            _run_dynamic(model, static_stages, dyn_stages, stages, u, writer, nodes, jgroups, dim, bar, dyn_solvers)
-    except (MasonrydamError, KeyboardInterrupt) as exc:
+            _run_dynamic(model, static_stages, dyn_stages, stages, u, writer, nodes, jgroups, dim, bar, dyn_solvers,
+                         stopper)
+        stopper.restore()  # solved: a request from here on is a plain KeyboardInterrupt
         bar.close()
-        writer.close(False, f"stopped: {type(exc).__name__}: {exc}", _stats_attrs(solver, t_start, dyn_solvers))
-        if tmp is not None:
-            os.unlink(tmp)
-        else:
-            exc.add_note(f"results of {writer.n} converged step(s) were kept in {path} (completed = false)")
+        stats = _stats_attrs(solver, t_start, dyn_solvers)
+        writer.close(True, "completed", stats)
+        if target is not None:
+            os.replace(work, target)
+    except BaseException as exc:
+        stopper.restore()
+        bar.close()
+        replacement = _end_early(exc, stopper, writer, work, target, target_existed,
+                                 lambda: _stats_attrs(solver, t_start, dyn_solvers))
+        if replacement is not None:
+            raise replacement from None
         raise
-    bar.close()
-    stats = _stats_attrs(solver, t_start, dyn_solvers)
-    writer.close(True, "completed", stats)
-    if tmp is None and os.path.getsize(path) > LOAD_IN_MEMORY_MAX:
+    path = work if target is None else target
+    if target is not None and os.path.getsize(path) > LOAD_IN_MEMORY_MAX:
         ds = xr.open_dataset(path)
     else:
         ds = xr.load_dataset(path)
-    if tmp is not None:
-        os.unlink(tmp)
+    if target is None:
+        os.unlink(work)
     if summary:
-        print_summary(sc, mesh, model, eff, solver, stats, path if tmp is None else None, ds, dyn_solvers=dyn_solvers)
+        print_summary(sc, mesh, model, eff, solver, stats, target, ds, dyn_solvers=dyn_solvers)
     return ds
+
+
+def _end_early(exc, stopper, writer, work, target, target_existed, stats):
+    """Close the result file of a run that ended early with ``exc``, keep it (see :func:`run`) and say
+    where in ``exc``: a :class:`RunStopped` gets its status and file, any other error a note. A run
+    without an output file removes its temporary file. Returns the exception to raise instead of
+    ``exc`` (a :class:`RunStopped` for an abort by a second request), or None."""
+    if isinstance(exc, RunStopped):
+        status, reason = exc.status, f"stopped {exc.where}"
+    elif isinstance(exc, KeyboardInterrupt):  # a second Ctrl-C / SIGTERM (or one with no handler here)
+        status, reason = stopper.status or "interrupted", "stopped at once (a second request) during a step"
+    else:
+        status, reason = "failed", f"{type(exc).__name__}: {exc}"
+    try:
+        extra = stats()
+    except Exception:  # the statistics must never hide the error that ended the run
+        extra = {}
+    try:
+        writer.close(False, status, extra, reason)
+    except Exception as close_exc:  # e.g. a full disk: the steps flushed so far are still in the file
+        exc.add_note(f"the result file '{work}' could not be closed cleanly ({close_exc}); the steps flushed "
+                     "before stay readable")
+    kept = None
+    if target is None:
+        if work.exists():
+            os.unlink(work)
+    else:
+        kept = settle_partial(work, target, target_existed)
+    steps = writer.n
+    if isinstance(exc, RunStopped):
+        exc.kept, exc.steps = kept, steps
+        exc.args = (exc.message(),)
+    elif isinstance(exc, KeyboardInterrupt):
+        return RunStopped(status, "at once (a second request) during the step after the last recorded one", kept, steps)
+    elif kept is not None:
+        where = (f"; the earlier result in {target} is unchanged" if kept != target else "")
+        exc.add_note(f"results of {steps} converged step(s) were kept in {kept} (completed = false){where}")
+    return None
 
 
 def _dynamic_attrs(stages) -> dict:
@@ -215,8 +283,9 @@ def _dynamic_attrs(stages) -> dict:
     return out
 
 
-def _run_dynamic(model, static_stages, dyn_stages, stages, u, writer, nodes, jgroups, dim, bar, dyn_solvers):
-    """Run the dynamic stages from the static state ``u`` (and the joint state committed in the model)."""
+def _run_dynamic(model, static_stages, dyn_stages, stages, u, writer, nodes, jgroups, dim, bar, dyn_solvers, stopper):
+    """Run the dynamic stages from the static state ``u`` (and the joint state committed in the model);
+    ``stopper`` (:class:`StopRequests`) is asked after every step."""
     from ..solvers.dynamic import DynamicSolver
     from ..solvers.modal import MassMatrix
 
@@ -235,16 +304,19 @@ def _run_dynamic(model, static_stages, dyn_stages, stages, u, writer, nodes, jgr
         def prog(fraction, si=si):
             bar(si, fraction)
 
-        ds = DynamicSolver(model, st.settings, mass=masses[lumped], progress=prog)
+        if k and stopper.requested() is not None:
+            raise RunStopped(stopper.requested(), f"after stage '{dyn_stages[k - 1].name}'")
+        ds = DynamicSolver(model, st.settings, mass=masses[lumped], progress=prog, stop_requested=stopper.requested)
         dyn_solvers.append(ds)
 
         def on_step(rec, si=si):
-            writer.write_step(si, rec["stage_fraction"], rec["iterations"], rec["u"].reshape(-1, dim)[nodes],
-                              rec["reaction"].reshape(-1, dim)[nodes], _joint_results(jgroups, dim),
-                              dynamic={"time": rec["t"], "velocity": rec["v"].reshape(-1, dim)[nodes],
-                                       "acceleration": rec["a"].reshape(-1, dim)[nodes],
-                                       "acceleration_absolute": rec["a_abs"].reshape(-1, dim)[nodes],
-                                       "ground_acceleration": rec["ag"], "energy": rec["energy"]})
+            with stopper.writing():
+                writer.write_step(si, rec["stage_fraction"], rec["iterations"], rec["u"].reshape(-1, dim)[nodes],
+                                  rec["reaction"].reshape(-1, dim)[nodes], _joint_results(jgroups, dim),
+                                  dynamic={"time": rec["t"], "velocity": rec["v"].reshape(-1, dim)[nodes],
+                                           "acceleration": rec["a"].reshape(-1, dim)[nodes],
+                                           "acceleration_absolute": rec["a_abs"].reshape(-1, dim)[nodes],
+                                           "ground_acceleration": rec["ag"], "energy": rec["energy"]})
 
         state = ds.run(st, u0=u, v0=v, a0=None, f_static=f_static, equilibrate=(k == 0), t0=t, energy0=energy,
                        on_step=on_step, record_initial=(k == 0))

@@ -1,26 +1,25 @@
 """The :class:`Scene`: what to analyse, from a TOML file or a Python dictionary."""
 from __future__ import annotations
 
-import copy
 import hashlib
 import json
 import tomllib
 from pathlib import Path
 
 from ..errors import SceneError
-from .schema import normalize
+from .schema import normalize, plain
 
 
 class Scene:
     """A validated scene.
 
-    data: the raw dictionary (as in the TOML file); base_dir: folder against which relative mesh
-    paths are resolved; source: where it came from (file path or '<dict>').
+    data: the raw dictionary (as in the TOML file; a copy, with NumPy values made plain Python ones);
+    base_dir: folder against which relative mesh paths are resolved; source: where it came from (file path or '<dict>').
     ``normalized`` holds the validated SI form; ``hash`` a SHA-256 of it (plus the mesh file bytes).
     """
 
     def __init__(self, data: dict, base_dir: str | Path = ".", source: str = "<dict>"):
-        self.data = copy.deepcopy(data)
+        self.data = plain(data)  # a deep copy; np.int64(3) -> 3, arrays -> lists (schema.plain)
         self.base_dir = Path(base_dir)
         self.source = source
         self.normalized = normalize(self.data)
@@ -30,8 +29,14 @@ class Scene:
         path = Path(path)
         if not path.exists():
             raise SceneError("scene", f"scene file '{path}' does not exist")
+        if path.is_dir():
+            raise SceneError("scene", f"'{path}' is a folder; give a scene TOML file (e.g. one in examples/)")
         try:
-            data = tomllib.loads(path.read_text())
+            data = tomllib.loads(path.read_text(encoding="utf-8"))
+        except OSError as exc:
+            raise SceneError("scene", f"cannot read '{path}': {exc.strerror or exc}") from None
+        except UnicodeDecodeError:
+            raise SceneError("scene", f"'{path}' is not a text file (not UTF-8); a scene is a TOML file") from None
         except tomllib.TOMLDecodeError as exc:
             raise SceneError("scene", f"'{path}' is not valid TOML: {exc}") from None
         return cls(data, base_dir=path.parent, source=str(path))

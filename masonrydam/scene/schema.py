@@ -6,14 +6,16 @@ converts quantities to SI, fills defaults and returns a new plain dictionary. Ev
 """
 from __future__ import annotations
 
+import copy
 import difflib
 import inspect
-import math
+
+import numpy as np
 
 from ..elements.quadrature import QUADRATURE_SCHEMES
 from ..errors import SceneError
 from ..solvers.linear import LINEAR_SOLVERS
-from .units import quantity
+from .units import finite, plausible, quantity
 
 COMPONENT_NAMES = ("x", "y", "z")
 JOINT_LAWS = ("mohr_coulomb", "linear")
@@ -22,6 +24,27 @@ LOAD_TYPES = ("self_weight", "nodal", "traction", "pressure", "edge_traction", "
 LOAD_ALIASES = {"edge_traction": "traction", "edge_pressure": "pressure"}
 HYPOTHESES = ("plane_stress", "plane_strain")
 G_STANDARD = 9.80665
+
+
+def plain(value):
+    """A deep copy of ``value`` with NumPy values made plain Python ones: a NumPy scalar
+    (``np.int64``, ``np.float32``, ``np.bool_``, ``np.str_``, ...) or 0-d array becomes the
+    int, float, bool or str it holds and an array a (nested) list, in dict keys too, so that a scene
+    built in Python with NumPy passes the same checks as one read from TOML and no error message
+    shows a NumPy repr. Other objects are deep-copied as they are."""
+    if isinstance(value, dict):
+        return {plain(k): plain(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [plain(v) for v in value]
+    if isinstance(value, tuple):
+        return tuple(plain(v) for v in value)
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, np.ndarray):  # (an object array may hold NumPy scalars: convert its items too)
+        return plain(value.item() if value.ndim == 0 else value.tolist())
+    if isinstance(value, (str, int, float, bool)) or value is None:
+        return value
+    return copy.deepcopy(value)
 
 
 def _check_keys(d: dict, allowed, where: str):
@@ -55,8 +78,8 @@ def _bool(value, key):
 
 
 def _positive(value, dimension, key, allow_zero=False):
-    v = quantity(value, dimension, key)
-    if not math.isfinite(v) or (v < 0 if allow_zero else v <= 0):
+    v = quantity(value, dimension, key)  # finite, and in the plausible range of the key
+    if v < 0 if allow_zero else v <= 0:
         raise SceneError(key, f"must be {'>= 0' if allow_zero else '> 0'}, got {value!r}")
     return v
 
@@ -101,6 +124,39 @@ def _model(d):
     return out
 
 
+def _generator_parameters(name, params, key):
+    """The parameters of generator ``name`` checked against its signature (lengths and angles to SI,
+    finite and plausible); those of the 2D generator inside ``extruded`` too."""
+    from generators import GENERATORS
+
+    sig = inspect.signature(GENERATORS[name])
+    allowed = {p for p in sig.parameters if p != "key"}
+    _check_keys(params, allowed, key)
+    missing = [p.name for p in sig.parameters.values() if p.default is inspect.Parameter.empty and p.name not in params]
+    if missing:
+        raise SceneError(f"{key}.{missing[0]}", f"required by generator '{name}'")
+    conv = {}
+    for k, v in params.items():
+        kind = str(sig.parameters[k].annotation)
+        pkey = f"{key}.{k}"
+        if kind == "float" and k.endswith("_deg"):
+            conv[k] = quantity(v, "angle", pkey)
+        elif kind == "float":  # generator lengths (m)
+            conv[k] = quantity(v, "length", pkey)
+        elif kind == "int":
+            conv[k] = _int(v, pkey)
+        elif kind == "bool":
+            conv[k] = _bool(v, pkey)
+        elif kind == "str" and not isinstance(v, str):
+            raise SceneError(pkey, f"expected a string, got {v!r}")
+        else:
+            conv[k] = v
+    if name == "extruded":  # the 2D generator and its parameters (``parameters`` is required)
+        inner = _choice(conv["generator"], sorted(g for g in GENERATORS if g.endswith("_2d")), f"{key}.generator")
+        conv["parameters"] = _generator_parameters(inner, conv["parameters"], f"{key}.parameters")
+    return conv
+
+
 def _mesh(d):
     from generators import GENERATORS
 
@@ -110,30 +166,8 @@ def _mesh(d):
         raise SceneError("mesh", "give exactly one of 'generator' (with 'parameters') or 'file'")
     if has_gen:
         name = _choice(d["generator"], sorted(GENERATORS), "mesh.generator")
-        params = d.get("parameters", {})
-        sig = inspect.signature(GENERATORS[name])
-        allowed = {p for p in sig.parameters if p != "key"}
-        _check_keys(params, allowed, "mesh.parameters")
-        missing = [p.name for p in sig.parameters.values() if p.default is inspect.Parameter.empty and p.name not in params]
-        if missing:
-            raise SceneError(f"mesh.parameters.{missing[0]}", f"required by generator '{name}'")
-        conv = {}
-        for k, v in params.items():
-            kind = str(sig.parameters[k].annotation)
-            pkey = f"mesh.parameters.{k}"
-            if kind == "float" and k.endswith("_deg"):
-                conv[k] = quantity(v, "angle", pkey)
-            elif kind == "float":  # generator lengths (m)
-                conv[k] = quantity(v, "length", pkey)
-            elif kind == "int":
-                conv[k] = _int(v, pkey)
-            elif kind == "bool":
-                conv[k] = _bool(v, pkey)
-            elif kind == "str" and not isinstance(v, str):
-                raise SceneError(pkey, f"expected a string, got {v!r}")
-            else:
-                conv[k] = v
-        return {"generator": name, "parameters": conv}
+        params = _generator_parameters(name, d.get("parameters", {}), "mesh.parameters")
+        return {"generator": name, "parameters": params}
     joints = d.get("joints", [])
     if not isinstance(joints, list) or not all(isinstance(j, str) for j in joints):
         raise SceneError("mesh.joints", f"expected a list of physical group names, got {joints!r}")
@@ -147,16 +181,12 @@ def _material(name, d):
     for req in ("youngs_modulus", "poisson_ratio"):
         if req not in d:
             raise SceneError(f"{key}.{req}", "is required")
+    # plausible ranges of E and density (MPa typed as Pa, unit weight typed as density): units.PLAUSIBLE
     E = _positive(d["youngs_modulus"], "stress", f"{key}.youngs_modulus")
-    if E < 1e6:
-        raise SceneError(f"{key}.youngs_modulus", f"{E:g} Pa is implausibly small for masonry or concrete; "
-                                                   f"values are SI (Pa): did you mean '{E:g} MPa'?")
     nu = d["poisson_ratio"]
-    if isinstance(nu, bool) or not isinstance(nu, (int, float)) or not (-1.0 < nu < 0.5):
+    if isinstance(nu, bool) or not isinstance(nu, (int, float)) or not (-1.0 < nu < 0.5):  # (nan fails too)
         raise SceneError(f"{key}.poisson_ratio", f"must be in (-1, 0.5), got {nu!r}")
     rho = _positive(d.get("density", 0.0), "density", f"{key}.density", allow_zero=True)
-    if rho > 1.2e4:  # denser than lead (11 340 kg/m3): most likely a unit weight (N/m3) typed as density
-        raise SceneError(f"{key}.density", f"{rho:g} kg/m3 is implausible; did you give a unit weight in N/m3?")
     return {"model": "linear_elastic", "youngs_modulus": E, "poisson_ratio": float(nu), "density": rho}
 
 
@@ -205,10 +235,7 @@ def _load(d, key, dim):
     t = LOAD_ALIASES.get(_choice(d["type"], LOAD_TYPES, f"{key}.type"), d["type"])
     if t == "self_weight":
         _check_keys(d, {"type", "factor"}, key)
-        f = d.get("factor", 1.0)
-        if isinstance(f, bool) or not isinstance(f, (int, float)):
-            raise SceneError(f"{key}.factor", f"expected a number, got {f!r}")
-        return {"type": t, "factor": float(f)}
+        return {"type": t, "factor": _number(d.get("factor", 1.0), f"{key}.factor")}
     if "set" not in d:
         raise SceneError(f"{key}.set", "is required")
     if t == "nodal":
@@ -268,9 +295,12 @@ _DYNAMIC_KEYS = {"name", "type", "steps", "duration", "dt", "integrator", "alpha
 
 
 def _number(value, key, minimum=None, maximum=None, open_min=False):
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise SceneError(key, f"expected a number, got {value!r}")
-    v = float(value)
+    try:
+        v = finite(float(value), key, value)
+    except OverflowError:
+        raise SceneError(key, "the integer given is too large for a number") from None
     if minimum is not None and (v <= minimum if open_min else v < minimum):
         raise SceneError(key, f"must be {'>' if open_min else '>='} {minimum:g}, got {value!r}")
     if maximum is not None and v > maximum:
@@ -279,7 +309,9 @@ def _number(value, key, minimum=None, maximum=None, open_min=False):
 
 
 def _time(value, key):
-    """A time in s (plain number, or a string '<number> s' / '<number> ms')."""
+    """A time in s (plain number, or a string '<number> s' / '<number> ms'); finite, > 0 and, for a
+    time step, in the plausible range of units.PLAUSIBLE."""
+    given = value
     if isinstance(value, str):
         parts = value.split()
         factor = {"s": 1.0, "ms": 1e-3}.get(parts[-1]) if len(parts) == 2 else None
@@ -289,7 +321,7 @@ def _time(value, key):
             value = float(parts[0]) * factor
         except ValueError:
             raise SceneError(key, f"cannot read {value!r} as a time") from None
-    return _number(value, key, 0.0, open_min=True)
+    return plausible(_number(value, key, 0.0, open_min=True), "time", key, given)
 
 
 #: processing steps of a ground-motion component (``processing = [{ step = "...", ... }, ...]``, applied in
@@ -335,8 +367,10 @@ def _processing(steps, key):
 
 def _ground_component(d, key):
     """One ground-motion component: exactly one source (record, file, values, pulse), optional
-    processing steps, and an optional scaling (scale, scale_to_pga or scale_to_sa)."""
-    _check_keys(d, {"record", "file", "format", "units", "dt", "values", "pulse", "processing", "scale",
+    processing steps, and an optional scaling (scale, scale_to_pga or scale_to_sa). ``column`` (with
+    'file' only): which value column of a text file with several, counted from 0 without the time
+    column (as ``masonrydam records show FILE --column N``)."""
+    _check_keys(d, {"record", "file", "format", "units", "dt", "column", "values", "pulse", "processing", "scale",
                     "scale_to_pga", "scale_to_sa"}, key)
     sources = [k for k in ("record", "file", "values", "pulse") if k in d]
     if len(sources) != 1:
@@ -347,15 +381,17 @@ def _ground_component(d, key):
     if src == "record":
         if not isinstance(d["record"], str):
             raise SceneError(f"{key}.record", f"expected a record name, got {d['record']!r}")
-        for k in ("format", "units", "dt"):
+        for k in ("format", "units", "dt", "column"):
             if k in d:
-                raise SceneError(f"{key}.{k}", "applies to 'file' and 'values' only (a bundled record knows it)")
+                raise SceneError(f"{key}.{k}", "applies to 'file' and 'values' only (a bundled record knows it)"
+                                 if k != "column" else "applies to 'file' only (a bundled record has one trace)")
         out["record"] = d["record"]
     elif src == "file":
         out["file"] = str(d["file"])
         out["format"] = None if "format" not in d else str(d["format"])
         out["units"] = None if "units" not in d else str(d["units"])
         out["dt"] = None if "dt" not in d else _time(d["dt"], f"{key}.dt")
+        out["column"] = None if "column" not in d else _int(d["column"], f"{key}.column", 0)
     elif src == "values":
         vals = d["values"]
         if not isinstance(vals, list) or len(vals) < 2:
@@ -365,8 +401,9 @@ def _ground_component(d, key):
             raise SceneError(f"{key}.dt", "is required with 'values' (s)")
         out["dt"] = _time(d["dt"], f"{key}.dt")
         out["units"] = str(d.get("units", "m/s2"))
-        if "format" in d:
-            raise SceneError(f"{key}.format", "applies to 'file' only")
+        for k in ("format", "column"):
+            if k in d:
+                raise SceneError(f"{key}.{k}", "applies to 'file' only")
     else:
         p = d["pulse"]
         pk = f"{key}.pulse"
@@ -378,7 +415,7 @@ def _ground_component(d, key):
                         "amplitude": quantity(p["amplitude"], "acceleration", f"{pk}.amplitude"),
                         "duration": _time(p["duration"], f"{pk}.duration")}
         out["dt"] = None if "dt" not in d else _time(d["dt"], f"{key}.dt")
-        for k in ("format", "units"):
+        for k in ("format", "units", "column"):
             if k in d:
                 raise SceneError(f"{key}.{k}", "has no meaning for a pulse")
     scalings = [k for k in ("scale", "scale_to_pga", "scale_to_sa") if k in d]
@@ -481,7 +518,9 @@ def _dynamic_stage(s, key, dim, index):
 
 
 def normalize(raw: dict) -> dict:
-    """Validate ``raw`` and return the normalised scene (SI floats, defaults filled)."""
+    """Validate ``raw`` and return the normalised scene (SI floats, defaults filled). NumPy values in
+    ``raw`` are taken as the plain Python values they hold (:func:`plain`)."""
+    raw = plain(raw)
     _check_keys(raw, {"model", "mesh", "materials", "joints", "supports", "stages", "solver", "output"}, "")
     for req in ("mesh", "materials", "stages"):
         if req not in raw:

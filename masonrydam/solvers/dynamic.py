@@ -173,7 +173,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from threadpoolctl import threadpool_limits
 
-from ..errors import ConvergenceError, NumericalError, SceneError
+from ..errors import ConvergenceError, NumericalError, RunStopped, SceneError
 from .dynamic_kernels import (joint_stored_energy, newmark_kinematics, newmark_residual, step_works, woodbury_apply,
                               woodbury_factor)
 from .joint_space import (JOINT_SPACE_MAX, MAX_INITIAL_STIFFNESS_ITERATIONS, SPLIT_INITIAL_STIFFNESS_ITERATIONS, JointSpace,
@@ -650,14 +650,20 @@ class DynamicSolver:
     ``v``, ``a`` (relative, full-DOF), ``a_abs`` (absolute), ``ag`` (dim,) m/s2, ``energy`` (dict, J),
     ``iterations`` (Newton iterations since the last record), ``reaction`` (full-DOF, N, at the
     constrained DOFs; zero elsewhere), ``final`` (bool).
+
+    ``stop_requested()``, when given, is asked after every converged step; a status it returns (e.g.
+    ``"interrupted"``) records that step (if the stride skipped it) and raises
+    :class:`~masonrydam.errors.RunStopped` naming the step and the time.
     """
 
-    def __init__(self, model, settings: DynamicSettings, mass: MassMatrix | None = None, progress=None):
+    def __init__(self, model, settings: DynamicSettings, mass: MassMatrix | None = None, progress=None,
+                 stop_requested=None):
         self.model, self.s = model, settings
         self.mass = mass if mass is not None else MassMatrix(model, settings.mass == "lumped")
         if self.mass.lumped != (settings.mass == "lumped"):
             raise ValueError("the mass matrix passed does not match settings.mass")
         self.progress = progress
+        self.stop_requested = stop_requested
         self.stats = DynamicStats()
         self.backend = resolve_backend(settings.linear_solver)
         self._Kj_full = None
@@ -1007,6 +1013,10 @@ class DynamicSolver:
             self._emit(stage, k, st, final=last)
         if self.progress is not None:
             self.progress(st.tau / stage.duration)
+        status = self.stop_requested() if self.stop_requested is not None else None
+        if status is not None and not last:
+            self._fail(stage, st, RunStopped(status, f"at step {k} of {n_steps} (t = {st.t:.4g} s) of stage "
+                                                     f"'{stage.name}'"))
 
     def _fail(self, stage, st, exc):
         """Record the last converged state (if not yet recorded) and raise."""

@@ -81,6 +81,25 @@ class SolveStats:
     per_stage: list = field(default_factory=list)
 
 
+def check_mechanism(model, stage: StaticStage) -> None:
+    """Raise MechanismError if a part of ``model`` can move as a rigid body under the supports and
+    prescribed DOFs of ``stage`` (missing supports, a floating block), judged with the model's current
+    joint states (fully open joints do not connect). The solver calls it at the start of each stage;
+    ``masonrydam check`` calls it (:func:`check_mechanisms`) on the model as built."""
+    parts = find_free_parts(model, stage.supports | stage.prescribed, use_joint_state=True)
+    if parts:
+        raise MechanismError(f"stage '{stage.name}': the model is a mechanism before solving", parts)
+
+
+def check_mechanisms(model, stages) -> None:
+    """:func:`check_mechanism` for each static stage of ``stages`` (dynamic stages are skipped), all
+    with the joint states of ``model`` as they are: what the solver finds before the first stage, and
+    before a later one if the earlier stages opened no joint."""
+    for st in stages:
+        if isinstance(st, StaticStage):
+            check_mechanism(model, st)
+
+
 class StaticSolver:
     """Drives a :class:`~masonrydam.assembly.model.Model` through static stages.
 
@@ -239,9 +258,7 @@ class StaticSolver:
             m.set_constraints(constrained)
             if self._initial_dofmap is not m.dofmap:  # modified Newton: initial stiffness of this constraint set
                 self._initial, self._initial_dofmap = None, m.dofmap
-            parts = find_free_parts(m, constrained, use_joint_state=True)
-            if parts:
-                raise MechanismError(f"stage '{st.name}': the model is a mechanism before solving", parts)
+            check_mechanism(m, st)
             u_start = u.copy()
             u[st.supports] = 0.0
             lam, nominal = 0.0, 1.0 / st.steps

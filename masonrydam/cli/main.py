@@ -11,7 +11,9 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
+import warnings
 from importlib import resources
 from pathlib import Path
 
@@ -115,21 +117,15 @@ def _cmd_plot(args):
     """Time histories (dynamic results) or step histories (static results) of a result file, as PNG:
     ground acceleration, relative displacement of the chosen nodes, slip and opening of the chosen
     joint points, and the energy balance."""
-    import warnings
-
     import numpy as np
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    from ..results.files import IncompleteResultWarning, check_output_path, open_result
+    from ..results.files import check_output_path, open_result
 
     path = Path(args.result)
     out = check_output_path(args.output or f"{path.stem}.png", "-o")
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", IncompleteResultWarning)
-        ds = open_result(path)
-    for w in caught:
-        print(f"masonrydam: note: {w.message}", file=sys.stderr)
+    ds = open_result(path)  # an incomplete result warns (one line on the command line)
     if not ds.sizes["step"]:
         raise MasonrydamError(f"'{path}' has no steps to plot (status '{ds.attrs.get('status', '?')}': the run "
                               "stopped before its first converged step)")
@@ -242,7 +238,9 @@ def main(argv=None) -> int:
     pl.set_defaults(func=_cmd_plot)
     args = p.parse_args(argv)
     try:
-        return args.func(args)
+        with warnings.catch_warnings():
+            warnings.showwarning = _one_line_warning
+            return args.func(args)
     except MasonrydamError as exc:
         print(f"masonrydam: error: {exc}", file=sys.stderr)
         for note in getattr(exc, "__notes__", []):
@@ -254,6 +252,14 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:  # Ctrl-C outside a run's steps (reading, meshing, plotting): nothing is kept
         print("masonrydam: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # the output went to a program that stopped reading (`| head`)
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no second error at exit
+        return 128 + 13  # as if killed by SIGPIPE, the shell's convention
+
+
+def _one_line_warning(message, category, filename, lineno, file=None, line=None):
+    """Warnings on the command line: one line each, without the source line that Python shows."""
+    print(f"masonrydam: warning: {message}", file=sys.stderr if file is None else file)
 
 
 if __name__ == "__main__":

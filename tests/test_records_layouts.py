@@ -12,6 +12,7 @@ from masonrydam import records as rec
 from masonrydam.cli.main import main as cli_main
 from masonrydam.errors import SceneError
 from masonrydam.records import G
+from test_records import _block_on_ground_scene
 
 DT = 0.005
 N = 400
@@ -186,24 +187,11 @@ def test_records_messages_show_no_numpy_reprs():
 # scene and command line
 # ---------------------------------------------------------------------------------------------
 
-def _scene(ground_x):
-    return {
-        "model": {"name": "layouts", "thickness": 1.0},
-        "mesh": {"generator": "blocks_2d", "parameters": {"blocks": [
-            {"x0": 0, "y0": 0, "x1": 1, "y1": 0.5, "group": "base"},
-            {"x0": 0, "y0": 0.5, "x1": 1, "y1": 1.0, "group": "block"}], "element_size": 0.5}},
-        "materials": {g: {"youngs_modulus": 30e9, "poisson_ratio": 0.2, "density": 2400} for g in ("base", "block")},
-        "joints": {"joints": {"law": "linear", "normal_stiffness": 1e10, "shear_stiffness": 1e10}},
-        "supports": [{"set": "base", "components": ["x", "y"]}],
-        "stages": [{"name": "shake", "type": "dynamic", "dt": 0.01, "steps": 10, "ground_motion": {"x": ground_x}}],
-    }
-
-
 def _ground_motion(ground_x):
     from masonrydam.scene.build import build_ground_motion
     from masonrydam.scene.schema import normalize
 
-    spec = normalize(_scene(ground_x))["stages"][0]["ground_motion"]["x"]
+    spec = normalize(_block_on_ground_scene(ground_x))["stages"][0]["ground_motion"]["x"]
     return build_ground_motion(spec, 0, "stages[0].ground_motion.x", 0.01)
 
 
@@ -238,7 +226,7 @@ def test_scene_column_is_validated_with_its_key(ground, words):
     from masonrydam.scene.schema import normalize
 
     with pytest.raises(SceneError) as exc:
-        normalize(_scene(ground))
+        normalize(_block_on_ground_scene(ground))
     assert exc.value.key == "stages[0].ground_motion.x.column" and words in str(exc.value)
 
 

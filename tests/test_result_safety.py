@@ -213,6 +213,22 @@ def test_signal_stops_at_the_end_of_a_step_and_keeps_the_steps(tmp_path, sig, co
     np.testing.assert_array_equal(ds.joint_state.values, ref.joint_state.values)
 
 
+def test_two_quick_ctrl_c_end_the_process_without_a_traceback(tmp_path):
+    """Two SIGINT in a row (the second stops at once if the step has not ended yet): exit 130, one
+    line, no traceback, and a readable file with the steps converged before."""
+    proc, out = start_cli_run(tmp_path)
+    wait_for_steps(proc, partial_path(out))
+    proc.send_signal(signal.SIGINT)
+    proc.send_signal(signal.SIGINT)
+    _, stderr = proc.communicate(timeout=120)
+    assert proc.returncode == 130, stderr
+    assert "Traceback" not in stderr and len(stderr.strip().splitlines()) == 1, stderr
+    assert stderr.startswith("masonrydam: stopped ") and f"kept in {out}" in stderr
+    with pytest.warns(IncompleteResultWarning, match="status 'interrupted'"):
+        ds = open_result(out)
+    assert ds.sizes["step"] >= 3 and np.isfinite(ds.displacement.values).all()
+
+
 def test_sigkill_leaves_the_earlier_result_and_a_readable_running_file(tmp_path):
     proc, out = start_cli_run(tmp_path)
     write_earlier_result(out)

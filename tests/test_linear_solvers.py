@@ -496,3 +496,65 @@ def test_symmetric_factorization_refuses_what_it_cannot_factorize():
     tiny = linear.SymmetricFactorization((1e-300 * A).tocsr())
     with pytest.raises(SingularMatrix, match="NaN or infinity"):
         tiny.solve(np.full(6, 1e10))  # the solution is about 1e310
+
+
+@pytest.mark.skipif(resolve_backend("auto") != "pardiso", reason="PARDISO is not available here")
+def test_refactorization_with_the_kept_analysis_solves_the_new_matrix():
+    """A matrix of the same pattern with other values (a joint stiffness changed by six orders, as when
+    a joint opens) is refactorized with the kept symbolic analysis and solves to the accuracy of a
+    fresh factorization; another pattern, and SuperLU, are refused."""
+    rng = np.random.default_rng(3)
+    n = 400
+    A = sp.random(n, n, density=0.01, random_state=rng, format="csr")
+    K = (A + A.T + sp.identity(n) * 10.0).tocsr()
+    K.sort_indices()
+    fact = Factorization(K, "pardiso")
+    K2 = K.copy()
+    K2.data = K.data * rng.uniform(0.5, 2.0, K.nnz)
+    K2 = ((K2 + K2.T) * 0.5).tocsr()
+    K2.sort_indices()
+    K2.data[K2.indices == 7] *= 1e-6  # a softened column (non-symmetric now)
+    assert np.array_equal(K2.indptr, K.indptr) and np.array_equal(K2.indices, K.indices)
+    b = rng.standard_normal(n)
+    assert fact.refactorize(K2)
+    x = fact.solve(b)
+    ref = Factorization(K2, "superlu").solve(b)
+    assert np.linalg.norm(K2 @ x - b) <= 1e-10 * np.linalg.norm(b)
+    assert rel_err(x, ref) < 1e-9 and fact.analyses == 1
+    other = (K + sp.eye(n, k=5)).tocsr()
+    assert not fact.refactorize(other)
+    assert not Factorization(K, "superlu").refactorize(K2)
+
+
+def test_static_run_reuses_the_symbolic_analysis():
+    """A nonlinear static run with PARDISO analyses the tangent pattern once per constraint set (and
+    again only where the kept matching perturbs pivots), not once per factorization, and reports both
+    counts; the answer is that of a run that analyses every
+    time (the same Newton path to the solver tolerance)."""
+    from masonrydam.solvers import static
+
+    if resolve_backend("auto") != "pardiso":
+        pytest.skip("PARDISO is not available here")
+    import tomllib
+
+    from masonrydam.cli.main import default_scene_path
+
+    data = tomllib.loads(default_scene_path().read_text())
+    data["stages"][1]["steps"] = 6
+    ds = masonrydam.run(data)
+    fact, analyses = int(ds.attrs["factorizations"]), int(ds.attrs["symbolic_analyses"])
+    assert fact > 20 and analyses <= 0.05 * fact, (fact, analyses)
+    original = static.StaticSolver._factorize
+
+    def fresh(self, K):  # the old behaviour: a new factorization (analysis included) every time
+        self._fact = None
+        return original(self, K)
+
+    static.StaticSolver._factorize = fresh
+    try:
+        ref = masonrydam.run(data)
+    finally:
+        static.StaticSolver._factorize = original
+    assert int(ref.attrs["symbolic_analyses"]) == int(ref.attrs["factorizations"])
+    u, u_ref = ds.displacement.values[-1], ref.displacement.values[-1]
+    assert np.abs(u - u_ref).max() <= 1e-6 * np.abs(u_ref).max()

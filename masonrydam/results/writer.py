@@ -1,12 +1,16 @@
 """Streaming netCDF4 writer for analysis results.
 
-The file is created before the first step with an unlimited ``step`` dimension; every converged
-step is appended and flushed (``sync``), so a run that stops (non-convergence, a mechanism, a kill)
-leaves a readable file with every finished step, marked ``completed = "false"`` with a ``status``
-(``running`` until the file is closed; ``failed``, ``interrupted`` or ``terminated``) and a
-``status_reason``. Where the file goes (a working file beside the target, renamed over it when the
-run completes) is :mod:`masonrydam.results.files`.
-``xarray.open_dataset`` reads it; every variable carries ``units`` and ``long_name``.
+The file is created before the first step with an unlimited ``step`` dimension. Converged steps are
+collected in memory and appended in blocks (:class:`OutputOptions`: every ``buffer_steps`` steps or
+``flush_seconds`` seconds, whichever comes first), each block with one write per variable and one
+flush (``sync``), in chunks along ``step``; memory stays bounded by the block, whatever the length of
+the record. ``close`` writes the steps still in memory, so a run that stops cleanly (an error, Ctrl-C,
+SIGTERM) loses no converged step; a killed process leaves a readable file with every block written
+before it, ``status = "running"``. A closed file is marked ``completed`` ``"true"`` or ``"false"``
+with a ``status`` (``failed``, ``interrupted`` or ``terminated``) and a ``status_reason``. Where the
+file goes (a working file beside the target, renamed over it when the run completes) is
+:mod:`masonrydam.results.files`. ``xarray.open_dataset`` reads it; every variable carries ``units``
+and ``long_name``.
 
 Time histories (scenes with a dynamic stage, ``dynamic=True``): the same unlimited ``step``
 dimension carries static and dynamic steps; ``time`` (s, on ``step``) is the time since the start
@@ -25,6 +29,8 @@ from __future__ import annotations
 
 import datetime as _dt
 import json
+import time
+from dataclasses import dataclass
 
 import netCDF4
 import numpy as np
@@ -47,18 +53,55 @@ ENERGY_VARIABLES = {
 }
 
 
+@dataclass(frozen=True)
+class OutputOptions:
+    """How the steps reach the file (scene section ``[output]``).
+
+    buffer_steps: steps collected in memory before they are written as one block (also capped so that
+    a block takes at most :data:`BUFFER_BYTES_MAX`); flush_seconds: a block is written at the latest
+    this long after the previous one, so that a slow run shows its progress in the file and a killed
+    one loses at most that much; precision: ``"double"`` (float64) or ``"single"`` (float32: half the
+    size, about 7 significant digits) for the nodal and joint fields (times, load factors and energies
+    stay double); compression: zlib level 0 (none) to 9 of the step variables (with byte shuffling).
+    """
+
+    buffer_steps: int = 256
+    flush_seconds: float = 2.0
+    precision: str = "double"
+    compression: int = 0
+
+
+#: largest memory (bytes) of one block of buffered steps; a block of a large model holds fewer steps
+BUFFER_BYTES_MAX = 64 * 2**20
+#: target size (bytes) of one HDF5 chunk of a step variable along ``step``
+CHUNK_BYTES = 2**20
+
+
+def _record_size(var) -> int:
+    """Values in one step of a step variable."""
+    return int(np.prod(var.shape[1:], dtype=np.int64))
+
+
 class ResultWriter:
-    """Write a static analysis to ``path``.
+    """Write an analysis to ``path``, step by step (``write_step``), in blocks (``options``).
 
     nodes: (n_out,) node indices recorded; coords: (n_nodes, dim);
     joint_points: dict with 'x' (n_jp, dim), 'set' (n_jp,) int, 'set_names', 'element' (n_jp,),
     'point' (n_jp,), 'normal' (n_jp, dim), 'shear_axes' (n_jp, dim-1, dim), 'weight' (n_jp,) (tributary length*thickness or area, m2).
     """
 
-    def __init__(self, path, coords, nodes, joint_points, dim, attrs: dict, dynamic: bool = False):
+    #: step variables of time-history files that static steps leave NaN
+    _DYNAMIC_ONLY = frozenset(["time", "velocity", "acceleration", "acceleration_absolute", "ground_acceleration"]
+                              + [f"energy_{name}" for name in ENERGY_VARIABLES])
+
+    def __init__(self, path, coords, nodes, joint_points, dim, attrs: dict, dynamic: bool = False,
+                 options: OutputOptions | None = None):
         self.path = str(path)
         self.dim = dim
         self.dynamic = bool(dynamic)
+        self.options = options = options or OutputOptions()
+        if options.precision not in ("double", "single"):
+            raise ValueError(f"precision must be 'double' or 'single', got {options.precision!r}")
         self.nc = nc = netCDF4.Dataset(self.path, "w", format="NETCDF4")
         comps = ["x", "y", "z"][:dim]
         shear = ["t"] if dim == 2 else ["t1", "t2"]
@@ -126,10 +169,18 @@ class ResultWriter:
         nc.completed = "false"
         nc.status = "running"
         nc.sync()
+        #: steps written or collected so far (all of them are in the file after ``flush``/``close``)
         self.n = 0
-        #: the step variables, looked up once; records are appended by ``Variable._put`` (see _append)
+        #: the step variables with a non-empty record, and a block buffer for each
         self._step_vars = {name: nc[name] for name in nc.variables
-                           if nc[name].dimensions and nc[name].dimensions[0] == "step"}
+                           if nc[name].dimensions[:1] == ("step",) and _record_size(nc[name]) > 0}
+        record_bytes = sum(v.dtype.itemsize * _record_size(v) for v in self._step_vars.values())
+        self.block_steps = max(1, min(options.buffer_steps, BUFFER_BYTES_MAX // max(record_bytes, 1)))
+        self._buffers = {name: np.empty((self.block_steps,) + v.shape[1:], dtype=v.dtype)
+                         for name, v in self._step_vars.items()}
+        self._dynamic_names = [name for name in self._step_vars if name in self._DYNAMIC_ONLY]
+        self._in_buffer = 0  # steps in the buffers, not yet in the file
+        self._last_flush = time.monotonic()
         self._fast_append = hasattr(netCDF4.Variable, "_put")
 
     def _dynamic_variables(self):
@@ -162,70 +213,96 @@ class ResultWriter:
         v.units = "1"
 
     def _var(self, name, dtype, dims, units, long_name, fill_value=None):
-        v = self.nc.createVariable(name, dtype, dims, zlib=False, fill_value=fill_value)
+        """A variable with units and long name. Step variables are chunked along ``step`` (chunks of
+        about :data:`CHUNK_BYTES`, at most a block), compressed as the options say, and the nodal and
+        joint fields stored in single precision where asked."""
+        kw = {}
+        if dims[:1] == ("step",):
+            o = self.options
+            if dtype == "f8" and o.precision == "single" and len(dims) > 1:
+                dtype = "f4"
+                fill_value = None if fill_value is None else np.float32(fill_value)
+            shape = [len(self.nc.dimensions[d]) for d in dims[1:]]
+            record = max(int(np.prod(shape, dtype=np.int64)), 1) * np.dtype(dtype).itemsize
+            kw["chunksizes"] = [max(1, min(o.buffer_steps, CHUNK_BYTES // record))] + [max(n, 1) for n in shape]
+            if o.compression:
+                kw.update(zlib=True, complevel=o.compression, shuffle=True)
+        v = self.nc.createVariable(name, dtype, dims, fill_value=fill_value, **kw)
         v.units = units
         v.long_name = long_name
         return v
 
-    def _append(self, name, k, value):
-        """Write record ``k`` of the step variable ``name``.
+    def _write_block(self, name, k0, block):
+        """Write ``block`` (n steps of variable ``name``) at step ``k0``.
 
         Through netCDF4-python's low-level ``Variable._put(data, start, count, stride)`` when it has one:
-        the public ``var[k] = value`` spends about 0.12 ms per call in Python (index parsing, masking)
-        around a write that takes 0.02 ms (measured with netCDF4 1.7.5), and a seismic run writes 26
-        variables per recorded step, which made the output the largest cost of a run outside the
-        solver. ``_put`` is private but has had this signature since netCDF4-python 1.0; if it is
-        missing or refuses the call, this writer switches to the public API for good (same file)."""
+        the public ``var[k0:k0 + n] = block`` spends about 0.12 ms per call in Python (index parsing,
+        masking) around the write itself (measured with netCDF4 1.7.5 for one step per call). ``_put``
+        is private but has had this signature since netCDF4-python 1.0; if it is missing or refuses the
+        call, this writer switches to the public API for good (same file)."""
         var = self._step_vars[name]
         if self._fast_append:
-            shape = var.shape[1:]
-            data = np.ascontiguousarray(value, dtype=var.dtype).reshape((1,) + shape)
-            nd = len(shape) + 1
+            nd = block.ndim
             start = np.zeros(nd, dtype=np.intp)
-            start[0] = k
-            count = np.array((1,) + shape, dtype=np.intp)
+            start[0] = k0
             try:
-                var._put(data, start, count, np.ones(nd, dtype=np.intp))
+                var._put(np.ascontiguousarray(block), start, np.array(block.shape, dtype=np.intp),
+                         np.ones(nd, dtype=np.intp))
                 return
             except (AttributeError, TypeError):
                 self._fast_append = False
-        var[k] = value
+        var[k0:k0 + len(block)] = block
+
+    def flush(self):
+        """Write the steps collected in memory to the file as one block, and flush the file."""
+        n = self._in_buffer
+        if n:
+            k0 = self.n - n
+            for name, buf in self._buffers.items():
+                self._write_block(name, k0, buf[:n])
+            self._in_buffer = 0
+            self.nc.sync()
+        self._last_flush = time.monotonic()
 
     def write_step(self, stage, load_factor, iterations, displacement, reaction, joints, dynamic=None):
-        """Append one converged step. displacement, reaction: (n_out, dim);
-        joints: dict opening (n_jp,), slip (n_jp, dim-1), plastic_slip, t_normal, t_shear, state;
-        dynamic (time-history files, dynamic steps): dict time (s), velocity, acceleration,
-        acceleration_absolute (n_out, dim), ground_acceleration (dim,), energy (dict name -> J)."""
-        k = self.n
-        put = self._append
+        """Add one converged step (written with its block, see :class:`OutputOptions`).
+        displacement, reaction: (n_out, dim); joints: dict opening (n_jp,), slip (n_jp, dim-1),
+        plastic_slip, t_normal, t_shear, state; dynamic (time-history files, dynamic steps): dict time
+        (s), velocity, acceleration, acceleration_absolute (n_out, dim), ground_acceleration (dim,),
+        energy (dict name -> J)."""
+        if dynamic is not None and not self.dynamic:
+            raise ValueError("this writer was created without dynamic=True")
+        i = self._in_buffer
+        buf = self._buffers
         if self.dynamic:
             if dynamic is None:
-                put("time", k, np.nan)
+                for name in self._dynamic_names:
+                    buf[name][i] = np.nan
             else:
-                put("time", k, dynamic["time"])
-                put("velocity", k, dynamic["velocity"])
-                put("acceleration", k, dynamic["acceleration"])
-                put("acceleration_absolute", k, dynamic["acceleration_absolute"])
-                put("ground_acceleration", k, dynamic["ground_acceleration"])
+                buf["time"][i] = dynamic["time"]
+                buf["velocity"][i] = dynamic["velocity"]
+                buf["acceleration"][i] = dynamic["acceleration"]
+                buf["acceleration_absolute"][i] = dynamic["acceleration_absolute"]
+                buf["ground_acceleration"][i] = dynamic["ground_acceleration"]
                 for name in ENERGY_VARIABLES:
-                    put(f"energy_{name}", k, dynamic["energy"][name])
-        elif dynamic is not None:
-            raise ValueError("this writer was created without dynamic=True")
-        put("step", k, k)
-        put("load_factor", k, load_factor)
-        put("stage", k, stage)
-        put("iterations", k, iterations)
-        put("displacement", k, displacement)
-        put("reaction", k, reaction)
-        if len(joints["opening"]):
-            put("joint_opening", k, joints["opening"])
-            put("joint_slip", k, joints["slip"])
-            put("joint_plastic_slip", k, joints["plastic_slip"])
-            put("joint_traction_normal", k, joints["t_normal"])
-            put("joint_traction_shear", k, joints["t_shear"])
-            put("joint_state", k, joints["state"])
+                    buf[f"energy_{name}"][i] = dynamic["energy"][name]
+        buf["step"][i] = self.n
+        buf["load_factor"][i] = load_factor
+        buf["stage"][i] = stage
+        buf["iterations"][i] = iterations
+        buf["displacement"][i] = displacement
+        buf["reaction"][i] = reaction
+        if "joint_opening" in buf:
+            buf["joint_opening"][i] = joints["opening"]
+            buf["joint_slip"][i] = joints["slip"]
+            buf["joint_plastic_slip"][i] = joints["plastic_slip"]
+            buf["joint_traction_normal"][i] = joints["t_normal"]
+            buf["joint_traction_shear"][i] = joints["t_shear"]
+            buf["joint_state"][i] = joints["state"]
         self.n += 1
-        self.nc.sync()
+        self._in_buffer = i + 1
+        if self._in_buffer == self.block_steps or time.monotonic() - self._last_flush >= self.options.flush_seconds:
+            self.flush()
 
     def close(self, completed: bool, status: str, extra_attrs: dict | None = None, reason: str | None = None):
         """Finish the file: ``completed`` ("true"/"false"), ``status`` (``"completed"``, ``"failed"``,
@@ -233,6 +310,7 @@ class ResultWriter:
         that ended early, ``status_reason`` (the error or the step it stopped at)."""
         if not self.nc.isopen():
             return
+        self.flush()
         for k, val in (extra_attrs or {}).items():
             self.nc.setncattr(k, val if isinstance(val, (str, int, float)) else json.dumps(val))
         self.nc.completed = "true" if completed else "false"

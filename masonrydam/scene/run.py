@@ -14,7 +14,7 @@ from .._version import __version__
 from ..errors import OutputError, RunStopped
 from ..materials import mohr_coulomb as mc
 from ..results.files import check_output_path, claim_working_file, partial_path, settle_partial
-from ..results.writer import ResultWriter
+from ..results.writer import OutputOptions, ResultWriter
 from ..solvers.linear import resolve_backend
 from ..solvers.dynamic import DynamicStage
 from ..solvers.static import SolverSettings, StaticSolver
@@ -168,8 +168,10 @@ def run(scene, output: str | os.PathLike | None = None, progress: bool = False, 
     if target is not None:
         claim_working_file(work)
     try:
+        options = OutputOptions(**{k: s["output"][k] for k in ("buffer_steps", "flush_seconds", "precision",
+                                                                 "compression")})
         writer = ResultWriter(work, mesh.points, nodes, _joint_points(jgroups, set_names, dim), dim, attrs,
-                              dynamic=bool(dyn_stages))
+                              dynamic=bool(dyn_stages), options=options)
     except OSError as exc:  # e.g. another run holds the working file (HDF5 file lock), disk full
         raise OutputError(f"cannot write the result file '{work}': {exc.strerror or exc}") from None
     bar = _Progress(len(stages), progress)
@@ -326,6 +328,7 @@ def _run_dynamic(model, static_stages, dyn_stages, stages, u, writer, nodes, jgr
 def _stats_attrs(solver, t_start, dyn_solvers=()):
     st = solver.stats
     out = {"steps": st.steps, "newton_iterations": st.iterations, "factorizations": st.factorizations,
+           "symbolic_analyses": st.analyses,
            "step_cuts": st.step_cuts, "solve_wall_time_s": round(st.wall_time_s, 4),
            "total_wall_time_s": round(time.perf_counter() - t_start, 4), "per_stage": json.dumps(st.per_stage)}
     if dyn_solvers:
@@ -385,7 +388,8 @@ def print_summary(sc, mesh, model, eff, solver, stats, path, ds, file=None, dyn_
         lines.append(f"stage      : {ps['stage']}: {ps['steps']} steps, {ps['iterations']} Newton iterations, "
                      f"{ps['step_cuts']} step cuts")
     lines.append(f"solver     : {solver.s.method}, {stats['factorizations']} factorization(s) "
-                 f"[{resolve_backend(solver.s.linear_solver, n_dof=model.n_dof, dim=model.dim)}], {stats['newton_iterations']} iterations in total")
+                 f"[{resolve_backend(solver.s.linear_solver, n_dof=model.n_dof, dim=model.dim)}; "
+                 f"{stats['symbolic_analyses']} symbolic analyses], {stats['newton_iterations']} iterations in total")
     for dsol in dyn_solvers:
         for p in dsol.stats.per_stage:
             crit = f", dt_crit {p['dt_critical']:.3g} s" if p.get("dt_critical") else ""

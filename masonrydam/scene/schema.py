@@ -517,6 +517,20 @@ def _dynamic_stage(s, key, dim, index):
     return out
 
 
+def _output_options(d: dict) -> dict:
+    """How steps reach the file (:class:`~masonrydam.results.writer.OutputOptions`)."""
+    from ..results.writer import OutputOptions
+
+    default = OutputOptions()
+    compression = _int(d.get("compression", default.compression), "output.compression", 0)
+    if compression > 9:
+        raise SceneError("output.compression", f"is a zlib level from 0 (none) to 9, got {compression}")
+    return {"precision": _choice(d.get("precision", default.precision), ("double", "single"), "output.precision"),
+            "compression": compression,
+            "buffer_steps": _int(d.get("buffer_steps", default.buffer_steps), "output.buffer_steps", 1),
+            "flush_seconds": _time(d.get("flush_seconds", default.flush_seconds), "output.flush_seconds")}
+
+
 def normalize(raw: dict) -> dict:
     """Validate ``raw`` and return the normalised scene (SI floats, defaults filled). NumPy values in
     ``raw`` are taken as the plain Python values they hold (:func:`plain`)."""
@@ -575,7 +589,7 @@ def normalize(raw: dict) -> dict:
             raise SceneError(f"stages[{j}].output", f"selects other nodes or joints than stages[{i}].output; the "
                                                     "result file has one node and joint selection for all stages")
     out_raw = raw.get("output", {})
-    _check_keys(out_raw, {"nodes", "joints"}, "output")
+    _check_keys(out_raw, {"nodes", "joints", "precision", "compression", "buffer_steps", "flush_seconds"}, "output")
     return {
         "model": model,
         "mesh": _mesh(raw["mesh"]),
@@ -585,5 +599,6 @@ def normalize(raw: dict) -> dict:
         "stages": st,
         "solver": _solver(raw.get("solver", {})),
         "output": {"nodes": _selection(out_raw.get("nodes", "all"), "output.nodes"),
-                   "joints": _selection(out_raw.get("joints", "all"), "output.joints")},
+                   "joints": _selection(out_raw.get("joints", "all"), "output.joints"),
+                   **_output_options(out_raw)},
     }

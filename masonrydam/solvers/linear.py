@@ -175,6 +175,7 @@ class Factorization:
         self.backend = resolve_backend(backend)
         self.K = K
         self.residual_check = residual_check
+        self.analyses = 1  # symbolic analyses (fill-reducing order, scaling): see refactorize
         _check_matrix_finite(K)
         if self.backend == "superlu":
             try:
@@ -190,6 +191,38 @@ class Factorization:
             self._ps.factorize(self._Kcopy)
             if self._ps.get_iparm(14) > 0:
                 raise SingularMatrix(f"{self._ps.get_iparm(14)} pivot(s) perturbed during factorization")
+
+    def refactorize(self, K: sp.csr_matrix) -> bool:
+        """Factorize ``K``, a matrix with the same sparsity pattern as the one factorized, reusing the
+        symbolic analysis (PARDISO phase 22: numerical factorization with the kept fill-reducing order,
+        scaling and matching). Returns False, changing nothing, where that cannot be done: another
+        backend (scipy's SuperLU always analyses), another pattern. A factorization that perturbs
+        pivots (the kept matching no longer fits the values) is redone with a new analysis (phase 12);
+        ``analyses`` counts the analyses of this object.
+
+        Why: a Newton iteration of a jointed model changes only the joint entries of the tangent; on the
+        default scene the analysis took about half of each of the 512 factorizations of a run
+        (docs/performance.md, "Static stages")."""
+        if self.backend != "pardiso" or K.shape != self.K.shape or K.nnz != self._Kcopy.nnz \
+                or not (np.array_equal(K.indptr, self._Kcopy.indptr) and np.array_equal(K.indices, self._Kcopy.indices)):
+            return False
+        _check_matrix_finite(K)
+        self.K = K
+        self._Kcopy.data[:] = K.data
+        ps = self._ps
+        ps.factorized_A = self._Kcopy  # pypardiso's record of what it factorized: solve() then takes phase 33
+        try:
+            ps.set_phase(22)
+            ps._call_pardiso(self._Kcopy, np.zeros((K.shape[0], 1)))
+        except AttributeError:  # pragma: no cover - a pypardiso without these (private) calls: new analysis
+            ps.factorize(self._Kcopy)
+            self.analyses += 1
+        if ps.get_iparm(14) > 0:  # perturbed pivots: analyse again with the current values
+            ps.factorize(self._Kcopy)
+            self.analyses += 1
+            if ps.get_iparm(14) > 0:
+                raise SingularMatrix(f"{ps.get_iparm(14)} pivot(s) perturbed during factorization")
+        return True
 
     def __del__(self):
         ps = getattr(self, "_ps", None)

@@ -74,6 +74,7 @@ class SolveStats:
     steps: int = 0
     iterations: int = 0
     factorizations: int = 0
+    analyses: int = 0  # symbolic analyses among the factorizations (a refactorization reuses one)
     step_cuts: int = 0
     line_searches: int = 0
     stabilized_steps: int = 0
@@ -119,13 +120,27 @@ class StaticSolver:
 
     # -- linear algebra -------------------------------------------------------------------------
     def _factorize(self, K):
-        if self._fact is not None and self._fact_data is not None and len(self._fact_data) == len(K.data) \
-                and self._fact.K.shape == K.shape and np.array_equal(self._fact_data, K.data):
-            return self._fact
-        self._fact = self._linear_solver(K)
+        """A factorization of K: the last one when K is unchanged, else the last one refactorized with
+        its symbolic analysis (same pattern, direct solver: :meth:`Factorization.refactorize`), else a
+        new one. ``stats.factorizations`` counts numerical factorizations, ``stats.analyses`` the
+        symbolic analyses among them."""
+        fact = self._fact
+        if fact is not None and self._fact_data is not None and len(self._fact_data) == len(K.data) \
+                and fact.K.shape == K.shape and np.array_equal(self._fact_data, K.data):
+            return fact
+        before = getattr(fact, "analyses", 0)
+        try:
+            reused = fact is not None and hasattr(fact, "refactorize") and fact.refactorize(K)
+        except SingularMatrix:
+            self._fact = None  # refactorize changed it: never hand it out again
+            raise
+        if not reused:
+            fact = self._fact = self._linear_solver(K)
+            before = 0
+        self.stats.analyses += getattr(fact, "analyses", 1) - before
         self._fact_data = K.data.copy()
         self.stats.factorizations += 1
-        return self._fact
+        return fact
 
     def _linear_solver(self, K):
         """make_solver for K; for the AMG backend with the rigid-body modes, positions and nodes of

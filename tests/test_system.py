@@ -252,18 +252,25 @@ def test_bad_elements_rejected_before_solving(bad_corner, what):
 def test_modified_newton_reaches_the_full_newton_answer():
     """Modified (initial-stiffness) Newton and full Newton converge to the same sliding solution
     (the residual is the same; only the iteration matrix differs), modified Newton with fewer
-    factorizations and more iterations."""
+    factorizations and more iterations; so does Newton on the joint unknowns (joint_space = "auto")."""
     joint = {"normal_stiffness": 1e10, "shear_stiffness": 1e10, "friction_angle": 30.0, "cohesion": 2e3,
              "residual_shear_stiffness": 2e9}
     stages = [{"name": "gravity", "loads": [{"type": "self_weight"}]},
               {"name": "push", "steps": 4,
                "loads": [{"type": "displacement", "set": "top", "components": ["x", "y"], "value": [5e-5, 0.0]}]}]
     runs = {}
-    for method in ("newton", "modified_newton"):
+    for method, js in (("newton", "off"), ("modified_newton", "off"), ("newton", "auto")):
         sc = block_scene(blocks=[BASE, BLOCK], joint=joint, stages=stages,
-                         solver={"method": method, "max_iterations": 300, "force_tolerance": 1e-7})
-        runs[method] = masonrydam.run(sc)
+                         solver={"method": method, "max_iterations": 300, "force_tolerance": 1e-7,
+                                 "joint_space": js})
+        runs[method if js == "off" else "joint_space"] = masonrydam.run(sc)
     a, b = runs["newton"], runs["modified_newton"]
+    # and the steps solved on the joint unknowns (condensed from the all-stick stiffness) reach it too
+    c = runs["joint_space"]
+    assert int(c.attrs["joint_space_steps"]) >= 4 and int(c.attrs["newton_iterations"]) == 0
+    np.testing.assert_allclose(c.displacement.isel(step=-1).values, a.displacement.isel(step=-1).values,
+                               rtol=1e-6, atol=1e-6 * np.abs(a.displacement.values).max())
+    assert top_force(c, "x", 1.0)[-1] == pytest.approx(top_force(a, "x", 1.0)[-1], rel=1e-6)
     assert (b.joint_state.isel(step=-1).values == 1).all()
     np.testing.assert_allclose(b.displacement.isel(step=-1).values, a.displacement.isel(step=-1).values,
                                rtol=1e-6, atol=1e-6 * np.abs(a.displacement.values).max())

@@ -182,8 +182,9 @@ def run(scene, output: str | os.PathLike | None = None, progress: bool = False, 
     def on_step(si, st, lam, u, f_int, f_ext):
         r = f_int - f_ext
         r[~(st.supports | st.prescribed)] = 0.0
-        iters = solver.stats.iterations - last_iters["n"]
-        last_iters["n"] = solver.stats.iterations
+        done = solver.stats.iterations + solver.stats.joint_space_iterations  # general and joint-space Newton
+        iters = done - last_iters["n"]
+        last_iters["n"] = done
         with stopper.writing():
             writer.write_step(si, lam, iters, u.reshape(-1, dim)[nodes], r.reshape(-1, dim)[nodes],
                               _joint_results(jgroups, dim))
@@ -328,7 +329,9 @@ def _run_dynamic(model, static_stages, dyn_stages, stages, u, writer, nodes, jgr
 def _stats_attrs(solver, t_start, dyn_solvers=()):
     st = solver.stats
     out = {"steps": st.steps, "newton_iterations": st.iterations, "factorizations": st.factorizations,
-           "symbolic_analyses": st.analyses,
+           "symbolic_analyses": st.analyses, "joint_space_size": st.joint_space_size,
+           "joint_space_steps": st.joint_space_steps, "joint_space_iterations": st.joint_space_iterations,
+           "joint_space_setup_s": round(st.joint_space_setup_s, 4),
            "step_cuts": st.step_cuts, "solve_wall_time_s": round(st.wall_time_s, 4),
            "total_wall_time_s": round(time.perf_counter() - t_start, 4), "per_stage": json.dumps(st.per_stage)}
     if dyn_solvers:
@@ -389,7 +392,12 @@ def print_summary(sc, mesh, model, eff, solver, stats, path, ds, file=None, dyn_
                      f"{ps['step_cuts']} step cuts")
     lines.append(f"solver     : {solver.s.method}, {stats['factorizations']} factorization(s) "
                  f"[{resolve_backend(solver.s.linear_solver, n_dof=model.n_dof, dim=model.dim)}; "
-                 f"{stats['symbolic_analyses']} symbolic analyses], {stats['newton_iterations']} iterations in total")
+                 f"{stats['symbolic_analyses']} symbolic analyses], {stats['newton_iterations']} general Newton "
+                 "iterations")
+    if stats["joint_space_size"]:
+        lines.append(f"joint space: static steps on {stats['joint_space_size']} joint unknowns (set-up "
+                     f"{stats['joint_space_setup_s']:.3g} s): {stats['joint_space_steps']} step attempts converged "
+                     f"there in {stats['joint_space_iterations']} iterations")
     for dsol in dyn_solvers:
         for p in dsol.stats.per_stage:
             crit = f", dt_crit {p['dt_critical']:.3g} s" if p.get("dt_critical") else ""

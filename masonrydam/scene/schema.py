@@ -260,13 +260,14 @@ def _load(d, key, dim):
 
 def _solver(d):
     _check_keys(d, {"method", "line_search", "max_iterations", "force_tolerance", "energy_tolerance",
-                    "max_step_cuts", "linear_solver"}, "solver")
+                    "max_step_cuts", "linear_solver", "joint_space"}, "solver")
     out = {
         "method": _choice(d.get("method", "newton"), ("newton", "modified_newton"), "solver.method"),
         "line_search": _bool(d.get("line_search", True), "solver.line_search"),
         "max_iterations": _int(d.get("max_iterations", 30), "solver.max_iterations", 1),
         "max_step_cuts": _int(d.get("max_step_cuts", 8), "solver.max_step_cuts", 0),
         "linear_solver": _choice(d.get("linear_solver", "auto"), LINEAR_SOLVERS, "solver.linear_solver"),
+        "joint_space": _choice(d.get("joint_space", "auto"), ("auto", "off"), "solver.joint_space"),
     }
     for k, default in (("force_tolerance", 1e-6), ("energy_tolerance", 1e-10)):
         v = d.get(k, default)

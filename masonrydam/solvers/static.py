@@ -14,7 +14,15 @@ that a state with no force at all, such as an open joint, still has a scale) and
 ``|du . r| <= energy_tolerance * |du_0 . r_0|``.
 
 A factorization is reused while the tangent is unchanged (same values): a scene whose joints stay
-linear is therefore solved with a single factorization.
+linear is therefore solved with a single factorization; a changed tangent is refactorized with the
+kept symbolic analysis (PARDISO).
+
+Joint space (``joint_space = "auto"``, full Newton): the blocks are linear, so each step is first
+solved on the relative displacements of the nonlinear joints, condensed from the all-stick stiffness
+(:mod:`.joint_space`, as the dynamic solver does), which needs no sparse factorization per
+iteration; the general Newton iterations then check the result against the full residual and go on
+from it where needed, or solve the step from its start where the joint-space iteration did not
+converge.
 """
 from __future__ import annotations
 
@@ -34,6 +42,11 @@ from .linear import SingularMatrix, make_solver, resolve_backend
 OPEN_TANGENT_REGULAR = 1e-6
 #: tangent factor once the step's state pattern repeats (chatter guard, see _newton_iterations)
 OPEN_TANGENT_STABILIZED = 1.0
+#: the joint-space iteration of a step converges to this fraction of the force tolerance: the general
+#: path then accepts its solution on the force residual alone (its energy test needs an iteration), so
+#: the solution is converged this much further, as far as the general path's energy test takes it
+#: (on the default scene the full residual at the joint-space solutions was 1e-13 to 8e-10 relative)
+JOINT_SPACE_FORCE_FRACTION = 1e-3
 
 
 @dataclass
@@ -47,6 +60,7 @@ class SolverSettings:
     energy_tolerance: float = 1e-10
     max_step_cuts: int = 8
     linear_solver: str = "auto"
+    joint_space: str = "auto"  # "auto" | "off": steps solved on the joint unknowns first (see _joint_space)
 
     def as_dict(self):
         return asdict(self)
@@ -75,6 +89,10 @@ class SolveStats:
     iterations: int = 0
     factorizations: int = 0
     analyses: int = 0  # symbolic analyses among the factorizations (a refactorization reuses one)
+    joint_space_size: int = 0  # joint unknowns condensed (0: the joint-space start was not used)
+    joint_space_steps: int = 0  # step attempts whose joint-space iteration converged
+    joint_space_iterations: int = 0  # joint-space Newton iterations
+    joint_space_setup_s: float = 0.0
     step_cuts: int = 0
     line_searches: int = 0
     stabilized_steps: int = 0
@@ -115,6 +133,8 @@ class StaticSolver:
         self.stats = SolveStats()
         self._fact = None
         self._fact_data = None
+        self._js = None  # joint-space system of the constraint set self._js_dofmap (see _joint_space)
+        self._js_dofmap = None
         self._initial = None  # modified Newton: initial stiffness factorization per constraint set
         self._initial_dofmap = None
 
@@ -161,12 +181,83 @@ class StaticSolver:
     def _newton(self, u, f_ext):
         self.model.set_open_tangent(OPEN_TANGENT_REGULAR)
         try:
-            return self._newton_iterations(u, f_ext)
+            js = self._joint_space()
+            r0_norm = None
+            if js is not None:
+                u, r0_norm = self._joint_space_start(js, u, f_ext)
+            return self._newton_iterations(u, f_ext, r0_norm)
         finally:
             self.model.set_open_tangent(OPEN_TANGENT_REGULAR)
 
-    def _newton_iterations(self, u, f_ext):
-        """Newton iterations of one step from the committed state.
+    def _joint_space(self):
+        """The joint-space system (:class:`~masonrydam.solvers.joint_space.JointSpace`) of the current
+        constraint set, set up when first needed; None where it does not apply.
+
+        Why: the blocks are linear elastic, so a load step is nonlinear only in the joint law, and the
+        step can be solved on the relative displacements of the nonlinear joints, condensed from the
+        all-stick stiffness ``K_ref`` (factorized once per constraint set, L D L^T), as the dynamic
+        solver does with its effective matrix (:mod:`.joint_space`): no sparse factorization per
+        iteration. It applies with ``joint_space = "auto"``, full Newton, a direct solver, nonlinear
+        joints, and at most JOINT_SPACE_MAX joint unknowns (the dense flexibility takes 8 m^2 bytes)."""
+        from .joint_space import JOINT_SPACE_MAX, JointSpace, joint_space_size
+
+        m, s = self.model, self.s
+        if s.joint_space == "off" or s.method != "newton" or not m.nonlinear:
+            return None
+        if self._js_dofmap is m.dofmap:
+            return self._js
+        self._js, self._js_dofmap = None, m.dofmap
+        if joint_space_size(m) > JOINT_SPACE_MAX or resolve_backend(s.linear_solver, n_dof=len(m.dofmap.free),
+                                                                      dim=m.dim) == "amg":
+            return None
+        import scipy.sparse as sp
+
+        from .linear import SymmetricFactorization
+        from .modal import elastic_tangent_data
+
+        t0 = time.perf_counter()
+        n = len(m.dofmap.free)
+        K_ref = sp.csr_matrix((elastic_tangent_data(m), m.indices, m.indptr), shape=(n, n))
+        try:
+            ref = SymmetricFactorization(K_ref)
+        except (SingularMatrix, ValueError):  # not positive definite (e.g. a mechanism): the general path
+            return None
+        self.stats.factorizations += 1
+        self.stats.analyses += 1
+        self._js = JointSpace(m, ref)
+        self.stats.joint_space_size = max(self.stats.joint_space_size, joint_space_size(m))
+        self.stats.joint_space_setup_s += time.perf_counter() - t0
+        return self._js
+
+    def _joint_space_start(self, js, u, f_ext):
+        """The step solved in joint space from ``u`` (the trial state with the step's prescribed
+        displacements), and the norm of the step's residual at ``u`` (its force scale). The solution is
+        returned where the joint-space iteration converged (the general Newton iterations check it
+        against the full residual and go on from it if needed), else ``u`` itself, with the joint
+        states as committed."""
+        from .joint_space import MAX_INITIAL_STIFFNESS_ITERATIONS
+
+        m, free = self.model, self.model.dofmap.free
+        f_int, _ = m.evaluate(u, want_tangent=False)
+        R = (f_int - f_ext)[free]
+        r0_norm = float(np.linalg.norm(R))
+        ref = max(float(np.linalg.norm(f_ext[free])), float(np.linalg.norm(f_int[free])), r0_norm, 1e-30)
+        try:
+            u_js, its, converged, _ = js.solve_step(u, R, JOINT_SPACE_FORCE_FRACTION * self.s.force_tolerance * ref,
+                                                    MAX_INITIAL_STIFFNESS_ITERATIONS)
+        except FloatingPointError:
+            u_js, its, converged = None, 0, False
+        self.stats.joint_space_iterations += its
+        if u_js is None or not converged:
+            m.revert()  # bonds the joint-space iterations latched broken: not for the general path
+            return u, r0_norm
+        self.stats.joint_space_steps += 1
+        return u_js, r0_norm
+
+    def _newton_iterations(self, u, f_ext, r0_norm=None):
+        """Newton iterations of one step from the committed state; ``r0_norm``: the norm of the step's
+        first residual (the force scale of a step with no load, see the module docstring), where the
+        iterations start from a later iterate (the joint-space solution).
 
         Chatter guard: when the joint state pattern of an iteration repeats one already seen in this
         step (Newton cycling), for the rest of the step (1) open points get their initial stiffness
@@ -191,7 +282,7 @@ class StaticSolver:
             if not np.isfinite(r_full).all():
                 raise NumericalError("NaN or infinity in the residual (check loads and stiffnesses)")
             r = r_full[free]
-            if it == 0:
+            if it == 0 and r0_norm is None:
                 r0_norm = float(np.linalg.norm(r))
             ref = max(np.linalg.norm(f_ext), np.linalg.norm(f_int), r0_norm, 1e-30)
             force_ok = np.linalg.norm(r) <= s.force_tolerance * ref
@@ -258,9 +349,14 @@ class StaticSolver:
 
     # -- stages -----------------------------------------------------------------------------------
     def run(self, stages: list[StaticStage], u0: np.ndarray | None = None):
+        from threadpoolctl import threadpool_limits
+
         t0 = time.perf_counter()
         try:
-            return self._run(stages, u0)
+            # one BLAS thread, as in the dynamic solver: the dense LU of the joint-space iteration
+            # (LAPACK) must be bitwise reproducible, and on two cores a second thread only waits
+            with threadpool_limits(limits=1, user_api="blas"):
+                return self._run(stages, u0)
         finally:
             self.stats.wall_time_s = time.perf_counter() - t0
 

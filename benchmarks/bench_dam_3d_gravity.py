@@ -23,15 +23,18 @@ numba, OpenMP, MKL and OpenBLAS. The subprocess first runs the same scene at ele
 * ``run s``: the ``masonrydam.run`` call (mesh generation, model build, solve, output); ``solve s``:
   the static solver alone (the result's ``solve_wall_time_s``); Newton iterations, factorizations,
   symbolic analyses (``symbolic_analyses``, absent from old results: shown as ``-``), step cuts and
-  converged steps;
+  converged steps; where the static step was solved on the joint unknowns first (``[solver]
+  joint_space``, models with few joint unknowns), the joint-space steps and iterations;
 * ``peak GiB``: the subprocess's high-water resident memory (VmHWM; it includes the imports and the
   small warm-up run), and ``run GiB``, the resident memory sampled every 5 ms during the timed run;
 * the final joint states (stick / slip / open, in total and per joint set), with where the open and
-  slipping points are (the range of y, upstream -> downstream, and z);
+  slipping points are: their number on horizontal (normal along z) and vertical (normal along x)
+  faces and the ranges of x (dam axis), y (upstream -> downstream) and z;
 * with ``--reference``: the same scene with ``force_tolerance`` 1e-9 and ``energy_tolerance`` 1e-14
-  (then 1e-8 / 1e-13 and 1e-7 / 1e-12 if the tighter one does not converge), 200 iterations and 12
-  step cuts at most: the number of joint points whose final state differs from the reference (per
-  set) and max_i |u_i - u_ref,i| / max_i |u_ref,i| over the nodes (Euclidean norms per node).
+  (then 1e-8 / 1e-13 and 1e-7 / 1e-12 if the tighter one does not converge; ``--reference-tolerances``),
+  100 iterations a step and 8 step cuts at most: the number of joint points whose final state differs
+  from the reference (per set) and max_i |u_i - u_ref,i| / max_i |u_ref,i| over the nodes (Euclidean
+  norms per node). Without a converged reference there is no comparison (the run's figures still print).
 
 A run that exceeds ``--timeout`` (default 1800 s) gets SIGTERM (the run stops at the end of its
 current step and reports its statistics) and, 60 s later, SIGKILL; a run whose resident memory
@@ -70,9 +73,11 @@ SCENE_FILE = ROOT / "examples" / "dam_3d_gravity.toml"
 STATES = ("stick", "slip", "open")
 #: reference tolerances (force, energy), tightest first; the first that converges is used
 REFERENCE_TOLERANCES = [(1e-9, 1e-14), (1e-8, 1e-13), (1e-7, 1e-12)]
-REFERENCE_MAX_ITERATIONS = 200
-REFERENCE_MAX_STEP_CUTS = 12
+REFERENCE_MAX_ITERATIONS = 100
+REFERENCE_MAX_STEP_CUTS = 8
 WARMUP_ELEMENT_SIZE = 20.0
+#: arrays of a run kept with a stored reference
+ARRAYS = ("state", "u", "joint_set", "jx", "jn")
 
 
 def scene(element_size: float, steps: int | None = None, solver: dict | None = None) -> dict:
@@ -136,7 +141,8 @@ def read_result(path: Path) -> dict:
         out["status"] = str(a.get("status", "?"))
         out["status_reason"] = str(a.get("status_reason", ""))
         for k in ("newton_iterations", "factorizations", "symbolic_analyses", "step_cuts", "steps",
-                  "solve_wall_time_s", "total_wall_time_s"):
+                  "solve_wall_time_s", "total_wall_time_s", "joint_space_size", "joint_space_steps",
+                  "joint_space_iterations", "joint_space_setup_s"):
             if k in a:
                 out[k] = float(a[k]) if k.endswith("_s") else int(a[k])
         n = ds.sizes.get("step", 0)
@@ -149,6 +155,7 @@ def read_result(path: Path) -> dict:
         out["joint_set"] = ds.joint_set.values
         out["set_names"] = json.loads(ds.joint_set.attrs.get("set_names", "[]"))
         out["jx"] = np.column_stack([ds[f"joint_{c}"].values for c in "xyz"]) if "joint_x" in ds else None
+        out["jn"] = np.column_stack([ds[f"joint_normal_{c}"].values for c in "xyz"]) if "joint_normal_x" in ds else None
     return out
 
 
@@ -237,9 +244,9 @@ def reference(element_size, steps, tmp, args) -> dict:
         z = np.load(store, allow_pickle=False)
         meta = json.loads(str(z["meta"]))
         print(f"  reference for element_size {element_size:g} read from {store}")
-        return {**meta, "state": z["state"], "u": z["u"], "stored": str(store)}
+        return {**meta, **{k: z[k] for k in ARRAYS if k in z.files}, "stored": str(store)}
     r = None
-    for ft, et in REFERENCE_TOLERANCES:
+    for ft, et in args.reference_tolerances:
         solver = {"force_tolerance": ft, "energy_tolerance": et, "max_iterations": REFERENCE_MAX_ITERATIONS,
                   "max_step_cuts": REFERENCE_MAX_STEP_CUTS}
         if args.reference_linear_solver:
@@ -253,16 +260,24 @@ def reference(element_size, steps, tmp, args) -> dict:
     if store is not None and "error" not in r:
         store.parent.mkdir(parents=True, exist_ok=True)
         meta = {k: v for k, v in r.items() if not isinstance(v, np.ndarray)}
-        np.savez(store, state=r["state"], u=r["u"], meta=json.dumps(meta, default=float))
+        np.savez(store, meta=json.dumps(meta, default=float), **{k: r[k] for k in ARRAYS if r.get(k) is not None})
     return r
 
 
 def _where(r, sel):
-    """y (upstream -> downstream) and z ranges of the selected joint points."""
+    """Where the selected joint points are: per orientation (horizontal: normal along z; vertical:
+    normal along x), their number and the ranges of x (along the axis), y (upstream -> downstream) and z."""
     if r.get("jx") is None or not sel.any():
         return ""
-    x = r["jx"][sel]
-    return f" at y {x[:, 1].min():.0f}..{x[:, 1].max():.0f} m, z {x[:, 2].min():.0f}..{x[:, 2].max():.0f} m"
+    horizontal = np.abs(r["jn"][:, 2]) > 0.9 if r.get("jn") is not None else np.ones(len(sel), bool)
+    parts = []
+    for name, o in (("horizontal", horizontal), ("vertical", ~horizontal)):
+        m = sel & o
+        if m.any():
+            x = r["jx"][m]
+            parts.append(f"{m.sum()} {name} at x {x[:, 0].min():.0f}..{x[:, 0].max():.0f}, y {x[:, 1].min():.0f}.."
+                         f"{x[:, 1].max():.0f}, z {x[:, 2].min():.0f}..{x[:, 2].max():.0f} m")
+    return " (" + "; ".join(parts) + ")"
 
 
 def report(r, ref=None):
@@ -277,6 +292,10 @@ def report(r, ref=None):
           f"{r.get('step_cuts', '?')} step cuts, {r.get('steps', r.get('recorded_steps', '?'))} steps "
           f"(last load factor {r.get('last_load_factor', float('nan')):.4g}); peak {r.get('peak_rss_mib', float('nan')) / 1024:.2f} GiB, "
           f"run {r.get('run_peak_mib', float('nan')) / 1024:.2f} GiB")
+    if r.get("joint_space_size"):
+        print(f"[{tag}] static joint space: {r['joint_space_size']} unknowns, {r.get('joint_space_steps', 0)} steps "
+              f"solved there, {r.get('joint_space_iterations', 0)} joint-space iterations, set-up "
+              f"{r.get('joint_space_setup_s', 0.0):.2f} s")
     if "state" not in r:
         return
     st, js, names = r["state"], r["joint_set"], r["set_names"]
@@ -285,8 +304,10 @@ def report(r, ref=None):
     for i, name in enumerate(names):
         m = js == i
         c = np.bincount(st[m].astype(int), minlength=3)
-        extra = "".join(f"; {STATES[s]}{_where(r, m & (st == s))}" for s in (1, 2) if c[s])
-        print(f"    {name:<20} {m.sum():>6} points: {c[0]} stick, {c[1]} slip, {c[2]} open{extra}")
+        print(f"    {name:<20} {m.sum():>6} points: {c[0]} stick, {c[1]} slip, {c[2]} open")
+        for s in (1, 2):
+            if c[s]:
+                print(f"      {STATES[s]}{_where(r, m & (st == s))}")
     if ref is not None and "state" in ref:
         if len(ref["state"]) != len(st):
             print(f"[{tag}] reference has {len(ref['state'])} joint points, this run {len(st)}: not comparable")
@@ -321,6 +342,8 @@ def main():
     ap.add_argument("--reference", action="store_true", help="also run (or read) the tight-tolerance reference and compare")
     ap.add_argument("--reference-only", action="store_true", help="run only the reference (e.g. to fill --reference-dir)")
     ap.add_argument("--reference-dir", default=None, help="store the reference results here and reuse them (keyed by the scene)")
+    ap.add_argument("--reference-tolerances", default=",".join(f"{f:g}:{e:g}" for f, e in REFERENCE_TOLERANCES),
+                    help="force:energy tolerance pairs of the reference, tightest first (default %(default)s)")
     ap.add_argument("--reference-linear-solver", default=None, help="linear solver of the reference (default: as the scene, auto)")
     ap.add_argument("--timeout", type=float, default=1800.0, help="seconds per timed run (default 1800)")
     ap.add_argument("--reference-timeout", type=float, default=3600.0, help="seconds per reference run (default 3600)")
@@ -333,6 +356,7 @@ def main():
     if args.child:
         child(json.loads(args.child))
         return
+    args.reference_tolerances = [tuple(float(v) for v in pair.split(":")) for pair in args.reference_tolerances.split(",")]
     import psutil
 
     print(f"# 3D gravity dam (examples/dam_3d_gravity.toml), gravity stage; {cpu_model()}, "

@@ -42,6 +42,8 @@ from .linear import SingularMatrix, make_solver, resolve_backend
 OPEN_TANGENT_REGULAR = 1e-6
 #: tangent factor once the step's state pattern repeats (chatter guard, see _newton_iterations)
 OPEN_TANGENT_STABILIZED = 1.0
+#: times a step may switch to the stabilized iteration (see StaticSolver._newton_iterations)
+MAX_STABILIZATIONS = 4
 #: the joint-space iteration of a step converges to this fraction of the force tolerance: the general
 #: path then accepts its solution on the force residual alone (its energy test needs an iteration), so
 #: the solution is converged this much further, as far as the general path's energy test takes it
@@ -259,20 +261,24 @@ class StaticSolver:
         first residual (the force scale of a step with no load, see the module docstring), where the
         iterations start from a later iterate (the joint-space solution).
 
-        Chatter guard: when the joint state pattern of an iteration repeats one already seen in this
-        step (Newton cycling), for the rest of the step (1) open points get their initial stiffness
-        in the tangent (``P_OPEN_TANGENT``; residual unchanged, linear convergence) and (2) bonds
-        that break stay broken (``latch_broken_bonds``): with cohesion the shear traction jumps from
-        up to c to 0 when a point opens, and letting iterations "un-break" a bond cycles across that
-        jump. Bonds are not latched before chatter is seen, so transient tension in early iterates
-        does not destroy cohesion.
+        Chatter guard: when the joint state pattern of an iteration repeats one seen before in this
+        step other than the previous iteration's (Newton cycling), (1) open points get their initial
+        stiffness in the tangent (``P_OPEN_TANGENT``; residual unchanged, linear convergence) and (2)
+        bonds that break stay broken (``latch_broken_bonds``): with cohesion the shear traction jumps
+        from up to c to 0 when a point opens, and letting iterations "un-break" a bond cycles across
+        that jump. Bonds are not latched before chatter is seen, so transient tension in early iterates
+        does not destroy cohesion. Once the pattern has stayed the same for two iterations the
+        consistent tangent comes back (the latched bonds stay broken), at most MAX_STABILIZATIONS
+        times a step, as in the dynamic solver.
         """
         m, s = self.model, self.s
         free = m.dofmap.free
         energy0 = None
         last_energy = None
         seen = set()
+        prev_sig = None
         stabilized = False
+        toggles = same = 0
         for it in range(s.max_iterations + 1):
             want_K = s.method == "newton" or self._initial is None
             f_int, K = m.evaluate(u, want_tangent=want_K)
@@ -291,16 +297,32 @@ class StaticSolver:
                 return True, u, it, f_int
             if it == s.max_iterations:
                 break
-            if not stabilized and m.nonlinear:
+            if m.nonlinear:
                 sig = m.state_signature()
-                if sig in seen:
+                if not stabilized and sig != prev_sig and sig in seen and toggles < MAX_STABILIZATIONS:
+                    # cycling: a pattern seen before other than the last one (a pattern that stays from
+                    # one iteration to the next is ordinary convergence)
                     stabilized = True
+                    toggles += 1
+                    same = 0
                     self.stats.stabilized_steps += 1
                     m.set_open_tangent(OPEN_TANGENT_STABILIZED)
                     m.latch_broken_bonds()
                     f_int, K = m.evaluate(u, want_tangent=True)
                     r = (f_ext - f_int)[free]
+                elif stabilized:
+                    # the pattern has settled: back to the consistent tangent. The initial stiffness of
+                    # open points converges only linearly, and where many points are open (contraction
+                    # joints of a 3D dam) it stalled Newton at 1-4 % per iteration
+                    same = same + 1 if sig == prev_sig else 0
+                    if same >= 2:
+                        stabilized = False
+                        m.set_open_tangent(OPEN_TANGENT_REGULAR)
+                        f_int, K = m.evaluate(u, want_tangent=True)
+                        r = (f_ext - f_int)[free]
+                        seen = set()
                 seen.add(sig)
+                prev_sig = sig
             if s.method == "modified_newton":
                 if self._initial is None:
                     self._initial = self._linear_solver(K)

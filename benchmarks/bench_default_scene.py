@@ -58,7 +58,7 @@ def run_once(cache_dir: str) -> dict:
     m = re.search(r"wall time\s*:\s*([\d.]+) s \(solve ([\d.]+) s\)", out)
     if m:
         d["run"], d["solve"] = float(m.group(1)), float(m.group(2))
-    m = re.search(r"solver\s*:.*?(\d+) factorization\(s\) \[(\w+)[^\]]*\], (\d+) iterations", out)
+    m = re.search(r"solver\s*:.*?(\d+) factorization\(s\) \[(\w+)[^\]]*\], (\d+) (?:general Newton )?iterations", out)
     if m:
         d["factorizations"], d["backend"], d["iterations"] = int(m.group(1)), m.group(2), int(m.group(3))
     d["steps"] = sum(int(s) for s in re.findall(r"stage\s*:.*?: (\d+) steps", out))
@@ -98,15 +98,18 @@ def breakdown():
     orig = (linear.Factorization.__init__, linear.Factorization.solve, Model.evaluate, static.StaticSolver._newton,
             linear.Factorization.refactorize)
 
-    def newton(self, u, f_ext):
-        it0, t0 = self.stats.iterations, time.perf_counter()
+    def newton(self, u, f_ext, *rest):
+        def done():  # general and joint-space Newton iterations
+            return self.stats.iterations + getattr(self.stats, "joint_space_iterations", 0)
+
+        it0, t0 = done(), time.perf_counter()
         ok = False
         try:
-            res = orig[3](self, u, f_ext)
+            res = orig[3](self, u, f_ext, *rest)
             ok = bool(res[0])
             return res
         finally:
-            attempts.append((ok, self.stats.iterations - it0, time.perf_counter() - t0))
+            attempts.append((ok, done() - it0, time.perf_counter() - t0))
 
     linear.Factorization.__init__ = timed("factorize", orig[0])
     linear.Factorization.solve = timed("solve", orig[1])

@@ -331,6 +331,7 @@ def _stats_attrs(solver, t_start, dyn_solvers=()):
     out = {"steps": st.steps, "newton_iterations": st.iterations, "factorizations": st.factorizations,
            "symbolic_analyses": st.analyses, "joint_space_size": st.joint_space_size,
            "joint_space_steps": st.joint_space_steps, "joint_space_iterations": st.joint_space_iterations,
+           "joint_space_splits": st.joint_space_splits,
            "joint_space_setup_s": round(st.joint_space_setup_s, 4),
            "step_cuts": st.step_cuts, "solve_wall_time_s": round(st.wall_time_s, 4),
            "total_wall_time_s": round(time.perf_counter() - t_start, 4), "per_stage": json.dumps(st.per_stage)}
@@ -397,7 +398,8 @@ def print_summary(sc, mesh, model, eff, solver, stats, path, ds, file=None, dyn_
     if stats["joint_space_size"]:
         lines.append(f"joint space: static steps on {stats['joint_space_size']} joint unknowns (set-up "
                      f"{stats['joint_space_setup_s']:.3g} s): {stats['joint_space_steps']} step attempts converged "
-                     f"there in {stats['joint_space_iterations']} iterations")
+                     f"there in {stats['joint_space_iterations']} iterations, {stats['joint_space_splits']} cut "
+                     "where it did not converge")
     for dsol in dyn_solvers:
         for p in dsol.stats.per_stage:
             crit = f", dt_crit {p['dt_critical']:.3g} s" if p.get("dt_critical") else ""

@@ -94,6 +94,7 @@ class SolveStats:
     joint_space_size: int = 0  # joint unknowns condensed (0: the joint-space start was not used)
     joint_space_steps: int = 0  # step attempts whose joint-space iteration converged
     joint_space_iterations: int = 0  # joint-space Newton iterations
+    joint_space_splits: int = 0  # step attempts cut because their joint-space iteration did not converge
     joint_space_setup_s: float = 0.0
     step_cuts: int = 0
     line_searches: int = 0
@@ -180,13 +181,21 @@ class StaticSolver:
                            dof_nodes=self._dof_nodes)
 
     # -- one step ---------------------------------------------------------------------------------
-    def _newton(self, u, f_ext):
+    def _newton(self, u, f_ext, can_cut=False):
+        """One step from the trial state ``u``: in joint space first (where it applies), then by the
+        general Newton iterations; with ``can_cut``, a step whose joint-space iteration does not
+        converge is given up at once (the caller halves it, which is cheaper than the general path's
+        tangent factorizations, as in the dynamic solver)."""
         self.model.set_open_tangent(OPEN_TANGENT_REGULAR)
         try:
             js = self._joint_space()
             r0_norm = None
             if js is not None:
-                u, r0_norm = self._joint_space_start(js, u, f_ext)
+                u_js, r0_norm = self._joint_space_start(js, u, f_ext)
+                if u_js is u and can_cut:
+                    self.stats.joint_space_splits += 1
+                    return False, u, 0, None
+                u = u_js
             return self._newton_iterations(u, f_ext, r0_norm)
         finally:
             self.model.set_open_tangent(OPEN_TANGENT_REGULAR)
@@ -407,7 +416,9 @@ class StaticSolver:
                 f_ext = f_base + target * st.force
                 singular = None
                 try:
-                    ok, u_new, iters, f_int = self._newton(trial, f_ext)
+                    # a step that can still be cut is cut where its joint-space iteration fails
+                    can_cut = cuts + 1 <= s.max_step_cuts and dl / 2.0 >= nominal / 2.0 ** s.max_step_cuts
+                    ok, u_new, iters, f_int = self._newton(trial, f_ext, can_cut)
                 except SingularMatrix as exc:
                     ok, singular = False, exc
                 if ok:

@@ -248,6 +248,8 @@ def main(argv=None) -> int:
         return 2
     except RunStopped as exc:  # Ctrl-C or SIGTERM during a run: the converged steps are kept
         print(f"masonrydam: {exc}", file=sys.stderr)
+        for note in getattr(exc, "__notes__", []):
+            print(f"masonrydam: {note}", file=sys.stderr)
         return exc.exit_code
     except KeyboardInterrupt:  # Ctrl-C outside a run's steps (reading, meshing, plotting): nothing is kept
         print("masonrydam: interrupted", file=sys.stderr)

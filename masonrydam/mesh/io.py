@@ -300,7 +300,7 @@ def _write(m, path: Path, file_format: str | None, **kwargs) -> None:
     except OSError as exc:
         raise MasonrydamError(f"cannot write mesh file '{path}': {exc.strerror or exc}") from None
     except Exception as exc:  # meshio raises many types (WriteError, KeyError, ValueError, ...)
-        raise MasonrydamError(f"meshio could not write '{path}': {type(exc).__name__}: {exc}") from None
+        raise MasonrydamError(f"meshio could not write '{path}': {type(exc).__name__}: {exc}") from exc
 
 
 def _insert_physical_names(path: Path, physical_names) -> None:

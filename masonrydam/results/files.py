@@ -66,23 +66,29 @@ def claim_working_file(work: Path) -> None:
         import fcntl
     except ImportError:  # pragma: no cover - not POSIX
         fcntl = None
-    if fcntl is not None:
-        with open(work, "rb") as fh:
-            try:  # a shared lock is refused only while a writer holds the exclusive one
-                fcntl.flock(fh, fcntl.LOCK_SH | fcntl.LOCK_NB)
-            except OSError:
-                raise OutputError(f"'{work}' is being written by another run to the same output; wait for it, "
-                                  "stop it, or give another -o") from None
-    work.unlink()
+    try:
+        if fcntl is not None:
+            with open(work, "rb") as fh:
+                try:  # a shared lock is refused only while a writer holds the exclusive one
+                    fcntl.flock(fh, fcntl.LOCK_SH | fcntl.LOCK_NB)
+                except OSError:
+                    raise OutputError(f"'{work}' is being written by another run to the same output; wait for "
+                                      "it, stop it, or give another -o") from None
+        work.unlink()
+    except OutputError:
+        raise
+    except OSError as exc:  # a folder of that name, no permission
+        raise OutputError(f"cannot replace '{work}', the working file of this output: "
+                          f"{exc.strerror or exc}") from None
 
 
-def settle_partial(work: Path, target: Path, target_existed: bool) -> Path:
+def settle_partial(work: Path, target: Path) -> Path:
     """Where the closed working file of a run that ended early stays (the path returned): at the
-    target when no file was there before the run, beside it (``work``) otherwise (or at the target
-    when the working file was already moved there)."""
+    target when no file is there, beside it (``work``) when one is (an earlier result, or one that
+    another run wrote meanwhile), at the target when the working file was already moved there."""
     if not work.exists():
         return target
-    if target_existed and target.exists():
+    if target.exists():
         return work
     os.replace(work, target)
     return target

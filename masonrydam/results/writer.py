@@ -310,11 +310,13 @@ class ResultWriter:
         that ended early, ``status_reason`` (the error or the step it stopped at)."""
         if not self.nc.isopen():
             return
-        self.flush()
-        for k, val in (extra_attrs or {}).items():
-            self.nc.setncattr(k, val if isinstance(val, (str, int, float)) else json.dumps(val))
-        self.nc.completed = "true" if completed else "false"
-        self.nc.status = status
-        if reason is not None:
-            self.nc.status_reason = reason
-        self.nc.close()
+        try:
+            self.flush()
+            for k, val in (extra_attrs or {}).items():
+                self.nc.setncattr(k, val if isinstance(val, (str, int, float)) else json.dumps(val))
+            self.nc.completed = "true" if completed else "false"
+            self.nc.status = status
+            if reason is not None:
+                self.nc.status_reason = reason
+        finally:  # never leave the file (and its HDF5 lock) open, also when the disk is full
+            self.nc.close()

@@ -1,6 +1,7 @@
 """Run a scene end to end: build, solve in stages, stream results, print a summary."""
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import sys
@@ -164,19 +165,18 @@ def run(scene, output: str | os.PathLike | None = None, progress: bool = False, 
     }
     if dyn_stages:
         attrs.update(_dynamic_attrs(stages))
-    target_existed = target is not None and target.exists()
     if target is not None:
         claim_working_file(work)
+    options = OutputOptions(**{f.name: s["output"][f.name] for f in dataclasses.fields(OutputOptions)})
     try:
-        options = OutputOptions(**{k: s["output"][k] for k in ("buffer_steps", "flush_seconds", "precision",
-                                                                 "compression")})
         writer = ResultWriter(work, mesh.points, nodes, _joint_points(jgroups, set_names, dim), dim, attrs,
                               dynamic=bool(dyn_stages), options=options)
     except OSError as exc:  # e.g. another run holds the working file (HDF5 file lock), disk full
+        if target is None:
+            os.unlink(work)
         raise OutputError(f"cannot write the result file '{work}': {exc.strerror or exc}") from None
-    bar = _Progress(len(stages), progress)
     last_iters = {"n": 0}
-    stopper = StopRequests().install()
+    stopper = StopRequests()
     n_static = len(static_stages)
 
     def on_step(si, st, lam, u, f_int, f_ext):
@@ -191,29 +191,35 @@ def run(scene, output: str | os.PathLike | None = None, progress: bool = False, 
         status = stopper.requested()
         end_of_run = si == n_static - 1 and lam >= 1.0 - 1e-12 and not dyn_stages
         if status is not None and not end_of_run:
-            raise RunStopped(status, f"at step {writer.n} (load factor {lam:.4g} of stage '{st.name}')")
+            raise RunStopped(status, f"after {writer.n} recorded steps (load factor {lam:.4g} of stage '{st.name}')")
 
-    solver = StaticSolver(model, settings, on_step=on_step, progress=bar)
+    bar = solver = None
     dyn_solvers = []
-    try:
+    try:  # from here on the working file is closed and kept (or removed) whatever happens
+        stopper.install()
+        bar = _Progress(len(stages), progress)
+        solver = StaticSolver(model, settings, on_step=on_step, progress=bar)
         u = solver.run(static_stages) if static_stages else np.zeros(model.n_dof)
         if dyn_stages:
             _run_dynamic(model, static_stages, dyn_stages, stages, u, writer, nodes, jgroups, dim, bar, dyn_solvers,
                          stopper)
-        stopper.restore()  # solved: a request from here on is a plain KeyboardInterrupt
-        bar.close()
-        stats = _stats_attrs(solver, t_start, dyn_solvers)
-        writer.close(True, "completed", stats)
-        if target is not None:
-            os.replace(work, target)
+        with stopper.closing():  # solved: a request from here on changes nothing
+            bar.close()
+            stats = _stats_attrs(solver, t_start, dyn_solvers)
+            writer.close(True, "completed", stats)
+            if target is not None:
+                os.replace(work, target)
     except BaseException as exc:
+        with stopper.closing():
+            if bar is not None:
+                bar.close()
+            replacement = _end_early(exc, stopper, writer, work, target,
+                                     lambda: _stats_attrs(solver, t_start, dyn_solvers) if solver else {})
         stopper.restore()
-        bar.close()
-        replacement = _end_early(exc, stopper, writer, work, target, target_existed,
-                                 lambda: _stats_attrs(solver, t_start, dyn_solvers))
         if replacement is not None:
             raise replacement from None
         raise
+    stopper.restore()
     path = work if target is None else target
     if target is not None and os.path.getsize(path) > LOAD_IN_MEMORY_MAX:
         ds = xr.open_dataset(path)
@@ -226,15 +232,17 @@ def run(scene, output: str | os.PathLike | None = None, progress: bool = False, 
     return ds
 
 
-def _end_early(exc, stopper, writer, work, target, target_existed, stats):
+def _end_early(exc, stopper, writer, work, target, stats):
     """Close the result file of a run that ended early with ``exc``, keep it (see :func:`run`) and say
     where in ``exc``: a :class:`RunStopped` gets its status and file, any other error a note. A run
     without an output file removes its temporary file. Returns the exception to raise instead of
-    ``exc`` (a :class:`RunStopped` for an abort by a second request), or None."""
+    ``exc`` (a :class:`RunStopped` for a ``KeyboardInterrupt``), or None."""
     if isinstance(exc, RunStopped):
         status, reason = exc.status, f"stopped {exc.where}"
-    elif isinstance(exc, KeyboardInterrupt):  # a second Ctrl-C / SIGTERM (or one with no handler here)
-        status, reason = stopper.status or "interrupted", "stopped at once (a second request) during a step"
+    elif isinstance(exc, KeyboardInterrupt):  # a second request, or Ctrl-C where no handler of ours ran
+        status = stopper.status or "interrupted"
+        where = "at once (a second request) during a step" if stopper.status else "by KeyboardInterrupt during a step"
+        reason = f"stopped {where}"
     else:
         status, reason = "failed", f"{type(exc).__name__}: {exc}"
     try:
@@ -243,21 +251,23 @@ def _end_early(exc, stopper, writer, work, target, target_existed, stats):
         extra = {}
     try:
         writer.close(False, status, extra, reason)
-    except Exception as close_exc:  # e.g. a full disk: the steps flushed so far are still in the file
-        exc.add_note(f"the result file '{work}' could not be closed cleanly ({close_exc}); the steps flushed "
+    except Exception as close_exc:  # e.g. a full disk: the blocks written so far stay readable
+        exc.add_note(f"the result file '{work}' could not be closed cleanly ({close_exc}); the steps written "
                      "before stay readable")
     kept = None
     if target is None:
         if work.exists():
             os.unlink(work)
     else:
-        kept = settle_partial(work, target, target_existed)
+        kept = settle_partial(work, target)
     steps = writer.n
     if isinstance(exc, RunStopped):
         exc.kept, exc.steps = kept, steps
-        exc.args = (exc.message(),)
     elif isinstance(exc, KeyboardInterrupt):
-        return RunStopped(status, "at once (a second request) during the step after the last recorded one", kept, steps)
+        stopped = RunStopped(status, where, kept, steps)
+        for note in getattr(exc, "__notes__", []):
+            stopped.add_note(note)
+        return stopped
     elif kept is not None:
         where = (f"; the earlier result in {target} is unchanged" if kept != target else "")
         exc.add_note(f"results of {steps} converged step(s) were kept in {kept} (completed = false){where}")

@@ -37,7 +37,8 @@ class StopRequests:
 
     def restore(self) -> None:
         for sig, handler in self._previous.items():
-            signal.signal(sig, handler)
+            # None: the previous handler was installed from C (not known to Python): the default one
+            signal.signal(sig, signal.SIG_DFL if handler is None else handler)
         self._previous.clear()
 
     def _handle(self, signum, frame):
@@ -48,6 +49,18 @@ class StopRequests:
             self._abort_pending = True
             return
         raise KeyboardInterrupt
+
+    @contextmanager
+    def closing(self):
+        """A section (closing the result file) after which the run is over: a second request waits for
+        its end and is then dropped, since there is nothing left to stop."""
+        self._writing += 1
+        try:
+            yield
+        finally:
+            self._writing -= 1
+            if not self._writing:
+                self._abort_pending = False
 
     @contextmanager
     def writing(self):

@@ -227,10 +227,11 @@ class Factorization:
         self.K = K
         self._Kcopy.data[:] = K.data
         ps = self._ps
-        ps.factorized_A = self._Kcopy  # pypardiso's record of what it factorized: solve() then takes phase 33
+        ps.factorized_A = ""  # until phase 22 has succeeded nothing counts as factorized (a hash that never matches)
         try:
             ps.set_phase(22)
             ps._call_pardiso(self._Kcopy, np.zeros((K.shape[0], 1)))
+            ps.factorized_A = self._Kcopy  # pypardiso's record of what it factorized: solve() takes phase 33
         except AttributeError:  # pragma: no cover - a pypardiso without these (private) calls: new analysis
             ps.factorize(self._Kcopy)
             self.analyses += 1

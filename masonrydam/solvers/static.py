@@ -154,8 +154,9 @@ class StaticSolver:
         before = getattr(fact, "analyses", 0)
         try:
             reused = fact is not None and hasattr(fact, "refactorize") and fact.refactorize(K)
-        except SingularMatrix:
+        except BaseException:
             self._fact = None  # refactorize changed it: never hand it out again
+            self.stats.analyses += getattr(fact, "analyses", 0) - before
             raise
         if not reused:
             fact = self._fact = self._linear_solver(K)
@@ -336,6 +337,7 @@ class StaticSolver:
                 if self._initial is None:
                     self._initial = self._linear_solver(K)
                     self.stats.factorizations += 1
+                    self.stats.analyses += 1
                 fact = self._initial
             else:
                 fact = self._factorize(K)
@@ -407,7 +409,7 @@ class StaticSolver:
             dlam = nominal
             cuts = 0
             stage_stats = {"stage": st.name, "steps": 0, "iterations": 0, "step_cuts": 0}
-            it_before = self.stats.iterations
+            it_before = self.stats.iterations + self.stats.joint_space_iterations
             while lam < 1.0 - 1e-12:
                 dl = min(dlam, 1.0 - lam)
                 target = lam + dl
@@ -455,7 +457,8 @@ class StaticSolver:
                         f"{s.max_step_cuts} step cuts (last increment {dl:.3g}); the structure may have reached "
                         "its collapse load under load control — use prescribed displacements, or more steps")
                 dlam = dl / 2.0
-            stage_stats["iterations"] = self.stats.iterations - it_before
+            # general and joint-space Newton iterations, as the result file's ``iterations``
+            stage_stats["iterations"] = self.stats.iterations + self.stats.joint_space_iterations - it_before
             self.stats.per_stage.append(stage_stats)
             f_base = f_base + st.force
         return u

@@ -116,10 +116,10 @@ def run(scene, output: str | os.PathLike | None = None, progress: bool = False, 
     With ``output`` the netCDF file is kept there. The run writes to ``NAME.partial.nc`` beside it
     and moves that file over ``output`` (an atomic rename) only when it completes, so an earlier
     result is never truncated and a reader holding it open keeps its contents. A run that ends early
-    keeps every converged step, marked ``completed = "false"`` with a ``status`` (``"failed: ..."``,
-    ``"interrupted"`` for Ctrl-C, ``"terminated"`` for SIGTERM): at ``output`` when no file was
-    there, in ``NAME.partial.nc`` otherwise (the earlier result stays byte for byte); the error says
-    where. Ctrl-C or SIGTERM stops the run at the end of the current step with
+    keeps every converged step, marked ``completed = "false"`` with a ``status`` (``"failed"``,
+    ``"interrupted"`` for Ctrl-C, ``"terminated"`` for SIGTERM) and a ``status_reason``: at
+    ``output`` when no file is there when the run ends, in ``NAME.partial.nc`` otherwise (the earlier
+    result stays byte for byte); the error says where. Ctrl-C or SIGTERM stops the run at the end of the current step with
     :class:`~masonrydam.errors.RunStopped`; a second one stops it at once. A killed process leaves
     ``NAME.partial.nc`` with ``status = "running"``.
 

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -378,3 +379,16 @@ def test_a_run_never_truncates_another_runs_working_file(tmp_path):
         assert stale.sizes["step"] >= 2
     finally:
         stale.close()
+
+
+def test_progress_shows_what_a_static_step_is_doing(capsys):
+    """The progress bar names the stage, the load factor, the Newton iteration and the residual of the
+    step being solved, so that a long first step is visibly alive."""
+    sc = sliding_scene(duration=0.01)
+    sc["solver"] = {"joint_space": "off"}
+    masonrydam.run(sc, progress=True)
+    err = capsys.readouterr().err
+    assert "gravity: load factor 1, iteration 0, residual " in err
+    # the last iteration shown is the converged one: the residual below the force tolerance (1e-6)
+    last = re.findall(r"gravity: load factor 1, iteration (\d+), residual ([0-9.e+-]+)", err)[-1]
+    assert int(last[0]) >= 1 and float(last[1]) < 1e-6

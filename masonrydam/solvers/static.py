@@ -136,6 +136,7 @@ class StaticSolver:
         self.stats = SolveStats()
         self._fact = None
         self._fact_data = None
+        self._where = ""  # the step being solved, in words (progress display)
         self._js = None  # joint-space system of the constraint set self._js_dofmap (see _joint_space)
         self._js_dofmap = None
         self._initial = None  # modified Newton: initial stiffness factorization per constraint set
@@ -201,6 +202,12 @@ class StaticSolver:
         finally:
             self.model.set_open_tangent(OPEN_TANGENT_REGULAR)
 
+    def _status(self, text: str) -> None:
+        """Tell the progress display what the current step is doing (see ``self._where``)."""
+        status = getattr(self.progress, "status", None)
+        if status is not None:
+            status(f"{self._where}, {text}")
+
     def _joint_space(self):
         """The joint-space system (:class:`~masonrydam.solvers.joint_space.JointSpace`) of the current
         constraint set, set up when first needed; None where it does not apply.
@@ -260,6 +267,7 @@ class StaticSolver:
         except FloatingPointError:
             u_js, its, converged = None, 0, False
         self.stats.joint_space_iterations += its
+        self._status(f"{its} joint-space iterations" + ("" if converged else ", not converged"))
         if u_js is None or not converged:
             m.revert()  # bonds the joint-space iterations latched broken: not for the general path
             return u, r0_norm
@@ -301,7 +309,9 @@ class StaticSolver:
             if it == 0 and r0_norm is None:
                 r0_norm = float(np.linalg.norm(r))
             ref = max(np.linalg.norm(f_ext), np.linalg.norm(f_int), r0_norm, 1e-30)
-            force_ok = np.linalg.norm(r) <= s.force_tolerance * ref
+            rn = float(np.linalg.norm(r))
+            self._status(f"iteration {it}, residual {rn / ref:.1e}")
+            force_ok = rn <= s.force_tolerance * ref
             energy_ok = last_energy is None or energy0 == 0 or last_energy <= s.energy_tolerance * energy0
             if force_ok and energy_ok:
                 return True, u, it, f_int
@@ -420,6 +430,7 @@ class StaticSolver:
                 try:
                     # a step that can still be cut is cut where its joint-space iteration fails
                     can_cut = cuts + 1 <= s.max_step_cuts and dl / 2.0 >= nominal / 2.0 ** s.max_step_cuts
+                    self._where = f"{st.name}: load factor {target:.4g}" + (f" ({cuts} cuts)" if cuts else "")
                     ok, u_new, iters, f_int = self._newton(trial, f_ext, can_cut)
                 except SingularMatrix as exc:
                     ok, singular = False, exc

@@ -94,11 +94,6 @@ def settle_partial(work: Path, target: Path) -> Path:
     return target
 
 
-def steps_in(ds) -> int:
-    """Number of recorded steps of a result dataset."""
-    return int(ds.sizes.get("step", 0))
-
-
 def result_state_note(path, attrs: dict, steps: int) -> str | None:
     """A one-line note for a result file that is not a completed run (None for a completed one)."""
     if attrs.get("completed") == "true":
@@ -137,7 +132,7 @@ def open_result(path, load: bool = True):
     if "displacement" not in ds.variables or "step" not in ds.dims:
         ds.close()
         raise OutputError(f"'{p}' is a netCDF file but not a masonrydam result (no 'displacement' on 'step')")
-    note = result_state_note(p, ds.attrs, steps_in(ds))
+    note = result_state_note(p, ds.attrs, int(ds.sizes["step"]))
     if note is not None:
         warnings.warn(note, IncompleteResultWarning, stacklevel=2)
     return ds

@@ -331,8 +331,9 @@ def _run_dynamic(model, static_stages, dyn_stages, stages, u, writer, nodes, jgr
         def prog(fraction, si=si):
             bar(si, fraction)
 
-        if k and stopper.requested() is not None:
-            raise RunStopped(stopper.requested(), f"after stage '{dyn_stages[k - 1].name}'")
+        status = stopper.requested()
+        if k and status is not None:
+            raise RunStopped(status, f"after stage '{dyn_stages[k - 1].name}'")
         ds = DynamicSolver(model, st.settings, mass=masses[lumped], progress=prog, stop_requested=stopper.requested)
         dyn_solvers.append(ds)
 

@@ -107,20 +107,23 @@ def test_condensed_correction_equals_the_dense_newton_solve():
     rows = np.flatnonzero(qt.reshape(m, dim).any(axis=1)).astype(np.int64)
     assert len(rows) == 5
     z, step = np.zeros(8), np.zeros(m)
-    ST = np.ascontiguousarray(S.T)
-    st, J, piv = capacitance_lu(ST, rows, qt)
+    # the columns stored in a shuffled order (slot[j]: the row of column j), as a lazy store keeps them
+    slot = rng.permutation(m).astype(np.int64)
+    ST = np.empty((m, m))
+    ST[slot] = S.T
+    st, J, piv = capacitance_lu(ST, slot, rows, qt)
     assert st == 0
-    assert joint_space_correction(ST, F, rows, qt, J, piv, z, step) == 0
+    assert joint_space_correction(ST, slot, F, rows, qt, J, piv, z, step) == 0
     np.testing.assert_allclose(step, expected, rtol=1e-12, atol=1e-12 * np.abs(expected).max())
     # a singular capacitance matrix is reported, not solved: Qt = -S^-1 on one point's block
     qs = np.zeros((P, dim, dim))
     qs[2] = -np.linalg.inv(S[4:6, 4:6])
     rows2 = np.array([4, 5], dtype=np.int64)
-    assert capacitance_lu(ST, rows2, qs)[0] == STATUS_SINGULAR
+    assert capacitance_lu(ST, slot, rows2, qs)[0] == STATUS_SINGULAR
     # and a NaN in the law's tangent is reported before LAPACK sees it
     qn = qt.copy()
     qn[4, 0, 0] = np.nan
-    assert capacitance_lu(ST, rows, qn)[0] == STATUS_NAN
+    assert capacitance_lu(ST, slot, rows, qn)[0] == STATUS_NAN
 
 
 def test_capacitance_update_equals_the_dense_newton_solve():
@@ -133,7 +136,9 @@ def test_capacitance_update_equals_the_dense_newton_solve():
     m = dim * P
     A = rng.standard_normal((m, m))
     S = A @ A.T / m + np.eye(m) + 0.3 * (A - A.T) / m  # not symmetric: checks rows against columns
-    ST = np.ascontiguousarray(S.T)
+    slot = rng.permutation(m).astype(np.int64)  # columns in a shuffled order, as in a lazy store
+    ST = np.empty((m, m))
+    ST[slot] = S.T
     kinds = {"open": -np.diag([3.0, 5.0]), "slip+": np.array([[-2.0, -0.7], [0.0, 0.0]]),
              "slip-": np.array([[-2.0, 0.7], [0.0, 0.0]])}
 
@@ -149,13 +154,13 @@ def test_capacitance_update_equals_the_dense_newton_solve():
     expected = _dense_newton_correction(S, q_cur, F)
     r_ref = np.flatnonzero(q_ref.reshape(m, dim).any(axis=1)).astype(np.int64)
     r_cur = np.flatnonzero(q_cur.reshape(m, dim).any(axis=1)).astype(np.int64)
-    st, J, piv = capacitance_lu(ST, r_ref, q_ref)
+    st, J, piv = capacitance_lu(ST, slot, r_ref, q_ref)
     assert st == 0
     z, step = np.zeros(16), np.zeros(m)
-    args = (ST, r_ref, np.ascontiguousarray(q_ref.reshape(m, dim)[r_ref]), J, piv, r_cur,
+    args = (ST, slot, r_ref, np.ascontiguousarray(q_ref.reshape(m, dim)[r_ref]), J, piv, r_cur,
             np.ascontiguousarray(q_cur.reshape(m, dim)[r_cur]), F)
     assert capacitance_update_solve(*args, 100, z) == 0
-    assert apply_correction(ST, F, r_cur, z, step) == 0
+    assert apply_correction(ST, slot, F, r_cur, z, step) == 0
     np.testing.assert_allclose(step, expected, rtol=1e-12, atol=1e-12 * np.abs(expected).max())
     assert capacitance_update_solve(*args, 2, z) == STATUS_TOO_MANY_CHANGES
 
@@ -359,6 +364,7 @@ def test_reevaluating_some_points_equals_a_full_residual_evaluation():
     delta_y = delta + rng.normal(0.0, 1e-6, m)
     wk = np.repeat(weight, dim) * np.tile([ks, kn], P)
     ST = rng.normal(0.0, 1e-11, (m, m))
+    slot = np.arange(m, dtype=np.int64)
     q_n = rng.normal(0.0, 1e3, (P, dim))
 
     def arrays():
@@ -369,7 +375,7 @@ def test_reevaluating_some_points_equals_a_full_residual_evaluation():
         trial, traction, q, qt, codes, info = out = arrays()
         F, err = np.zeros(m), np.zeros(1)
         assert joint_space_evaluate_residual(params, index, weight, delta, base, trial, traction, q, qt, codes, info,
-                                             held, ST, delta_y, q_n, wk, F, err) == 0
+                                             held, ST, slot, delta_y, q_n, wk, F, err) == 0
         return out, F, err[0]
 
     held0 = np.zeros(P, dtype=np.int8)
@@ -381,7 +387,7 @@ def test_reevaluating_some_points_equals_a_full_residual_evaluation():
     held1[changed] = 1 - held1[changed]
     e1 = np.zeros(1)
     assert joint_space_reevaluate_points(changed, params, index, weight, delta, base, trial, traction, q, qt, codes,
-                                         info, held1, ST, wk, F, e1) == 0
+                                         info, held1, ST, slot, wk, F, e1) == 0
     (trial_r, traction_r, q_r, qt_r, codes_r, _), F_r, err_r = full(held1)
     assert not np.array_equal(codes_r, full(held0)[0][4])  # the flags made a difference
     np.testing.assert_array_equal(codes, codes_r)
@@ -440,7 +446,8 @@ def test_no_point_stays_held_after_a_step():
         fake.held[1:3] = 1
         raise FloatingPointError("NaN in the joint-space residual")
 
-    fake = SimpleNamespace(held=np.ones(4, dtype=np.int8), _solve_step=failing_step)
+    fake = SimpleNamespace(held=np.ones(4, dtype=np.int8), _solve_step=failing_step,
+                           columns=SimpleNamespace(new_step=lambda: None))
     with pytest.raises(FloatingPointError):
         JointSpace.solve_step(fake, None, None, 1.0)
     assert not seen["held_on_entry"].any()

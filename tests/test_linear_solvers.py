@@ -477,6 +477,39 @@ def test_symmetric_factorization_equals_the_direct_solve_on_a_jointed_wall():
     assert n < f.nnz_factor < n * (n + 1) // 2
 
 
+@pytest.mark.parametrize("max_width", [1, 3, 64])
+def test_supernodal_block_solve_equals_the_entry_by_entry_one(monkeypatch, max_width):
+    """The block substitution by supernodes (dense products through BLAS; Liu, Ng & Peyton 1993) gives
+    the entry-by-entry substitution's answer to round-off on the jointed wall's effective matrix,
+    whatever the widest supernode allowed; every supernode it uses is a true one (each column holds
+    the rows of its diagonal block and then those of the supernode's last column)."""
+    from masonrydam.solvers.ldlt_kernels import supernode_partition
+
+    model, K, b, free = model_system(wall_dict(epu=2))
+    Kf = (K + sp.diags(np.full(K.shape[0], 1e-3 * K.diagonal().max()))).tocsr()
+    rng = np.random.default_rng(2)
+    B = rng.standard_normal((Kf.shape[0], 5))
+    f = linear.SymmetricFactorization(Kf)
+    X_entries = f.solve(B)
+    assert f._supernodes is None  # a small factor keeps the entry-by-entry kernel
+    monkeypatch.setattr(linear, "SUPERNODAL_MIN_FACTOR", 0)
+    monkeypatch.setattr(linear, "SUPERNODE_MAX_WIDTH", max_width)
+    X_super = f.solve(B)
+    starts = f._supernodes[0]
+    np.testing.assert_allclose(X_super, X_entries, rtol=0, atol=1e-12 * np.abs(X_entries).max())
+    assert rel_err(X_super[:, 0], direct(Kf, B[:, 0])) < 1e-10
+    widths = np.diff(starts)
+    assert widths.max() <= max_width and widths.sum() == Kf.shape[0]
+    if max_width > 1:
+        assert widths.max() > 1, "the wall's factor has supernodes wider than one column"
+    Lp, Li = f._Lp, f._Li
+    for s, e in zip(starts[:-1], starts[1:]):
+        below = Li[Lp[e - 1]:Lp[e]]
+        for c in range(s, e):
+            np.testing.assert_array_equal(Li[Lp[c]:Lp[c + 1]], np.concatenate([np.arange(c + 1, e), below]))
+    assert np.array_equal(supernode_partition(Lp, Li, max_width), starts)
+
+
 def test_symmetric_factorization_refuses_what_it_cannot_factorize():
     """Not symmetric: ValueError (the caller falls back to LU); indefinite or singular (a pivot that is
     not positive): SingularMatrix naming the pivots; non-finite entries: SingularMatrix; a right-hand

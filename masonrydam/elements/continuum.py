@@ -243,8 +243,15 @@ def _block_finite(block):
 # Kernels. Each public kernel dispatches on ``coords.shape[1]`` to one generic implementation,
 # compiled once per dimension: ``dim_tag`` is the tuple ``(0, 0)`` or ``(0, 0, 0)``, and
 # ``dim = len(dim_tag)`` is a compile-time constant in each specialization, so the short loops over
-# the spatial dimension are unrolled by LLVM (about 2.5x faster than a run-time ``dim``).
+# the spatial dimension are unrolled by LLVM (about 2.5x faster than a run-time ``dim``). The public
+# functions are plain Python: a numba dispatcher with both calls in it compiled both dimensions on
+# first use (the 2D default scene compiled the 3D kernels too: about 3 s of its first run).
 # ----------------------------------------------------------------------------------------------
+
+
+def _dim_tag(coords):
+    """``(0, 0)`` for 2D coordinates, ``(0, 0, 0)`` for 3D: the compile-time dimension of the kernels."""
+    return (0, 0) if coords.shape[1] == 2 else (0, 0, 0)
 
 
 @numba.njit(cache=True)
@@ -309,7 +316,6 @@ def _stiffness_impl(coords, conn, dN_ref, weights, D_table, material_index, thic
     return STATUS_OK
 
 
-@numba.njit(cache=True)
 def continuum_stiffness(coords, conn, dN_ref, weights, D_table, material_index, thickness, ke_out, info):
     """Linear elastic element stiffness matrices ``K_e = int B^T D B dV``.
 
@@ -339,9 +345,9 @@ def continuum_stiffness(coords, conn, dN_ref, weights, D_table, material_index, 
     int
         ``STATUS_OK``, ``STATUS_BAD_JACOBIAN`` or ``STATUS_NAN`` (see module docstring).
     """
-    if coords.shape[1] == 2:
-        return _stiffness_impl(coords, conn, dN_ref, weights, D_table, material_index, thickness, ke_out, info, (0, 0))
-    return _stiffness_impl(coords, conn, dN_ref, weights, D_table, material_index, thickness, ke_out, info, (0, 0, 0))
+    return _stiffness_impl(
+        coords, conn, dN_ref, weights, D_table, material_index, thickness, ke_out, info, _dim_tag(coords)
+    )
 
 
 @numba.njit(cache=True)
@@ -389,7 +395,6 @@ def _internal_force_impl(coords, conn, dN_ref, weights, D_table, material_index,
     return STATUS_OK
 
 
-@numba.njit(cache=True)
 def continuum_internal_force(coords, conn, dN_ref, weights, D_table, material_index, thickness, u, fe_out, info):
     """Linear elastic internal force vectors ``f_e = int B^T sigma dV``, ``sigma = D B u_e`` (N).
 
@@ -403,12 +408,8 @@ def continuum_internal_force(coords, conn, dN_ref, weights, D_table, material_in
     Consistent with the stiffness: ``fe_out[e] == ke_out[e] @ u_e`` up to rounding.
     Returns a status code (see module docstring).
     """
-    if coords.shape[1] == 2:
-        return _internal_force_impl(
-            coords, conn, dN_ref, weights, D_table, material_index, thickness, u, fe_out, info, (0, 0)
-        )
     return _internal_force_impl(
-        coords, conn, dN_ref, weights, D_table, material_index, thickness, u, fe_out, info, (0, 0, 0)
+        coords, conn, dN_ref, weights, D_table, material_index, thickness, u, fe_out, info, _dim_tag(coords)
     )
 
 
@@ -443,7 +444,6 @@ def _body_force_impl(coords, conn, N_ref, dN_ref, weights, body_force, thickness
     return STATUS_OK
 
 
-@numba.njit(cache=True)
 def continuum_body_force(coords, conn, N_ref, dN_ref, weights, body_force, thickness, fe_out, info):
     """Consistent nodal loads of a constant body force per element, ``f_a = int N_a b dV`` (N).
 
@@ -459,9 +459,9 @@ def continuum_body_force(coords, conn, N_ref, dN_ref, weights, body_force, thick
 
     Returns a status code (see module docstring).
     """
-    if coords.shape[1] == 2:
-        return _body_force_impl(coords, conn, N_ref, dN_ref, weights, body_force, thickness, fe_out, info, (0, 0))
-    return _body_force_impl(coords, conn, N_ref, dN_ref, weights, body_force, thickness, fe_out, info, (0, 0, 0))
+    return _body_force_impl(
+        coords, conn, N_ref, dN_ref, weights, body_force, thickness, fe_out, info, _dim_tag(coords)
+    )
 
 
 @numba.njit(cache=True)
@@ -521,7 +521,6 @@ def _mass_impl(coords, conn, N_ref, dN_ref, weights, density, thickness, lumped,
     return STATUS_OK
 
 
-@numba.njit(cache=True)
 def continuum_mass(coords, conn, N_ref, dN_ref, weights, density, thickness, lumped, me_out, info):
     """Element mass matrices, consistent ``M_ab = int rho N_a N_b dV I_dim`` or HRZ-lumped (kg).
 
@@ -545,9 +544,9 @@ def continuum_mass(coords, conn, N_ref, dN_ref, weights, density, thickness, lum
 
     Returns a status code (see module docstring).
     """
-    if coords.shape[1] == 2:
-        return _mass_impl(coords, conn, N_ref, dN_ref, weights, density, thickness, lumped, me_out, info, (0, 0))
-    return _mass_impl(coords, conn, N_ref, dN_ref, weights, density, thickness, lumped, me_out, info, (0, 0, 0))
+    return _mass_impl(
+        coords, conn, N_ref, dN_ref, weights, density, thickness, lumped, me_out, info, _dim_tag(coords)
+    )
 
 
 @numba.njit(cache=True)
@@ -585,7 +584,6 @@ def _stress_impl(coords, conn, dN_ref, D_table, material_index, u, stress_out, i
     return STATUS_OK
 
 
-@numba.njit(cache=True)
 def continuum_stress(coords, conn, dN_ref, D_table, material_index, u, stress_out, info):
     """Linear elastic stresses ``sigma = D B u_e`` (Pa) at the points of the tables.
 
@@ -600,6 +598,4 @@ def continuum_stress(coords, conn, dN_ref, D_table, material_index, u, stress_ou
 
     Returns a status code (see module docstring; the Jacobian test applies at the output points).
     """
-    if coords.shape[1] == 2:
-        return _stress_impl(coords, conn, dN_ref, D_table, material_index, u, stress_out, info, (0, 0))
-    return _stress_impl(coords, conn, dN_ref, D_table, material_index, u, stress_out, info, (0, 0, 0))
+    return _stress_impl(coords, conn, dN_ref, D_table, material_index, u, stress_out, info, _dim_tag(coords))

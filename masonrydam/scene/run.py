@@ -358,6 +358,8 @@ def _stats_attrs(solver, t_start, dyn_solvers=()):
            "joint_space_steps": st.joint_space_steps, "joint_space_iterations": st.joint_space_iterations,
            "joint_space_splits": st.joint_space_splits,
            "joint_space_setup_s": round(st.joint_space_setup_s, 4),
+           "joint_space_flexibility_columns": st.joint_space_flexibility_columns,
+           "joint_space_flexibility_s": round(st.joint_space_flexibility_s, 4),
            "step_cuts": st.step_cuts, "solve_wall_time_s": round(st.wall_time_s, 4),
            "total_wall_time_s": round(time.perf_counter() - t_start, 4), "per_stage": json.dumps(st.per_stage)}
     if dyn_solvers:
@@ -385,6 +387,8 @@ def _stats_attrs(solver, t_start, dyn_solvers=()):
             "dynamic_joint_space_column_recoveries": sum(x.joint_space_column_recoveries for x in d),
             "dynamic_joint_space_column_memory_MB": round(max(x.joint_space_column_bytes for x in d) / 2**20, 2),
             "dynamic_joint_space_setup_s": round(sum(x.joint_space_setup_s for x in d), 4),
+            "dynamic_joint_space_flexibility_columns": sum(x.joint_space_flexibility_columns for x in d),
+            "dynamic_joint_space_flexibility_s": round(sum(x.joint_space_flexibility_s for x in d), 4),
             "dynamic_wall_time_s": round(wall, 4),
             "dynamic_output_time_s": round(sum(x.output_time_s for x in d), 4),
             "dynamic_ms_per_step": round(1e3 * wall / max(steps, 1), 4),
@@ -394,6 +398,11 @@ def _stats_attrs(solver, t_start, dyn_solvers=()):
             "dynamic_per_stage": json.dumps([p for x in d for p in x.per_stage]),
         })
     return out
+
+
+def _columns_note(columns, seconds):
+    """The summary's note on the flexibility columns computed as steps needed them (large joint sets)."""
+    return f"; {columns} flexibility columns computed when first needed ({seconds:.3g} s)" if columns else ""
 
 
 def print_summary(sc, mesh, model, eff, solver, stats, path, ds, file=None, dyn_solvers=()):
@@ -424,7 +433,8 @@ def print_summary(sc, mesh, model, eff, solver, stats, path, ds, file=None, dyn_
         lines.append(f"joint space: static steps on {stats['joint_space_size']} joint unknowns (set-up "
                      f"{stats['joint_space_setup_s']:.3g} s): {stats['joint_space_steps']} step attempts converged "
                      f"there in {stats['joint_space_iterations']} iterations, {stats['joint_space_splits']} cut "
-                     "where it did not converge")
+                     "where it did not converge"
+                     + _columns_note(stats['joint_space_flexibility_columns'], stats['joint_space_flexibility_s']))
     for dsol in dyn_solvers:
         for p in dsol.stats.per_stage:
             crit = f", dt_crit {p['dt_critical']:.3g} s" if p.get("dt_critical") else ""
@@ -444,10 +454,11 @@ def print_summary(sc, mesh, model, eff, solver, stats, path, ds, file=None, dyn_
                          f"{stats['dynamic_joint_space_column_recoveries']} recoveries from "
                          f"{stats['dynamic_joint_space_column_memory_MB']:.3g} MB of stored columns), "
                          f"{stats['dynamic_joint_space_splits']} halved, "
-                         f"{stats['dynamic_joint_space_fallbacks']} finished by the general path")
+                         f"{stats['dynamic_joint_space_fallbacks']} finished by the general path"
+                         + _columns_note(stats['dynamic_joint_space_flexibility_columns'],
+                                         stats['dynamic_joint_space_flexibility_s']))
         else:
-            lines.append("joint space: off (no nonlinear joints, an explicit scheme, joint_space = 'off', or more "
-                         "joint unknowns than the 'auto' limit)")
+            lines.append("joint space: off (no nonlinear joints, an explicit scheme, or joint_space = 'off')")
         lines.append(f"energy     : balance error {stats['energy_error_max_J']:.3g} J "
                      f"({100 * stats['energy_error_relative']:.3g} % of the largest energy term)")
     if "joint_state" in ds and ds.sizes.get("joint_point", 0):

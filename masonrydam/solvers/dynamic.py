@@ -91,8 +91,10 @@ components and costs one more substitution at the end; no sparse matrix is facto
 is accepted by the same full-residual test as any Newton iterate. A step that the joint-space
 iteration does not converge within its limits is halved like a failed step (each sub-step size
 gets its own joint-space system, set up the first time it is needed); at the last halving it goes
-on from its last iterate in the general path below. ``"auto"`` condenses up to
-``JOINT_SPACE_MAX`` joint unknowns (8 m^2 bytes for S); ``"off"`` forces the general path.
+on from its last iterate in the general path below. ``"auto"`` (the same as ``"on"``) condenses any
+number of joint unknowns: up to ``JOINT_SPACE_MAX`` the flexibility S is set up at once (8 m^2
+bytes), above it its columns are computed when a step first needs them and kept in a bounded store
+(:class:`~masonrydam.solvers.joint_space.FlexibilityColumns`); ``"off"`` forces the general path.
 
 Because the all-stick matrix is symmetric positive definite and solved once or twice per step for
 the whole record, it is factorized as a sparse ``L D L^T`` with numba substitutions
@@ -176,7 +178,7 @@ from threadpoolctl import threadpool_limits
 from ..errors import ConvergenceError, NumericalError, RunStopped, SceneError
 from .dynamic_kernels import (joint_stored_energy, newmark_kinematics, newmark_residual, step_works, woodbury_apply,
                               woodbury_factor)
-from .joint_space import (JOINT_SPACE_MAX, MAX_INITIAL_STIFFNESS_ITERATIONS, SPLIT_INITIAL_STIFFNESS_ITERATIONS, JointSpace,
+from .joint_space import (MAX_INITIAL_STIFFNESS_ITERATIONS, SPLIT_INITIAL_STIFFNESS_ITERATIONS, JointSpace,
                           joint_space_size)
 from .linear import DIRECT_SOLVERS, Factorization, SingularMatrix, SymmetricFactorization, resolve_backend
 from .modal import MassMatrix, RayleighDamping, elastic_joint_full, elastic_tangent_data
@@ -219,7 +221,7 @@ class DynamicSettings:
     Woodbury update before refactorizing (0: refactorize whenever the matrix changes);
     stability_safety: fraction of the critical step allowed for conditionally stable schemes;
     joint_space: "auto" | "on" | "off" - Newton condensed on the nonlinear joints
-    (:mod:`.joint_space`; "auto": when they have at most ``JOINT_SPACE_MAX`` components);
+    (:mod:`.joint_space`; "auto" and "on": whenever the model has nonlinear joints);
     key: scene key prefix used in error messages (e.g. ``"stages[1]."``).
     """
 
@@ -403,6 +405,10 @@ class DynamicStats:
     joint_space_column_recoveries: int = 0
     #: bytes of those stored columns (all step sizes)
     joint_space_column_bytes: int = 0
+    #: columns of the joint flexibility computed as steps needed them (above JOINT_SPACE_MAX unknowns),
+    #: and the seconds they took
+    joint_space_flexibility_columns: int = 0
+    joint_space_flexibility_s: float = 0.0
     #: the solvers of the all-stick effective matrices: "ldlt", "pardiso" or "superlu"
     reference_solvers: set = field(default_factory=set)
     per_stage: list = field(default_factory=list)
@@ -909,6 +915,8 @@ class DynamicSolver:
                         self.stats.joint_space_dense_updates += js.updates
                         self.stats.joint_space_holds += js.hold_events
                         self.stats.joint_space_column_recoveries += js.column_recoveries
+                        self.stats.joint_space_flexibility_columns += js.columns.computed
+                        self.stats.joint_space_flexibility_s += js.columns.seconds
                     self.stats.joint_space_column_bytes = max(
                         self.stats.joint_space_column_bytes,
                         sum(js.XT.nbytes for js in self._js_by_h.values() if js.XT is not None))
@@ -927,27 +935,31 @@ class DynamicSolver:
         if s.joint_space == "off" or not m.nonlinear:
             return
         size = joint_space_size(m)
-        if s.joint_space == "auto" and size > JOINT_SPACE_MAX:
-            return
         self._new_joint_space(ref, s.dt)
         self.stats.joint_space_size = size
 
     def _new_joint_space(self, ref, h):
         t0 = time.perf_counter()
-        # the stored recovery columns (n_eq x m) only at the nominal step size: sub-steps are rare
-        js = self._js_by_h[h] = JointSpace(self.model, ref.fact, store_columns=h == self.s.dt)
+        # the stored recovery columns (n_eq x m) only at the nominal step size, and a quarter of the
+        # memory for flexibility columns at a sub-step size: sub-steps are rare
+        nominal = h == self.s.dt
+        js = self._js_by_h[h] = JointSpace(self.model, ref.fact, store_columns=nominal,
+                                           column_memory_share=1.0 if nominal else 0.25)
         self.stats.joint_space_setup_s += time.perf_counter() - t0
         return js
 
     def _joint_space_for(self, h):
         """The joint-space system of step size h: the nominal one, or one of a sub-step size (its
-        all-stick matrix factorized and pinned, and its flexibility set up, when first needed)."""
+        all-stick matrix factorized and pinned, and its flexibility set up, when first needed; not
+        for a large joint set, whose sub-steps take the general path, see :meth:`_implicit_try`)."""
         if not self._js_by_h:
             return None
         js = self._js_by_h.get(h)
         if js is None:
             if not any(h == self.s.dt / 2 ** k for k in range(1, self.s.max_substeps + 1)):
                 return None  # e.g. a shorter last step of the stage: not worth a set-up
+            if self._js_by_h[self.s.dt].columns.lazy:
+                return None
             ref = self.eff.factorize(self._elastic_eff(h), pin=True, key=("elastic", h), symmetric=True)
             js = self._new_joint_space(ref, h)
         return js
@@ -1145,9 +1157,14 @@ class DynamicSolver:
                     converged = converged and float(np.linalg.norm(R)) <= s.force_tolerance * ref
                 if converged:
                     self.stats.joint_space_steps += 1
-                elif can_split:
+                elif can_split and not js.columns.lazy:
                     # halve the step (the joint-space systems of the halves are set up once): cheaper
-                    # than finishing it in the general path, which refactorizes at state changes
+                    # than finishing it in the general path, which refactorizes at state changes. Not
+                    # with a large joint set (flexibility columns computed as needed): a sub-step size
+                    # would need its own L D L^T and thousands of columns (7 s and 5 000 columns on
+                    # the 3D dam example at element_size 6), and a step that needed more columns than
+                    # the store holds would need about as many halved; the general path goes on from
+                    # the last joint-space iterate instead
                     self.stats.joint_space_splits += 1
                     return False, None, f"the joint-space iteration did not converge ({why})"
                 else:

@@ -48,6 +48,8 @@ against the full residual of the step.
 """
 from __future__ import annotations
 
+import time
+
 import numpy as np
 import scipy.sparse as sp
 from scipy.linalg.lapack import dgetrf
@@ -58,7 +60,7 @@ from .dynamic_kernels import STATUS_SINGULAR
 from .joint_space_kernels import (active_components, add_flexibility_product, apply_correction, capacitance_assemble,
                                   capacitance_update_solve, joint_points_evaluate, joint_space_correction,
                                   joint_space_evaluate_residual, joint_space_reevaluate_points,
-                                  state_key, subtract_columns_product)
+                                  STATUS_MISSING_COLUMNS, condensed_residual, state_key, subtract_columns_product)
 
 #: largest number of joint components (points x dim) condensed by ``joint_space = "auto"``: the dense
 #: flexibility takes 8 m^2 bytes (288 MB at 6 000) and m substitutions to set up
@@ -82,6 +84,14 @@ UPDATE_CHANGE_FRACTION = 40
 LINE_SEARCH_STEPS = (1.0, 0.5, 0.25)
 #: columns of ``K_ref^-1 B^T`` computed per multi-right-hand-side substitution while setting up S
 _COLUMN_BLOCK = 256
+#: above JOINT_SPACE_MAX joint unknowns the columns of S are computed when an iteration first needs
+#: them (the components that slide or open, and those whose force changed) and kept in a store of at
+#: most this many bytes (8 m bytes a column); see :class:`FlexibilityColumns`
+FLEXIBILITY_MEMORY_MAX = 2 * 2**30
+#: a fetch of fewer columns than this is filled up to it with neighbours (not yet stored) of the
+#: columns asked for (:meth:`FlexibilityColumns._neighbours`): a block of 32 costs about what 4 do
+#: (the substitution is bound by reading the factor); 128 gave no gain on the 8 x 4 m wall
+PREFETCH_COLUMNS = 32
 #: the columns ``X = K_ref^-1 B_f^T`` (n_eq, m) of the set-up are kept (as ``XT``, 8 n_eq m bytes) when
 #: they take at most this many bytes: then a converged step recovers its displacements as
 #: ``u = y - X dq`` from the few nonzero entries of ``dq`` instead of a second substitution
@@ -100,7 +110,7 @@ RECOVERY_COLUMNS_MIN = 64
 SINGULAR_PIVOT = 1e-14
 
 
-def capacitance_lu(ST, rows, qt):
+def capacitance_lu(ST, slot, rows, qt):
     """``(status, J, piv)``: LU factors of the capacitance matrix ``I + Qt_a S_:a`` of the active
     components ``rows`` (see :func:`.joint_space_kernels.capacitance_assemble`), in ``J`` (na, na),
     Fortran order, with the 0-based row swaps ``piv`` (na,) int64 in LAPACK's order, for
@@ -115,7 +125,7 @@ def capacitance_lu(ST, rows, qt):
     na = rows.shape[0]
     J = np.empty((na, na), order="F")
     scale = np.zeros(1)
-    st = capacitance_assemble(ST, rows, qt, J, scale)
+    st = capacitance_assemble(ST, slot, rows, qt, J, scale)
     if st != STATUS_OK:
         return st, J, np.zeros(na, dtype=np.int64)
     J, piv, info = dgetrf(J, overwrite_a=1)
@@ -177,6 +187,113 @@ def joint_operator(model) -> tuple[sp.csr_matrix, np.ndarray, np.ndarray, np.nda
             np.ascontiguousarray(np.concatenate(index), dtype=np.int64))
 
 
+class ColumnStoreFull(Exception):
+    """A step needs more columns of the joint flexibility than :class:`FlexibilityColumns` can hold."""
+
+
+class FlexibilityColumns:
+    """Columns of the joint flexibility ``S = B_f K_ref^-1 B_f^T`` (m x m, m/N), as rows of ``ST``
+    (capacity, m) with ``slot`` (m,) int64 (column ``j`` is ``ST[slot[j]]``, ``-1``: not stored; the
+    layout of :mod:`.joint_space_kernels`).
+
+    Why: the dense S takes ``8 m^2`` bytes and ``m`` substitutions to set up (4.7 GB and about 24 000
+    substitutions for the 3D dam of ``examples/dam_3d_gravity.toml``), but an iteration reads only
+    the columns of the components that slide or open and of those whose joint force changed: a
+    step whose joints all stick reads none. With ``lazy`` (the joint space's choice above
+    :data:`JOINT_SPACE_MAX` unknowns) a column is computed (multi-right-hand-side substitutions in
+    blocks of :data:`_COLUMN_BLOCK`) the first time :meth:`ensure` asks for it, and kept across
+    steps (``K_ref`` does not change); when the store is full, the columns used longest ago (not in
+    the current step, see :meth:`new_step`) make room, and a step that needs more columns than the
+    store holds raises :class:`ColumnStoreFull`.
+
+    fact : ``solve(b)`` for ``K_ref`` (a vector or an (n_eq, k) block); Bf : CSR (m, n_eq) and
+    Bf_T : CSC (n_eq, m), ``B`` on the free DOFs; capacity : columns held when ``lazy``; not
+    ``lazy``: all ``m`` columns, computed at once, and XT : None, or an (m, n_eq) array that receives
+    the columns of ``X = K_ref^-1 B_f^T`` as its rows.
+    """
+
+    def __init__(self, fact, Bf, Bf_T, capacity, lazy, XT=None):
+        m = Bf.shape[0]
+        self.fact, self.Bf, self.Bf_T, self.m = fact, Bf, Bf_T, m
+        self.capacity = capacity = int(min(capacity, m)) if lazy else m
+        self.lazy = lazy
+        self.ST = np.empty((capacity, m))
+        self.slot = np.full(m, -1, dtype=np.int64)
+        #: column held by each row of ST (-1: free), and the step that last used it
+        self.owner = np.full(capacity, -1, dtype=np.int64)
+        self.stamp = np.zeros(capacity, dtype=np.int64)
+        self.epoch = 0
+        self.n_free = capacity
+        #: columns computed by :meth:`ensure` (lazy store; statistics), and the seconds that took
+        self.computed = 0
+        self.seconds = 0.0
+        if not self.lazy:
+            self._compute(np.arange(m, dtype=np.int64), np.arange(m, dtype=np.int64), XT)
+
+    def _compute(self, cols, slots, XT=None):
+        """Columns ``cols`` of S into the rows ``slots`` of ST (and of X into XT's rows ``cols``)."""
+        n_eq = self.Bf_T.shape[0]
+        for k0 in range(0, len(cols), _COLUMN_BLOCK):
+            c, r = cols[k0:k0 + _COLUMN_BLOCK], slots[k0:k0 + _COLUMN_BLOCK]
+            X = np.asarray(self.fact.solve(self.Bf_T[:, c].toarray())).reshape(n_eq, len(c))
+            self.ST[r] = (self.Bf @ X).T
+            if XT is not None:
+                XT[c] = X.T
+        self.slot[cols] = slots
+        self.owner[slots] = cols
+
+    def new_step(self):
+        """Columns used from now on belong to a new step (those of earlier steps may be evicted)."""
+        self.epoch += 1
+
+    def ensure(self, cols):
+        """Make the columns ``cols`` (int array, any order, repeats allowed) available in ``ST``;
+        raises :class:`ColumnStoreFull` when the current step would need more than ``capacity``."""
+        if not self.lazy or len(cols) == 0:
+            return
+        slots = self.slot[cols]
+        self.stamp[slots[slots >= 0]] = self.epoch
+        missing = np.unique(cols[slots < 0])
+        if len(missing) == 0:
+            return
+        if len(missing) > self.n_free:
+            # evict the columns used longest ago, none of the current step's
+            old = np.flatnonzero((self.owner >= 0) & (self.stamp < self.epoch))
+            need = len(missing) - self.n_free
+            if len(old) < need:
+                raise ColumnStoreFull(f"the step needs more than {self.capacity} columns of the joint flexibility "
+                                      f"(FLEXIBILITY_MEMORY_MAX = {FLEXIBILITY_MEMORY_MAX} bytes)")
+            out = old[np.argsort(self.stamp[old], kind="stable")[:need]]
+            self.slot[self.owner[out]] = -1
+            self.owner[out] = -1
+            self.n_free += need
+        n_new = len(missing)
+        extra = self._neighbours(missing, min(PREFETCH_COLUMNS, self.n_free) - n_new)
+        cols_new = np.concatenate([missing, extra])
+        free = np.flatnonzero(self.owner < 0)[:len(cols_new)]
+        t0 = time.perf_counter()
+        self._compute(cols_new, free)
+        self.seconds += time.perf_counter() - t0
+        self.computed += len(cols_new)
+        self.stamp[free[:n_new]] = self.epoch
+        self.stamp[free[n_new:]] = self.epoch - 1  # fetched ahead: evictable within this step
+        self.n_free -= len(cols_new)
+
+    def _neighbours(self, cols, count):
+        """Up to ``count`` columns not stored, nearest first in the joint-point order to ``cols``: the
+        points of a joint set are numbered along it, and a crack or a slip runs along a joint, so the
+        next step tends to need the neighbours of the columns it needs now."""
+        if count <= 0:
+            return np.zeros(0, dtype=np.int64)
+        offsets = np.stack([np.arange(1, PREFETCH_COLUMNS + 1), -np.arange(1, PREFETCH_COLUMNS + 1)], axis=1).ravel()
+        cand = (cols[None, :] + offsets[:, None]).ravel()
+        cand = cand[(cand >= 0) & (cand < self.m)]
+        cand = cand[self.slot[cand] < 0]
+        cand = cand[~np.isin(cand, cols)]
+        _, first = np.unique(cand, return_index=True)
+        return cand[np.sort(first)[:count]]
+
+
 class JointSpace:
     """The condensed joint-space system of one reference factorization (one step size).
 
@@ -184,10 +301,12 @@ class JointSpace:
     with ``solve(b)`` for ``K_ref`` on the free DOFs (a vector or an (n_eq, k) block) and, to allow the
     recovery from stored columns, ``nnz_factor`` (entries of its triangular factor);
     store_columns : keep ``X = K_ref^-1 B_f^T`` for the recovery of the displacements of a step (see
-    :data:`RECOVERY_MEMORY_MAX`; the dynamic solver asks for it at the nominal step size only).
+    :data:`RECOVERY_MEMORY_MAX`; the dynamic solver asks for it at the nominal step size only);
+    column_memory_share : the store of flexibility columns above JOINT_SPACE_MAX unknowns takes at most
+    this fraction of :data:`FLEXIBILITY_MEMORY_MAX` bytes.
     """
 
-    def __init__(self, model, factorization, store_columns=True):
+    def __init__(self, model, factorization, store_columns=True, column_memory_share=1.0):
         self.model = model
         self.dim = dim = model.dim
         self.groups = [g for g in model.igroups if g.nonlinear]
@@ -198,27 +317,24 @@ class JointSpace:
         free = model.dofmap.free
         self.fact = factorization
         Bf_T = self.B[:, free].T.tocsc()  # (n_eq, m)
-        # ST[j] = column j of S = B_f K_ref^-1 B_f^T (K_ref is symmetric, so S is too; ST is kept as
-        # the transpose anyway, so that nothing depends on it)
-        self.ST = np.empty((m, m))
         n_eq = len(free)
         nnz_factor = getattr(factorization, "nnz_factor", 0)
+        #: the store is dense (every column computed now) up to JOINT_SPACE_MAX unknowns, else lazy
+        lazy = m > JOINT_SPACE_MAX
+        capacity = max(1, int(column_memory_share * FLEXIBILITY_MEMORY_MAX) // (8 * m)) if lazy else m
         #: (m, n_eq) the transpose of X = K_ref^-1 B_f^T, or None (not kept: too big, not asked for, or a
         #: factorization that does not report its fill)
         self.XT = None
         #: largest number of nonzero entries of dq recovered from XT (above it: a substitution)
         self.recovery_columns_max = 0
-        if store_columns and nnz_factor and 8 * n_eq * m <= RECOVERY_MEMORY_MAX:
+        if store_columns and nnz_factor and not lazy and 8 * n_eq * m <= RECOVERY_MEMORY_MAX:
             self.XT = np.empty((m, n_eq))
             self.recovery_columns_max = max(RECOVERY_COLUMNS_MIN,
                                             int(RECOVERY_COLUMNS_PER_FILL * nnz_factor / max(n_eq, 1)))
-        Bf = self.B[:, free].tocsr()
-        for j0 in range(0, m, _COLUMN_BLOCK):
-            j1 = min(m, j0 + _COLUMN_BLOCK)
-            X = np.asarray(factorization.solve(Bf_T[:, j0:j1].toarray(order="F"))).reshape(n_eq, j1 - j0)
-            self.ST[j0:j1] = (Bf @ X).T
-            if self.XT is not None:
-                self.XT[j0:j1] = X.T
+        # columns of S = B_f K_ref^-1 B_f^T (K_ref is symmetric, so S is too; ST is kept as the
+        # transpose anyway, so that nothing depends on it)
+        self.columns = FlexibilityColumns(factorization, self.B[:, free].tocsr(), Bf_T, capacity, lazy, self.XT)
+        self.ST, self.slot = self.columns.ST, self.columns.slot
         self._u_free = np.empty(n_eq)
         self.Bf_T = Bf_T.tocsr()
         P, ns = self.n_points, mc.N_JOINT_STATE
@@ -274,17 +390,24 @@ class JointSpace:
     def _evaluate(self, delta, delta_y, q_n):
         """The joint law at ``delta`` (into the point arrays), the condensed residual ``self.F`` there and
         its force error ``|W D0 F|`` (N), which is returned."""
-        self._raise_on(joint_space_evaluate_residual(
+        st = joint_space_evaluate_residual(
             self.params_table, self.param_index, self.weight, delta, self.base, self.trial, self.traction, self.q,
-            self.qt, self.codes, self.info, self.held, self.ST, delta_y, q_n, self.wk, self.F, self._err))
+            self.qt, self.codes, self.info, self.held, self.ST, self.slot, delta_y, q_n, self.wk, self.F, self._err)
+        if st == STATUS_MISSING_COLUMNS:  # fetch the columns of the forces that changed, then the residual
+            self.columns.ensure(np.flatnonzero((self.q != q_n).ravel()))
+            st = condensed_residual(delta, delta_y, self.q, q_n, self.ST, self.slot, self.wk, self.F, self._err,
+                                    self.info)
+        self._raise_on(st)
         return float(self._err[0])
 
     def _reevaluate(self, points, delta):
         """The law again at ``points`` only (their held flag changed; ``delta`` unchanged), ``self.F`` updated
         by the change of their joint forces; returns the force error (see :meth:`_evaluate`)."""
+        points = points.astype(np.int64)
+        self.columns.ensure((points[:, None] * self.dim + np.arange(self.dim)).ravel())
         self._raise_on(joint_space_reevaluate_points(
-            points.astype(np.int64), self.params_table, self.param_index, self.weight, delta, self.base, self.trial,
-            self.traction, self.q, self.qt, self.codes, self.info, self.held, self.ST, self.wk, self.F, self._err))
+            points, self.params_table, self.param_index, self.weight, delta, self.base, self.trial, self.traction,
+            self.q, self.qt, self.codes, self.info, self.held, self.ST, self.slot, self.wk, self.F, self._err))
         return float(self._err[0])
 
     def _raise_on(self, status):
@@ -334,27 +457,31 @@ class JointSpace:
         size of the union), else with a new LU, which becomes the reference. Returns a status."""
         na = len(rows)
         if na == 0:  # initial stiffness everywhere: D = -F (the reference LU is kept)
-            return apply_correction(self.ST, self.F, rows, self.z, self.step)
+            return apply_correction(self.ST, self.slot, self.F, rows, self.z, self.step)
+        self.columns.ensure(rows)
         if self.z.shape[0] < na:
             self.z = np.zeros(max(na, 2 * self.z.shape[0], 16))
         key = rows.tobytes() + qt_rows.tobytes()
         if key == self._lu_key:
-            return joint_space_correction(self.ST, self.F, rows, self.qt, self.J, self.piv, self.z, self.step)
+            return joint_space_correction(self.ST, self.slot, self.F, rows, self.qt, self.J, self.piv, self.z,
+                                          self.step)
         if self._ref is not None:
             ref_rows, ref_qt = self._ref
             max_changes = max(UPDATE_MIN_CHANGES, (len(ref_rows) + na) // UPDATE_CHANGE_FRACTION)
-            st = capacitance_update_solve(self.ST, ref_rows, ref_qt, self.J, self.piv, rows, qt_rows, self.F,
+            self.columns.ensure(ref_rows)
+            st = capacitance_update_solve(self.ST, self.slot, ref_rows, ref_qt, self.J, self.piv, rows, qt_rows, self.F,
                                           max_changes, self.z)
             if st == STATUS_OK:
                 self.updates += 1
-                return apply_correction(self.ST, self.F, rows, self.z, self.step)
+                return apply_correction(self.ST, self.slot, self.F, rows, self.z, self.step)
         self._lu_key, self._ref = None, None
-        st, self.J, self.piv = capacitance_lu(self.ST, rows, self.qt)
+        st, self.J, self.piv = capacitance_lu(self.ST, self.slot, rows, self.qt)
         if st != STATUS_OK:
             return st
         self._lu_key, self._ref = key, (rows, qt_rows)
         self.factorizations += 1
-        return joint_space_correction(self.ST, self.F, rows, self.qt, self.J, self.piv, self.z, self.step)
+        return joint_space_correction(self.ST, self.slot, self.F, rows, self.qt, self.J, self.piv, self.z,
+                                      self.step)
 
     def _state_key(self):
         """Per point: state code and the sign of the first shear traction (a friction direction that
@@ -365,10 +492,15 @@ class JointSpace:
 
     def solve_step(self, u_n, R_n, force_tolerance, initial_stiffness_iterations=None):
         """Solve one step in joint space (see :meth:`_solve_step`); no point is held on entry, and none is
-        left held on any exit (return, non-convergence, NaN or an exception)."""
+        left held on any exit (return, non-convergence, NaN or an exception). A step that needs more
+        columns of S than the store holds (:class:`ColumnStoreFull`) returns ``(None, 0, False, why)``."""
         self.held[:] = 0
+        self.columns.new_step()
         try:
             return self._solve_step(u_n, R_n, force_tolerance, initial_stiffness_iterations)
+        except ColumnStoreFull as exc:  # the groups' states are untouched until a u is returned
+            self._lu_key, self._ref, self._dq_last = None, None, None
+            return None, 0, False, str(exc)
         finally:
             self.held[:] = 0
 
@@ -422,7 +554,8 @@ class JointSpace:
             # start from the joint forces changing as in the last step (a joint sliding on keeps
             # sliding at about the same rate): delta = delta_y - S dq_last, if that is closer
             s_dq = np.zeros(self.m)
-            add_flexibility_product(self.ST, self._dq_last, s_dq)
+            self.columns.ensure(np.flatnonzero(self._dq_last))
+            add_flexibility_product(self.ST, self.slot, self._dq_last, s_dq)
             trial = delta - s_dq
             at_predictor = self._snapshot()
             e_trial = self._evaluate(trial, delta_y, q_n)

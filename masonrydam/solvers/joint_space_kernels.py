@@ -2,8 +2,11 @@
 
 Notation (see that module): the ``P`` joint integration points of the nonlinear joint sets, each with
 ``dim`` local relative-displacement components, give ``m = P * dim`` joint unknowns ``delta``
-(local frame, m). ``ST`` (m, m) is the transpose of the joint flexibility ``S = B K_ref^-1 B^T`` (m/N),
-stored so that a column of ``S`` is a contiguous row of ``ST``. ``q`` (P, dim) is the joint force
+(local frame, m). Columns of the joint flexibility ``S = B K_ref^-1 B^T`` (m/N) are rows of ``ST``
+(k, m), so that a column is contiguous: column ``j`` of ``S`` is ``ST[slot[j]]``, with ``slot`` (m,)
+int64 (``slot = arange(m)`` when every column is stored; ``-1`` for a column not in the store, which
+no kernel reads: :class:`~masonrydam.solvers.joint_space.FlexibilityColumns` fetches the columns a
+call needs first). ``q`` (P, dim) is the joint force
 correction ``w (t - D0 delta)`` (N) and ``qt`` (P, dim, dim) its derivative ``w (C - D0)`` (N/m), with
 ``w`` the point's tributary area (m^2), ``D0 = diag(ks, [ks,] kn)`` and ``t``, ``C`` the traction and
 tangent of the joint law.
@@ -25,6 +28,12 @@ from ..materials.mohr_coulomb import (P_COHESION, P_KN, P_KS, P_KS_RESIDUAL, P_O
 from .dynamic_kernels import lu_factor_inplace, lu_forward_inplace, lu_solve_inplace
 from .ldlt_kernels import UNSIGNED
 
+#: more rows changed than allowed for an update of the reference LU: refactorize instead
+STATUS_TOO_MANY_CHANGES = 5
+#: the residual needs a column of S that is not in the store (slot -1): nothing written to F
+STATUS_MISSING_COLUMNS = 6
+
+
 @numba.njit(cache=True, inline="always")
 def _add_scaled(out, row, v):
     """``out += v row`` (both (n,)): one column of S or X (a contiguous row of its transpose)."""
@@ -42,10 +51,12 @@ def _finite_status(x):
 
 
 @numba.njit(cache=True)
-def _law_at_points(points, n, params_table, param_index, weight, delta, state_base, state_trial, traction, q, qt,
-                   codes, info, held):
+def joint_law_at_points(points, n, params_table, param_index, weight, delta, state_base, state_trial, traction, q,
+                        qt, codes, info, held):
     """The joint law at the points ``points[:n]``, or at the points ``0 .. n-1`` when ``points`` is empty
-    (see :func:`joint_points_evaluate` for the arrays). One call for all the points: the law
+    (see :func:`joint_points_evaluate` for the arrays). The only kernel that contains the law: the
+    residual kernels take its results (compiled once, the law costs about 1.4 s of the first run;
+    inside each residual kernel it was compiled again). One call for all the points: the law
     (:func:`~masonrydam.materials.mohr_coulomb.mohr_coulomb_point`) gets scalars read here, because a
     per-point helper that takes the arrays (or row views of them) pays reference counts per point
     that cost several times the law (588 points: 52 us that way, about 8 us in one loop).
@@ -104,7 +115,9 @@ def _law_at_points(points, n, params_table, param_index, weight, delta, state_ba
     return STATUS_OK
 
 
-@numba.njit(cache=True)
+_ALL_POINTS = np.zeros(0, dtype=np.int64)
+
+
 def joint_points_evaluate(params_table, param_index, weight, delta, state_base, state_trial, traction, q, qt,
                           codes, info, held):
     """Joint law at every point for the local relative displacements ``delta`` (P, dim), from
@@ -118,8 +131,8 @@ def joint_points_evaluate(params_table, param_index, weight, delta, state_base, 
     ``D0 (delta - s_p)``, committed state otherwise (an iteration device of
     :meth:`~masonrydam.solvers.joint_space.JointSpace.solve_step`, never a converged state). Returns
     STATUS_OK, or STATUS_NAN with the point in ``info[0]``."""
-    return _law_at_points(np.zeros(0, dtype=np.int64), delta.shape[0], params_table, param_index, weight, delta,
-                          state_base, state_trial, traction, q, qt, codes, info, held)
+    return joint_law_at_points(_ALL_POINTS, delta.shape[0], params_table, param_index, weight, delta, state_base,
+                               state_trial, traction, q, qt, codes, info, held)
 
 
 @numba.njit(cache=True)
@@ -144,30 +157,35 @@ def _force_norm(wk, F, err, info):
     return STATUS_OK
 
 
-@numba.njit(cache=True)
 def joint_space_reevaluate_points(points, params_table, param_index, weight, delta, state_base, state_trial, traction,
-                                  q, qt, codes, info, held, ST, wk, F, err):
+                                  q, qt, codes, info, held, ST, slot, wk, F, err):
     """The joint law again at the listed ``points`` (k,) int64, distinct, only - the others and ``delta`` unchanged,
     e.g. after their ``held`` flag changed - with the condensed residual updated by the change of
     their joint forces, ``F += S (q_new - q_old)`` (columns of those points), and its norm ``err[0]``.
     Equals :func:`joint_space_evaluate_residual` at the same arguments up to round-off, at the cost
     of ``k`` points instead of all. Same arguments and statuses."""
     dim = q.shape[1]
-    n = points.shape[0]
-    q_old = np.empty((n, dim))
-    for k in range(n):
-        for c in range(dim):
-            q_old[k, c] = q[points[k], c]
-    st = _law_at_points(points, n, params_table, param_index, weight, delta.reshape(-1, dim), state_base,
-                        state_trial, traction, q, qt, codes, info, held)
+    q_old = q[points]
+    st = joint_law_at_points(points, points.shape[0], params_table, param_index, weight, delta.reshape(-1, dim),
+                             state_base, state_trial, traction, q, qt, codes, info, held)
     if st != STATUS_OK:
         return st
+    return add_point_force_changes(points, q, q_old, ST, slot, wk, F, err, info)
+
+
+@numba.njit(cache=True)
+def add_point_force_changes(points, q, q_old, ST, slot, wk, F, err, info):
+    """``F += S (q[points] - q_old)`` (columns of those points' components) and ``err[0] = |wk * F|``:
+    the residual update of :func:`joint_space_reevaluate_points`; ``q_old`` (k, dim) the forces of
+    ``points`` before the law was evaluated there again. Returns STATUS_OK or STATUS_NAN."""
+    dim = q.shape[1]
+    n = points.shape[0]
     for k in range(n):
         p = points[k]
         for c in range(dim):
             v = q[p, c] - q_old[k, c]
             if v != 0.0:
-                _add_scaled(F, ST[p * dim + c], v)
+                _add_scaled(F, ST[slot[p * dim + c]], v)
     return _force_norm(wk, F, err, info)
 
 
@@ -207,12 +225,12 @@ def state_key(codes, traction, key):
 
 
 @numba.njit(cache=True)
-def add_flexibility_product(ST, dq, F):
+def add_flexibility_product(ST, slot, dq, F):
     """``F += S dq`` (both flat (m,)): one column of ``S`` (a contiguous row of ``ST``) per nonzero
     entry of ``dq``, which is nonzero only where a point's joint force changed."""
     for j in range(F.shape[0]):
         if dq[j] != 0.0:
-            _add_scaled(F, ST[j], dq[j])
+            _add_scaled(F, ST[slot[j]], dq[j])
 
 
 @numba.njit(cache=True)
@@ -227,7 +245,7 @@ def subtract_columns_product(XT, cols, vals, out):
 
 
 @numba.njit(cache=True)
-def capacitance_assemble(ST, rows, qt, J, scale):
+def capacitance_assemble(ST, slot, rows, qt, J, scale):
     """The capacitance matrix ``I + Qt_a S_:a`` into ``J`` (na, na), ``na = len(rows)``, Fortran order
     (LAPACK then factorizes it in place; a column of ``J`` is filled contiguously from one contiguous
     row of ``ST``).
@@ -247,7 +265,7 @@ def capacitance_assemble(ST, rows, qt, J, scale):
         for d in range(dim):
             qa[i, d] = qt[p, c, d]
     for j in range(na):
-        rj = ST[rows[j]]
+        rj = ST[slot[rows[j]]]
         for i in range(na):
             b = base[i]
             acc = 0.0
@@ -283,7 +301,7 @@ def lu_solve_colmajor(A, piv, w):
 
 
 @numba.njit(cache=True)
-def joint_space_correction(ST, F, rows, qt, J, piv, z, step):
+def joint_space_correction(ST, slot, F, rows, qt, J, piv, z, step):
     """Newton correction ``D`` of the condensed system ``delta + S q(delta) = const``, written to ``step`` (m,).
 
     With ``z = Qt_a D`` on the components ``rows`` where ``Qt`` has a nonzero row (the other
@@ -302,11 +320,9 @@ def joint_space_correction(ST, F, rows, qt, J, piv, z, step):
             acc += qt[p, c, d] * F[p * dim + d]
         w[i] = -acc
     lu_solve_colmajor(J, piv, w)
-    return apply_correction(ST, F, rows, w, step)
+    return apply_correction(ST, slot, F, rows, w, step)
 
 
-#: more rows changed than allowed for an update of the reference LU: refactorize instead
-STATUS_TOO_MANY_CHANGES = 5
 
 
 @numba.njit(cache=True)
@@ -336,7 +352,7 @@ def _apply_ref_inverse(Jref, piv, ref_rows_n, JRN, posR, nN_idx, v, x):
 
 
 @numba.njit(cache=True)
-def capacitance_update_solve(ST, ref_rows, ref_qt, Jref, piv, rows, qt_rows, F, max_changes, z):
+def capacitance_update_solve(ST, slot, ref_rows, ref_qt, Jref, piv, rows, qt_rows, F, max_changes, z):
     """Solve ``(I + Qt_c S_:c) z = -Qt_c F`` for the current active components ``rows`` (sorted, with
     their rows of Qt in ``qt_rows`` (nc, dim)) from the LU (``Jref``, ``piv``) of the capacitance
     matrix of reference components ``ref_rows`` (sorted; ``ref_qt`` (nr, dim)).
@@ -405,7 +421,7 @@ def capacitance_update_solve(ST, ref_rows, ref_qt, Jref, piv, rows, qt_rows, F, 
             k += 1
     JRN = np.empty((nr, nN))
     for kk in range(nN):  # one contiguous row of ST per column, read in increasing order
-        col = ST[U[N_idx[kk]]]
+        col = ST[slot[U[N_idx[kk]]]]
         for ii in range(nr):
             b = (ref_rows[ii] // dim) * dim
             acc = 0.0
@@ -435,7 +451,7 @@ def capacitance_update_solve(ST, ref_rows, ref_qt, Jref, piv, rows, qt_rows, F, 
             Y[kk, u] = col_out[u]
     W = np.empty((nd, nU))
     for u in range(nU):  # one contiguous row of ST per column of W
-        col = ST[U[u]]
+        col = ST[slot[U[u]]]
         for kk in range(nd):
             b = (U[D[kk]] // dim) * dim
             acc = 0.0
@@ -474,33 +490,43 @@ def capacitance_update_solve(ST, ref_rows, ref_qt, Jref, piv, rows, qt_rows, F, 
 
 
 @numba.njit(cache=True)
-def apply_correction(ST, F, rows, z, step):
+def apply_correction(ST, slot, F, rows, z, step):
     """``step = -F - S_:a z`` (m,) for the components ``rows`` and their ``z``; STATUS_OK or STATUS_NAN."""
     for i in range(F.shape[0]):
         step[i] = -F[i]
     for j in range(rows.shape[0]):
         if z[j] != 0.0:
-            _add_scaled(step, ST[rows[j]], -z[j])
+            _add_scaled(step, ST[slot[rows[j]]], -z[j])
     return _finite_status(step)
 
 
-@numba.njit(cache=True)
 def joint_space_evaluate_residual(params_table, param_index, weight, delta, state_base, state_trial, traction, q, qt,
-                                  codes, info, held, ST, delta_y, q_n, wk, F, err):
+                                  codes, info, held, ST, slot, delta_y, q_n, wk, F, err):
     """The joint law at ``delta`` (:func:`joint_points_evaluate`, same arguments and outputs) and then the
     condensed residual ``F = delta - delta_y + S (q - q_n)`` (:func:`add_flexibility_product`; only the
-    points whose ``q`` changed contribute) and its force norm ``err[0] = |wk * F|`` (N), in one pass
-    from Python. ``delta``, ``delta_y``, ``wk``, ``F`` flat (m,); ``q_n`` (P, dim). Returns the law's
-    status (a NaN of the law with its point in ``info[0]``), or STATUS_NAN with ``info[0] = -1`` for a
-    non-finite residual."""
-    dim = q.shape[1]
-    n_pts = q.shape[0]
-    st = joint_points_evaluate(params_table, param_index, weight, delta.reshape(n_pts, dim), state_base, state_trial,
+    points whose ``q`` changed contribute) and its force norm ``err[0] = |wk * F|`` (N): two kernels,
+    :func:`joint_law_at_points` and :func:`condensed_residual`. ``delta``, ``delta_y``, ``wk``, ``F`` flat (m,); ``q_n`` (P, dim). Returns the law's
+    status (a NaN of the law with its point in ``info[0]``), STATUS_NAN with ``info[0] = -1`` for a
+    non-finite residual, or STATUS_MISSING_COLUMNS (the law evaluated, ``F`` untouched) when a
+    component whose ``q`` changed has no column in the store: the caller fetches the columns of the
+    nonzero entries of ``q - q_n`` and calls again."""
+    st = joint_points_evaluate(params_table, param_index, weight, delta.reshape(q.shape), state_base, state_trial,
                                traction, q, qt, codes, info, held)
     if st != STATUS_OK:
         return st
+    return condensed_residual(delta, delta_y, q, q_n, ST, slot, wk, F, err, info)
+
+
+@numba.njit(cache=True)
+def condensed_residual(delta, delta_y, q, q_n, ST, slot, wk, F, err, info):
+    """``F = delta - delta_y + S (q - q_n)`` and ``err[0] = |wk * F|`` from the law's ``q`` (the residual
+    part of :func:`joint_space_evaluate_residual`, same arguments and statuses)."""
+    dq = (q - q_n).ravel()
     m = F.shape[0]
+    for j in range(m):
+        if dq[j] != 0.0 and slot[j] < 0:
+            return STATUS_MISSING_COLUMNS
     for i in range(m):
         F[i] = delta[i] - delta_y[i]
-    add_flexibility_product(ST, (q - q_n).ravel(), F)
+    add_flexibility_product(ST, slot, dq, F)
     return _force_norm(wk, F, err, info)

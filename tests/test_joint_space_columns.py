@@ -5,12 +5,11 @@ not set up; :class:`~masonrydam.solvers.joint_space.FlexibilityColumns` computes
 iteration reads and keeps them in a bounded store. These tests check that the columns are those of
 ``S``, that the store evicts the columns used longest ago and refuses a step that needs more than it
 holds, and that runs with the store give the histories of the dense flexibility and the closed form
-of reference problem 1 (Newmark 1965), also when the store is too small for a step (the step is
-halved and finished by the general Newton path instead).
+of reference problem 1 (Newmark 1965), also when the store is too small to keep every column (the
+oldest are evicted and computed again) or too small for a step (the step goes on in the general
+Newton path).
 """
 from __future__ import annotations
-
-import math
 
 import numpy as np
 import pytest
@@ -20,6 +19,7 @@ import masonrydam
 from masonrydam.solvers import joint_space as js_module
 from masonrydam.solvers import static as static_module
 from masonrydam.solvers.joint_space import ColumnStoreFull, FlexibilityColumns
+from test_dynamics import sliding_scene  # reference problem 1: a block on a joint with mu = 0.2, a 0.2 s pulse
 
 G = 9.80665
 
@@ -99,24 +99,6 @@ def test_a_small_fetch_brings_the_neighbours_which_stay_evictable(monkeypatch):
     assert (cols.slot[4] < 0) != (cols.slot[6] < 0)
 
 
-def _sliding_scene(duration=0.4, amplitude=0.4 * G, mu=0.2):
-    """Reference problem 1: a block on a Mohr-Coulomb joint (mu = 0.2) under a rectangular pulse."""
-    return {
-        "model": {"name": "sliding_block", "thickness": 1.0},
-        "mesh": {"generator": "blocks_2d", "parameters": {"blocks": [
-            {"x0": 0, "y0": 0, "x1": 2, "y1": 0.25, "group": "base"},
-            {"x0": 0, "y0": 0.25, "x1": 2, "y1": 0.75, "group": "block"}], "element_size": 0.25}},
-        "materials": {g: {"youngs_modulus": 30e9, "poisson_ratio": 0.2, "density": 2000} for g in ("base", "block")},
-        "joints": {"joints": {"normal_stiffness": 1e10, "shear_stiffness": 1e10,
-                              "friction_angle": math.degrees(math.atan(mu))}},
-        "supports": [{"set": "base", "components": ["x", "y"]}],
-        "stages": [{"name": "gravity", "loads": [{"type": "self_weight"}]},
-                   {"name": "pulse", "type": "dynamic", "dt": 0.002, "duration": duration, "integrator": "hht",
-                    "ground_motion": {"x": {"pulse": {"shape": "rectangular", "amplitude": amplitude,
-                                                      "duration": 0.2}}}}],
-    }
-
-
 def _slip(ds):
     top = np.nonzero(np.isclose(ds.y.values, 0.75))[0]
     return -ds.displacement.sel(component="x").isel(node=top).mean(axis=1).values
@@ -127,9 +109,9 @@ def test_lazy_columns_give_the_dense_history_and_newmark_slip(monkeypatch):
     needed (JOINT_SPACE_MAX lowered to 0) gives the history of the dense flexibility to round-off and
     Newmark's permanent slip s = A t_p^2 (A - a_y) / (2 a_y), a_y = mu g, within 2 %; the run
     reports the columns it computed (static and dynamic), fewer than the joint unknowns' m each."""
-    dense = masonrydam.run(_sliding_scene())
+    dense = masonrydam.run(sliding_scene())
     monkeypatch.setattr(js_module, "JOINT_SPACE_MAX", 0)
-    lazy = masonrydam.run(_sliding_scene())
+    lazy = masonrydam.run(sliding_scene())
     a = lazy.attrs
     m = int(a["dynamic_joint_space_size"])
     assert int(dense.attrs["dynamic_joint_space_flexibility_columns"]) == 0
@@ -142,19 +124,40 @@ def test_lazy_columns_give_the_dense_history_and_newmark_slip(monkeypatch):
     assert s_lazy[-1] == pytest.approx(A * tp**2 * (A - ay) / (2 * ay), rel=0.02)
 
 
+def test_a_store_smaller_than_the_joint_set_evicts_and_keeps_the_history(monkeypatch):
+    """A store with room for 24 of the sliding block's 32 columns (a sliding step reads its 16 shear
+    components and fetches neighbours ahead): columns are evicted (more are computed than the store
+    holds), every step is still solved in joint space, and the history is the dense flexibility's
+    to round-off."""
+    dense = masonrydam.run(sliding_scene())
+    monkeypatch.setattr(js_module, "JOINT_SPACE_MAX", 0)
+    m = int(dense.attrs["dynamic_joint_space_size"])
+    capacity = 24
+    assert m > capacity
+    monkeypatch.setattr(js_module, "FLEXIBILITY_MEMORY_MAX", capacity * 8 * m)
+    small = masonrydam.run(sliding_scene())
+    a = small.attrs
+    assert int(a["dynamic_joint_space_flexibility_columns"]) > capacity  # the store was full and evicted
+    assert int(a["dynamic_joint_space_steps"]) == int(a["dynamic_steps"])
+    assert int(a["dynamic_joint_space_store_full"]) == 0
+    s_dense = _slip(dense)
+    np.testing.assert_allclose(_slip(small), s_dense, rtol=0, atol=1e-9 * np.abs(s_dense).max())
+
+
 def test_a_store_too_small_for_a_step_hands_it_to_the_general_path(monkeypatch):
     """With room for 4 columns (the sliding block's steps need about 30) no sliding step can be solved
     in joint space: each goes on in the general Newton path (not halved: a large joint set has no
     joint space at sub-step sizes), never a failed run, and the slip is still Newmark's within 2 %;
     the sticking steps after the pulse stay in joint space (they read no column)."""
     monkeypatch.setattr(js_module, "JOINT_SPACE_MAX", 0)
-    probe = masonrydam.run(_sliding_scene(duration=0.002))
+    probe = masonrydam.run(sliding_scene(duration=0.002))
     m = int(probe.attrs["dynamic_joint_space_size"])
     monkeypatch.setattr(js_module, "FLEXIBILITY_MEMORY_MAX", 4 * 8 * m)
-    ds = masonrydam.run(_sliding_scene(duration=0.6))  # the block slides until about 0.4 s
+    ds = masonrydam.run(sliding_scene(duration=0.6))  # the block slides until about 0.4 s
     a = ds.attrs
     assert str(a["completed"]) == "true"
     assert int(a["dynamic_joint_space_fallbacks"]) > 0 and int(a["dynamic_newton_iterations"]) > 0
+    assert int(a["dynamic_joint_space_store_full"]) == int(a["dynamic_joint_space_fallbacks"])
     assert int(a["dynamic_joint_space_splits"]) == 0
     assert 0 < int(a["dynamic_joint_space_steps"]) < int(a["dynamic_steps"])
     A, tp, ay = 0.4 * G, 0.2, 0.2 * G

@@ -389,6 +389,7 @@ def _stats_attrs(solver, t_start, dyn_solvers=()):
             "dynamic_joint_space_setup_s": round(sum(x.joint_space_setup_s for x in d), 4),
             "dynamic_joint_space_flexibility_columns": sum(x.joint_space_flexibility_columns for x in d),
             "dynamic_joint_space_flexibility_s": round(sum(x.joint_space_flexibility_s for x in d), 4),
+            "dynamic_joint_space_store_full": sum(x.joint_space_store_full for x in d),
             "dynamic_wall_time_s": round(wall, 4),
             "dynamic_output_time_s": round(sum(x.output_time_s for x in d), 4),
             "dynamic_ms_per_step": round(1e3 * wall / max(steps, 1), 4),
@@ -400,9 +401,12 @@ def _stats_attrs(solver, t_start, dyn_solvers=()):
     return out
 
 
-def _columns_note(columns, seconds):
+def _columns_note(columns, seconds, store_full=0):
     """The summary's note on the flexibility columns computed as steps needed them (large joint sets)."""
-    return f"; {columns} flexibility columns computed when first needed ({seconds:.3g} s)" if columns else ""
+    if not columns:
+        return ""
+    full = f", {store_full} step(s) needed more than the store holds" if store_full else ""
+    return f"; {columns} flexibility columns computed when first needed ({seconds:.3g} s{full})"
 
 
 def print_summary(sc, mesh, model, eff, solver, stats, path, ds, file=None, dyn_solvers=()):
@@ -456,7 +460,8 @@ def print_summary(sc, mesh, model, eff, solver, stats, path, ds, file=None, dyn_
                          f"{stats['dynamic_joint_space_splits']} halved, "
                          f"{stats['dynamic_joint_space_fallbacks']} finished by the general path"
                          + _columns_note(stats['dynamic_joint_space_flexibility_columns'],
-                                         stats['dynamic_joint_space_flexibility_s']))
+                                         stats['dynamic_joint_space_flexibility_s'],
+                                         stats['dynamic_joint_space_store_full']))
         else:
             lines.append("joint space: off (no nonlinear joints, an explicit scheme, or joint_space = 'off')")
         lines.append(f"energy     : balance error {stats['energy_error_max_J']:.3g} J "

@@ -409,6 +409,8 @@ class DynamicStats:
     #: and the seconds they took
     joint_space_flexibility_columns: int = 0
     joint_space_flexibility_s: float = 0.0
+    #: step attempts that needed more flexibility columns than the store holds (general path instead)
+    joint_space_store_full: int = 0
     #: the solvers of the all-stick effective matrices: "ldlt", "pardiso" or "superlu"
     reference_solvers: set = field(default_factory=set)
     per_stage: list = field(default_factory=list)
@@ -920,6 +922,7 @@ class DynamicSolver:
                     self.stats.joint_space_column_bytes = max(
                         self.stats.joint_space_column_bytes,
                         sum(js.XT.nbytes for js in self._js_by_h.values() if js.XT is not None))
+                    self._js_by_h = {}  # their factors and columns: each stage sets up its own
         finally:
             m.set_open_tangent(1e-6)  # the static solver's regularisation (solvers.static.OPEN_TANGENT_REGULAR)
             self.stats.wall_time_s += time.perf_counter() - t_wall
@@ -1145,6 +1148,7 @@ class DynamicSolver:
                 except FloatingPointError:
                     u_js, its, converged = None, 0, False
                 self.stats.joint_space_iterations += its
+                self.stats.joint_space_store_full += js.store_full
                 self._iters_since_record += its
                 if u_js is not None:
                     # go on from the joint-space solution (or its last iterate): the loop below accepts

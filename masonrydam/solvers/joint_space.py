@@ -58,9 +58,9 @@ from ..errors import STATUS_NAN, STATUS_OK
 from ..materials import mohr_coulomb as mc
 from .dynamic_kernels import STATUS_SINGULAR
 from .joint_space_kernels import (active_components, add_flexibility_product, apply_correction, capacitance_assemble,
-                                  capacitance_update_solve, joint_points_evaluate, joint_space_correction,
-                                  joint_space_evaluate_residual, joint_space_reevaluate_points,
-                                  STATUS_MISSING_COLUMNS, condensed_residual, state_key, subtract_columns_product)
+                                  capacitance_update_solve, condensed_residual, joint_points_evaluate,
+                                  joint_space_correction, joint_space_reevaluate_points, state_key,
+                                  subtract_columns_product)
 
 #: largest number of joint components (points x dim) condensed by ``joint_space = "auto"``: the dense
 #: flexibility takes 8 m^2 bytes (288 MB at 6 000) and m substitutions to set up
@@ -364,6 +364,8 @@ class JointSpace:
         self.hold_events = 0
         #: converged steps whose displacements came from the stored columns, not a substitution (statistics)
         self.column_recoveries = 0
+        #: the last step needed more columns of S than the store holds
+        self.store_full = False
         self.params_table[:, mc.P_OPEN_TANGENT] = 0.0
         k0 = np.empty((P, dim))
         k0[:] = self.params_table[self.param_index, mc.P_KS][:, None]
@@ -390,14 +392,13 @@ class JointSpace:
     def _evaluate(self, delta, delta_y, q_n):
         """The joint law at ``delta`` (into the point arrays), the condensed residual ``self.F`` there and
         its force error ``|W D0 F|`` (N), which is returned."""
-        st = joint_space_evaluate_residual(
-            self.params_table, self.param_index, self.weight, delta, self.base, self.trial, self.traction, self.q,
-            self.qt, self.codes, self.info, self.held, self.ST, self.slot, delta_y, q_n, self.wk, self.F, self._err)
-        if st == STATUS_MISSING_COLUMNS:  # fetch the columns of the forces that changed, then the residual
+        self._raise_on(joint_points_evaluate(
+            self.params_table, self.param_index, self.weight, delta.reshape(-1, self.dim), self.base, self.trial,
+            self.traction, self.q, self.qt, self.codes, self.info, self.held))
+        if self.columns.lazy:  # the columns of the forces that changed (and marked as used in this step)
             self.columns.ensure(np.flatnonzero((self.q != q_n).ravel()))
-            st = condensed_residual(delta, delta_y, self.q, q_n, self.ST, self.slot, self.wk, self.F, self._err,
-                                    self.info)
-        self._raise_on(st)
+        self._raise_on(condensed_residual(delta, delta_y, self.q, q_n, self.ST, self.slot, self.wk, self.F,
+                                          self._err, self.info))
         return float(self._err[0])
 
     def _reevaluate(self, points, delta):
@@ -465,10 +466,11 @@ class JointSpace:
         if key == self._lu_key:
             return joint_space_correction(self.ST, self.slot, self.F, rows, self.qt, self.J, self.piv, self.z,
                                           self.step)
+        if self._ref is not None and not self._columns_fit(self._ref[0]):
+            self._lu_key, self._ref = None, None  # no room for the reference's columns: a new LU instead
         if self._ref is not None:
             ref_rows, ref_qt = self._ref
             max_changes = max(UPDATE_MIN_CHANGES, (len(ref_rows) + na) // UPDATE_CHANGE_FRACTION)
-            self.columns.ensure(ref_rows)
             st = capacitance_update_solve(self.ST, self.slot, ref_rows, ref_qt, self.J, self.piv, rows, qt_rows, self.F,
                                           max_changes, self.z)
             if st == STATUS_OK:
@@ -483,6 +485,15 @@ class JointSpace:
         return joint_space_correction(self.ST, self.slot, self.F, rows, self.qt, self.J, self.piv, self.z,
                                       self.step)
 
+    def _columns_fit(self, cols):
+        """Fetch the columns ``cols`` for an optional device (a low-rank update, a start guess): True when
+        they are in the store, False when the store has no room for them in this step."""
+        try:
+            self.columns.ensure(cols)
+        except ColumnStoreFull:
+            return False
+        return True
+
     def _state_key(self):
         """Per point: state code and the sign of the first shear traction (a friction direction that
         flips is a state change too)."""
@@ -493,13 +504,16 @@ class JointSpace:
     def solve_step(self, u_n, R_n, force_tolerance, initial_stiffness_iterations=None):
         """Solve one step in joint space (see :meth:`_solve_step`); no point is held on entry, and none is
         left held on any exit (return, non-convergence, NaN or an exception). A step that needs more
-        columns of S than the store holds (:class:`ColumnStoreFull`) returns ``(None, 0, False, why)``."""
+        columns of S than the store holds (:class:`ColumnStoreFull`) returns ``(None, 0, False, why)``
+        and sets ``self.store_full`` (a halved step would need about as many columns)."""
         self.held[:] = 0
         self.columns.new_step()
+        self.store_full = False
         try:
             return self._solve_step(u_n, R_n, force_tolerance, initial_stiffness_iterations)
         except ColumnStoreFull as exc:  # the groups' states are untouched until a u is returned
             self._lu_key, self._ref, self._dq_last = None, None, None
+            self.store_full = True
             return None, 0, False, str(exc)
         finally:
             self.held[:] = 0
@@ -553,16 +567,16 @@ class JointSpace:
         if self._dq_last is not None:
             # start from the joint forces changing as in the last step (a joint sliding on keeps
             # sliding at about the same rate): delta = delta_y - S dq_last, if that is closer
-            s_dq = np.zeros(self.m)
-            self.columns.ensure(np.flatnonzero(self._dq_last))
-            add_flexibility_product(self.ST, self.slot, self._dq_last, s_dq)
-            trial = delta - s_dq
-            at_predictor = self._snapshot()
-            e_trial = self._evaluate(trial, delta_y, q_n)
-            if e_trial < err:
-                delta, err = trial, e_trial
-            else:  # back to the predictor: its law arrays and residual, saved above
-                self._restore(at_predictor)
+            if self._columns_fit(np.flatnonzero(self._dq_last)):  # else no room to spare for a guess
+                s_dq = np.zeros(self.m)
+                add_flexibility_product(self.ST, self.slot, self._dq_last, s_dq)
+                trial = delta - s_dq
+                at_predictor = self._snapshot()
+                e_trial = self._evaluate(trial, delta_y, q_n)
+                if e_trial < err:
+                    delta, err = trial, e_trial
+                else:  # back to the predictor: its law arrays and residual, saved above
+                    self._restore(at_predictor)
         flips = np.zeros(P, dtype=np.int64)
         released = np.zeros(P, dtype=bool)  # held once in this step and let go: never held again
         seen, prev_sig, prev_key, stabilized, same = set(), None, None, False, 0

@@ -206,7 +206,7 @@ class StaticSolver:
             r0_norm = None
             if js is not None:
                 u_js, r0_norm = self._joint_space_start(js, u, f_ext)
-                if u_js is u and can_cut:
+                if u_js is u and can_cut and not js.store_full:  # a halved step needs about as many columns
                     self.stats.joint_space_splits += 1
                     return False, u, 0, None
                 u = u_js
@@ -423,6 +423,7 @@ class StaticSolver:
                 return self._run(stages, u0)
         finally:
             self.stats.wall_time_s = time.perf_counter() - t0
+            self._js, self._js_dofmap = None, None  # its factor and columns: not for the dynamic stages
 
     def _run(self, stages, u0):
         m, s = self.model, self.s

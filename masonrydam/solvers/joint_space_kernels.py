@@ -189,31 +189,14 @@ def add_point_force_changes(points, q, q_old, ST, slot, wk, F, err, info):
     return _force_norm(wk, F, err, info)
 
 
-@numba.njit(cache=True)
 def active_components(qt):
     """``(rows, qt_rows)``: the flat components ``p * dim + c`` (na,) int64, ascending, whose row of ``qt``
     (P, dim, dim) is not zero, and those rows (na, dim) - the active set of the capacitance matrix
-    (:func:`capacitance_assemble`)."""
-    P, dim = qt.shape[0], qt.shape[1]
-    flags = np.zeros(P * dim, dtype=np.bool_)
-    na = 0
-    for p in range(P):
-        for c in range(dim):
-            for d in range(dim):
-                if qt[p, c, d] != 0.0:
-                    flags[p * dim + c] = True
-                    na += 1
-                    break
-    rows = np.empty(na, dtype=np.int64)
-    qt_rows = np.empty((na, dim))
-    k = 0
-    for r in range(P * dim):
-        if flags[r]:
-            rows[k] = r
-            for d in range(dim):
-                qt_rows[k, d] = qt[r // dim, r % dim, d]
-            k += 1
-    return rows, qt_rows
+    (:func:`capacitance_assemble`). numpy, not numba: compiled it cost 0.55 s of the first run for
+    a few microseconds a call."""
+    flat = qt.reshape(-1, qt.shape[2])
+    rows = np.flatnonzero(flat.any(axis=1)).astype(np.int64)
+    return rows, flat[rows]
 
 
 @numba.njit(cache=True)

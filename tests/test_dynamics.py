@@ -472,8 +472,10 @@ def test_newmark_sliding_block_permanent_slip(shape):
     """Reference problem 1 (Newmark 1965): an elastic block on a Mohr-Coulomb joint (c = 0, mu = 0.2,
     kn = ks = 1e10 Pa/m) after a gravity stage, horizontal pulse of amplitude A = 0.4 g.
     Rectangular pulse (t0 = 0.2 s): s = A (A - a_y) t0^2 / (2 a_y), stop at A t0 / a_y. Half-sine
-    (tp = 0.4 s): closed form by integration. Permanent slip within 2 % of the closed form (the
-    block slides the other way from the ground: slip = top minus bottom < 0)."""
+    (tp = 0.4 s): closed form by integration. Permanent slip within 0.05 % of the closed form (the
+    block slides the other way from the ground: slip = top minus bottom < 0). The code reaches
+    5e-5 (rectangular) and 1.5e-4 (half-sine) at dt = 2 ms: the elastic block on penalty springs is
+    not quite Newmark's rigid block; the bound leaves room for round-off, not for a solver error."""
     A, mu = 0.4 * G, 0.2
     ay = mu * G
     if shape == "rectangular":
@@ -486,7 +488,7 @@ def test_newmark_sliding_block_permanent_slip(shape):
         ds = masonrydam.run(sliding_scene("half_sine", A, tp, mu, duration=t_stop + 0.15))
     slip = ds.joint_slip.isel(step=-1).values
     assert (slip < 0).all()
-    assert -slip.mean() == pytest.approx(expected, rel=0.02)
+    assert -slip.mean() == pytest.approx(expected, rel=5e-4)
     assert np.ptp(slip) < 1e-3 * abs(slip.mean())  # the block slides as a whole
     assert (ds.joint_state.isel(step=-1).values == 0).all(), "the block sticks again after the pulse"
     # sliding stops at t_stop: after it the slip is constant; 0.05 s before it the rigid block still has
@@ -500,15 +502,16 @@ def test_newmark_sliding_block_permanent_slip(shape):
 
 def test_central_difference_sliding_block():
     """Explicit central difference with the joints evaluated once per step: the rectangular-pulse
-    sliding block (Newmark 1965) within 2 %, and an energy balance error below 1e-3 of the input
-    (second-order scheme, dt below the critical step of the joint springs)."""
+    sliding block (Newmark 1965) within 0.5 % (the code reaches 2.7e-3: the joint law evaluated once
+    per step lags the onset and end of sliding by up to a step), and an energy balance error below
+    1e-3 of the input (second-order scheme, dt below the critical step of the joint springs)."""
     A, mu, t0 = 0.4 * G, 0.2, 0.2
     ay = mu * G
     expected = A * (A - ay) * t0**2 / (2 * ay)
     sc = sliding_scene(integrator="central_difference", dt=5e-5, duration=A * t0 / ay + 0.05,
                        output={"stride": 200})
     ds = masonrydam.run(sc)
-    assert -ds.joint_slip.isel(step=-1).values.mean() == pytest.approx(expected, rel=0.02)
+    assert -ds.joint_slip.isel(step=-1).values.mean() == pytest.approx(expected, rel=5e-3)
     assert ds.attrs["energy_error_relative"] < 1e-3
     assert ds.attrs["dynamic_factorizations"] == 0
 
@@ -516,14 +519,14 @@ def test_central_difference_sliding_block():
 def test_stiffness_proportional_damping_excludes_joints_by_default():
     """Hall (2006), EESD 35:525-545: stiffness-proportional damping on stiff elements that slide or open
     produces large spurious damping forces. With beta K on the continuum only (default), a rigid
-    sliding block feels no damping force and slides as Newmark's block (within 2 %); with the joint
+    sliding block feels no damping force and slides as Newmark's block (within 0.05 %); with the joint
     penalty stiffness in beta K the joint dashpot holds the block back."""
     A, mu, t0 = 0.4 * G, 0.2, 0.2
     ay = mu * G
     expected = A * (A - ay) * t0**2 / (2 * ay)
     damping = {"alpha": 0.0, "beta": 0.002}
     ds = masonrydam.run(sliding_scene(duration=0.55, damping=damping))
-    assert -ds.joint_slip.isel(step=-1).values.mean() == pytest.approx(expected, rel=0.02)
+    assert -ds.joint_slip.isel(step=-1).values.mean() == pytest.approx(expected, rel=5e-4)
     ds2 = masonrydam.run(sliding_scene(duration=0.55, damping=dict(damping, exclude_joints=False)))
     assert -ds2.joint_slip.isel(step=-1).values.mean() < 0.5 * expected
 
@@ -818,7 +821,8 @@ def test_horizontal_and_vertical_ground_motion_together():
     """Reference problem 1 with a vertical component: the ground accelerates downwards at 0.5 g (ramped
     in over 0.2 s, slowly against the block's vertical period of 2 ms), then a rectangular horizontal
     pulse A = 0.15 g for 0.2 s. The joint's yield acceleration is mu (g - 0.5 g) = 0.1 g, and Newmark's
-    (1965) rigid-block slip A t_p^2 (A - a_y) / (2 a_y) holds within 2 %; without the vertical component
+    (1965) rigid-block slip A t_p^2 (A - a_y) / (2 a_y) holds within 0.05 % (the code reaches 1.5e-4);
+    without the vertical component
     (a_y = 0.2 g > A) the block does not slide."""
     dt, A, tp = 0.002, 0.15 * G, 0.2
     n_pre, n_pulse, n_post = 150, 100, 150
@@ -834,26 +838,26 @@ def test_horizontal_and_vertical_ground_motion_together():
         ds = masonrydam.run(sc)
         slips[vertical] = -_top_slip(ds) + _top_slip(ds.isel(step=[n_pre - 1]))  # from the start of the pulse
     ay = 0.2 * (G - 0.5 * G)
-    assert slips[True] == pytest.approx(A * tp**2 * (A - ay) / (2 * ay), rel=0.02)
+    assert slips[True] == pytest.approx(A * tp**2 * (A - ay) / (2 * ay), rel=5e-4)
     assert abs(slips[False]) < 1e-3 * slips[True]
 
 
 def test_substeps_rescue_steps_that_do_not_converge():
     """The general Newton path with two iterations allowed per step cannot follow the onset of sliding in
     one step; halving the step (automatic sub-steps) finishes the run, and the slip is Newmark's (1965)
-    rigid-block value A t_p^2 (A - a_y) / (2 a_y) within 2 % (reference problem 1)."""
+    rigid-block value A t_p^2 (A - a_y) / (2 a_y) within 0.05 % (reference problem 1)."""
     ds = masonrydam.run(sliding_scene(duration=0.55, dt=0.002, max_iterations=2, max_substeps=6, joint_space="off"))
     assert ds.attrs["completed"] == "true" and int(ds.attrs["dynamic_substeps"]) > 0
     A, ay, tp = 0.4 * G, 0.2 * G, 0.2
-    assert -_top_slip(ds) == pytest.approx(A * tp**2 * (A - ay) / (2 * ay), rel=0.02)
+    assert -_top_slip(ds) == pytest.approx(A * tp**2 * (A - ay) / (2 * ay), rel=5e-4)
 
 
 def test_consistent_mass_time_history():
     """A time history with the consistent mass matrix (reference problem 1, HHT): Newmark's (1965)
-    rigid-block slip within 2 %, as with the lumped mass."""
+    rigid-block slip within 0.05 %, as with the lumped mass."""
     ds = masonrydam.run(sliding_scene(duration=0.55, mass="consistent"))
     A, ay, tp = 0.4 * G, 0.2 * G, 0.2
-    assert -_top_slip(ds) == pytest.approx(A * tp**2 * (A - ay) / (2 * ay), rel=0.02)
+    assert -_top_slip(ds) == pytest.approx(A * tp**2 * (A - ay) / (2 * ay), rel=5e-4)
 
 
 def test_a_long_result_file_is_returned_lazily(tmp_path, monkeypatch):

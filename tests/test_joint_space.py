@@ -3,7 +3,7 @@
 The condensed step must reproduce the general Newton path: both solve the same discrete equations
 (HHT step of Hilber, Hughes & Taylor 1977 with the seed's Mohr-Coulomb joints), so the two time
 histories agree to the Newton tolerance. Checked on reference problem 1 (Newmark 1965 sliding block,
-shared/reference/PROBLEMS.md: the permanent slip of the rectangular pulse within 2 % of the closed
+shared/reference/PROBLEMS.md: the permanent slip of the rectangular pulse within 0.05 % of the closed
 form, as tests/test_dynamics.py checks for the general path) and reference problem 3 (Housner 1963
 rocking block: opening, impact and re-closure). The pieces are checked against their definitions:
 ``delta = B u`` against the interface kernel at random displacements on inclined 2D and 3D joints,
@@ -225,7 +225,7 @@ def test_sliding_block_same_history_as_the_general_path_and_newmark_slip():
             assert int(ds.attrs["dynamic_joint_space_size"]) == 0
     A, tp, ay = 0.4 * G, 0.2, 0.2 * G
     slip = A * tp**2 * (A - ay) / (2 * ay)
-    assert -hist["on"][-1] == pytest.approx(slip, rel=0.02)  # the block lags behind the ground
+    assert -hist["on"][-1] == pytest.approx(slip, rel=5e-4)  # the block lags behind the ground
     np.testing.assert_allclose(hist["on"], hist["off"], rtol=0, atol=1e-6 * slip)
 
 

@@ -107,7 +107,7 @@ def _slip(ds):
 def test_lazy_columns_give_the_dense_history_and_newmark_slip(monkeypatch):
     """The sliding block (every step of the pulse slides) with the columns of S computed when first
     needed (JOINT_SPACE_MAX lowered to 0) gives the history of the dense flexibility to round-off and
-    Newmark's permanent slip s = A t_p^2 (A - a_y) / (2 a_y), a_y = mu g, within 2 %; the run
+    Newmark's permanent slip s = A t_p^2 (A - a_y) / (2 a_y), a_y = mu g, within 0.05 %; the run
     reports the columns it computed (static and dynamic), fewer than the joint unknowns' m each."""
     dense = masonrydam.run(sliding_scene())
     monkeypatch.setattr(js_module, "JOINT_SPACE_MAX", 0)
@@ -121,7 +121,7 @@ def test_lazy_columns_give_the_dense_history_and_newmark_slip(monkeypatch):
     s_dense, s_lazy = _slip(dense), _slip(lazy)
     np.testing.assert_allclose(s_lazy, s_dense, rtol=0, atol=1e-9 * np.abs(s_dense).max())
     A, tp, ay = 0.4 * G, 0.2, 0.2 * G
-    assert s_lazy[-1] == pytest.approx(A * tp**2 * (A - ay) / (2 * ay), rel=0.02)
+    assert s_lazy[-1] == pytest.approx(A * tp**2 * (A - ay) / (2 * ay), rel=5e-4)
 
 
 def test_a_store_smaller_than_the_joint_set_evicts_and_keeps_the_history(monkeypatch):
@@ -147,7 +147,7 @@ def test_a_store_smaller_than_the_joint_set_evicts_and_keeps_the_history(monkeyp
 def test_a_store_too_small_for_a_step_hands_it_to_the_general_path(monkeypatch):
     """With room for 4 columns (the sliding block's steps need about 30) no sliding step can be solved
     in joint space: each goes on in the general Newton path (not halved: a large joint set has no
-    joint space at sub-step sizes), never a failed run, and the slip is still Newmark's within 2 %;
+    joint space at sub-step sizes), never a failed run, and the slip is still Newmark's within 0.05 %;
     the sticking steps after the pulse stay in joint space (they read no column)."""
     monkeypatch.setattr(js_module, "JOINT_SPACE_MAX", 0)
     probe = masonrydam.run(sliding_scene(duration=0.002))
@@ -161,7 +161,7 @@ def test_a_store_too_small_for_a_step_hands_it_to_the_general_path(monkeypatch):
     assert int(a["dynamic_joint_space_splits"]) == 0
     assert 0 < int(a["dynamic_joint_space_steps"]) < int(a["dynamic_steps"])
     A, tp, ay = 0.4 * G, 0.2, 0.2 * G
-    assert _slip(ds)[-1] == pytest.approx(A * tp**2 * (A - ay) / (2 * ay), rel=0.02)
+    assert _slip(ds)[-1] == pytest.approx(A * tp**2 * (A - ay) / (2 * ay), rel=5e-4)
 
 
 def test_static_steps_with_lazy_columns_reach_the_dense_state(monkeypatch):

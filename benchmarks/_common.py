@@ -5,6 +5,33 @@ import platform
 from pathlib import Path
 
 
+#: thread-count variables of numba, OpenMP, MKL and OpenBLAS
+THREAD_VARIABLES = ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS")
+
+
+def pin_one_thread() -> None:
+    """One thread for numba, OpenMP, MKL and OpenBLAS: call it before numpy, scipy or masonrydam are
+    imported (the libraries read these variables when they load)."""
+    import os
+
+    for name in THREAD_VARIABLES:
+        os.environ[name] = "1"
+
+
+def peak_rss_mib() -> float:
+    """High-water resident memory of this process (VmHWM, MiB). Not ``ru_maxrss``: on Linux that
+    survives fork + exec, so a child would report the parent's peak when it is larger."""
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("VmHWM:"):
+                return int(line.split()[1]) / 1024.0
+    except OSError:
+        pass
+    import resource
+
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # KiB on Linux
+
+
 def cpu_model() -> str:
     """CPU model name from /proc/cpuinfo (or the platform's processor string)."""
     try:

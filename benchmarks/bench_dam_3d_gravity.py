@@ -44,10 +44,9 @@ figure.
 """
 from __future__ import annotations
 
-import os
+from _common import pin_one_thread  # benchmarks/ is sys.path[0] when run as a script
 
-for _k in ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
-    os.environ[_k] = "1"
+pin_one_thread()
 
 import argparse
 import hashlib
@@ -67,7 +66,7 @@ if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from _common import RssSampler, cpu_model  # noqa: E402
+from _common import RssSampler, cpu_model, peak_rss_mib  # noqa: E402
 
 SCENE_FILE = ROOT / "examples" / "dam_3d_gravity.toml"
 STATES = ("stick", "slip", "open")
@@ -103,19 +102,6 @@ def scene_key(sc: dict) -> str:
 # -----------------------------------------------------------------------------------------------
 # child: one run
 # -----------------------------------------------------------------------------------------------
-
-
-def _vmhwm_mib() -> float:
-    """High-water RSS of this process (VmHWM, MiB); not ru_maxrss, which survives fork + exec."""
-    try:
-        for line in Path("/proc/self/status").read_text().splitlines():
-            if line.startswith("VmHWM:"):
-                return int(line.split()[1]) / 1024.0
-    except OSError:
-        pass
-    import resource
-
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 
 def _heartbeat(label, every, stop):
@@ -184,7 +170,7 @@ def child(spec: dict) -> None:
             error = f"{type(exc).__name__}: {exc}"
     wall = time.perf_counter() - t0
     stop.set()
-    res = {"run_s": wall, "run_peak_mib": smp.peak, "peak_rss_mib": _vmhwm_mib()}
+    res = {"run_s": wall, "run_peak_mib": smp.peak, "peak_rss_mib": peak_rss_mib()}
     if error:
         res["error"] = error
     print("JSON:" + json.dumps(res), flush=True)

@@ -24,8 +24,9 @@ from __future__ import annotations
 import os
 
 # single thread everywhere, before numpy / numba are imported
-for _k in ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
-    os.environ[_k] = "1"
+from _common import pin_one_thread  # benchmarks/ is sys.path[0] when run as a script
+
+pin_one_thread()
 
 import argparse
 import json

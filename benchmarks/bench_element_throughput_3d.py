@@ -18,10 +18,9 @@ Prints elements per second. A benchmark, not a test: it never fails on a slow fi
 """
 from __future__ import annotations
 
-import os
+from _common import pin_one_thread  # benchmarks/ is sys.path[0] when run as a script
 
-for _k in ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
-    os.environ[_k] = "1"
+pin_one_thread()
 
 import argparse
 import sys

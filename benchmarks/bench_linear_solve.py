@@ -40,7 +40,6 @@ for _k in ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
 import argparse
 import copy
 import json
-import resource
 import subprocess
 import sys
 import tempfile
@@ -67,11 +66,7 @@ MAIN = (4.4, 2.48, 5)
 SWEEP = [(1.0, 0.62, 2), (2.2, 1.24, 2), (2.2, 1.24, 4), (4.4, 2.48, 3), MAIN]
 
 
-from _common import RssSampler, cpu_model  # noqa: E402  (benchmarks/ is sys.path[0] when run as a script)
-
-
-def peak_rss_mib() -> float:
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # KiB on Linux
+from _common import RssSampler, cpu_model, peak_rss_mib  # noqa: E402  (benchmarks/ is sys.path[0] when run as a script)
 
 
 

@@ -13,10 +13,9 @@ figure.
 """
 from __future__ import annotations
 
-import os
+from _common import pin_one_thread  # benchmarks/ is sys.path[0] when run as a script
 
-for _k in ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
-    os.environ[_k] = "1"
+pin_one_thread()
 
 import argparse
 import sys

@@ -50,7 +50,6 @@ for _k in ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_
 
 import argparse
 import json
-import resource
 import subprocess
 import sys
 import tempfile
@@ -64,7 +63,7 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-from _common import RssSampler, cpu_model  # noqa: E402  (benchmarks/ is sys.path[0] when run as a script)
+from _common import RssSampler, cpu_model, peak_rss_mib  # noqa: E402  (benchmarks/ is sys.path[0] when run as a script)
 
 E_BLOCK = 20e9
 NU_BLOCK = 0.2
@@ -294,18 +293,6 @@ def reduce(coords, K, f, fixed):
 # -----------------------------------------------------------------------------------------------
 # child: one solver on one saved system
 # -----------------------------------------------------------------------------------------------
-
-
-def peak_rss_mib() -> float:
-    """High-water RSS of this process (VmHWM, MiB). Not ``ru_maxrss``: on Linux that survives
-    fork + exec, so a child would report the parent's peak (the model build) when it is larger."""
-    try:
-        for line in Path("/proc/self/status").read_text().splitlines():
-            if line.startswith("VmHWM:"):
-                return int(line.split()[1]) / 1024.0
-    except OSError:
-        pass
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0  # KiB on Linux
 
 
 

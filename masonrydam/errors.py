@@ -66,6 +66,12 @@ class OutputError(MasonrydamError, OSError):
     read-only folder), or an input file that is not what it should be. Raised before any work is done."""
 
 
+class AccuracyWarning(UserWarning):
+    """A finished run whose numbers say it is not converged (e.g. an energy balance that needs energy
+    created at contact events to close, or large numerical dissipation): the results are kept, the
+    warning names the likely cause and the result attributes record it."""
+
+
 class RunStopped(KeyboardInterrupt):
     """A run stopped on request: Ctrl-C (SIGINT) or SIGTERM, at the end of a converged step, or at once
     on a second request. Every converged step is kept (see :func:`masonrydam.run`).

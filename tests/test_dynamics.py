@@ -206,13 +206,17 @@ def test_step_works_kernel_is_the_trapezoidal_rule(lumped):
     rng = np.random.default_rng(9)
     n_dof, n = 12, 9
     free = np.sort(rng.choice(n_dof, n, replace=False))
-    u0, u1, f0, f1, kc0, kc1 = (rng.normal(size=n_dof) for _ in range(6))
+    u0, u1, f0, f1, kc0, kc1, a0, a1 = (rng.normal(size=n_dof) for _ in range(8))
     pg0, pg1, fs, cv0, cv1, v1, mdiag, mv1 = (rng.normal(size=n) for _ in range(8))
-    out = np.empty(5)
-    step_works(free, u0, u1, pg0, pg1, fs, cv0, cv1, f0, f1, kc0, kc1, v1, mdiag if lumped else np.zeros(0), mv1, out)
+    M = np.diag(mdiag) if lumped else np.eye(n) + 0.1 * rng.normal(size=(n, n))
+    ma0, ma1 = M @ a0[free], M @ a1[free]
+    out = np.empty(10)
+    step_works(free, u0, u1, pg0, pg1, fs, cv0, cv1, f0, f1, kc0, kc1, v1, mdiag if lumped else np.zeros(0), mv1,
+               a0, a1, ma0, ma1, out)
     du = u1[free] - u0[free]
     ref = [0.5 * (pg0 + pg1) @ du, fs @ du, 0.5 * (cv0 + cv1) @ du,
-           0.5 * ((f0 - kc0)[free] + (f1 - kc1)[free]) @ du, 0.5 * v1 @ (mdiag * v1 if lumped else mv1)]
+           0.5 * ((f0 - kc0)[free] + (f1 - kc1)[free]) @ du, 0.5 * v1 @ (mdiag * v1 if lumped else mv1),
+           0.5 * (ma0 + ma1) @ du, (ma1 - ma0) @ du, (f1 - f0)[free] @ du, (cv1 - cv0) @ du, (pg1 - pg0) @ du]
     np.testing.assert_allclose(out, ref, rtol=1e-12)
 
 
@@ -609,10 +613,11 @@ def free_rocking(integrator, dt, theta_ratio=0.02, duration=0.3, **kw):
 def test_housner_free_rocking_quarter_period_impact_and_energy():
     """Reference problem 3 (Housner 1963), block 0.3 x 1.5 m released from theta0 = 0.02 alpha:
     - time to the first impact T/4 = acosh(1 / (1 - theta0/alpha)) / p, p = sqrt(3 g / (4 R)), within
-      2 % (masonrydam is small-displacement: the restoring moment is m g b instead of m g R sin(alpha -
-      theta), which changes T/4 by 0.3 % at this theta0);
-    - angular velocity ratio at impact r = 1 - 1.5 sin^2(alpha) within 3 % (velocities from parabolic
-      fits of theta(t) over 20 ms before and 16 ms after the impact, HHT alpha = -0.1);
+      1 % (the code reaches 0.41 %: masonrydam is small-displacement, the restoring moment is m g b
+      instead of m g R sin(alpha - theta), which changes T/4 by 0.3 % at this theta0);
+    - angular velocity ratio at impact r = 1 - 1.5 sin^2(alpha) within 2.5 % (the code reaches 1.5 %;
+      velocities from parabolic fits of theta(t) over 20 ms before and 16 ms after the impact, HHT
+      alpha = -0.1; the fits themselves are good to about 1 %);
     - without damping the mechanical energy (kinetic + elastic + joint stored - work of gravity) never
       exceeds its initial value by more than 1e-3 of the released potential energy m g b theta0."""
     t, th, e_mech, th0, alpha = free_rocking("hht", 5e-4, alpha=-0.1)
@@ -621,13 +626,13 @@ def test_housner_free_rocking_quarter_period_impact_and_energy():
     T4 = math.acosh(1 / (1 - th0 / alpha)) / p
     i = np.nonzero(th <= 0)[0][0]
     tc = t[i - 1] + (t[i] - t[i - 1]) * th[i - 1] / (th[i - 1] - th[i])
-    assert tc == pytest.approx(T4, rel=0.02)
+    assert tc == pytest.approx(T4, rel=0.01)
     acc = p**2 * math.sin(alpha)  # linearised angular acceleration about a corner
     before = (t > tc - 0.02) & (t < tc - 0.002)
     after = (t > tc + 0.004) & (t < tc + 0.02)
     w_b = np.polyfit(t[before] - tc, th[before] + 0.5 * acc * (t[before] - tc) ** 2, 1)[0]
     w_a = np.polyfit(t[after] - tc, th[after] - 0.5 * acc * (t[after] - tc) ** 2, 1)[0]
-    assert w_a / w_b == pytest.approx(1 - 1.5 * math.sin(alpha) ** 2, rel=0.03)
+    assert w_a / w_b == pytest.approx(1 - 1.5 * math.sin(alpha) ** 2, rel=0.025)
     E0 = 2000 * B * H * G * (B / 2) * th0
     assert e_mech.max() <= 1e-3 * E0
     assert e_mech[-1] < -0.05 * E0, "impacts dissipate energy"
@@ -680,7 +685,31 @@ def test_time_history_file_stride_selection_energy_and_provenance(tmp_path):
 
     png = tmp_path / "slide.png"
     assert main(["plot", str(out), "--joints", "0", "-o", str(png)]) == 0
-    assert png.stat().st_size > 10_000
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    # what is drawn: four panels against time, each line the file's data
+    from masonrydam.cli.main import history_figure
+
+    fig = history_figure(ds, "slide.nc", "x", None, [0])
+    ground, disp, joint, energy = fig.axes
+    t = dyn.time.values
+    for ax in fig.axes:
+        assert ax.get_xlabel() == "time [s]"
+        for line in ax.get_lines():
+            np.testing.assert_array_equal(line.get_xdata(), t)
+    (ag_x, ag_y) = ground.get_lines()
+    np.testing.assert_array_equal(ag_x.get_ydata(), dyn.ground_acceleration.sel(component="x").values)
+    assert np.max(ag_x.get_ydata()) == pytest.approx(0.4 * G)  # the pulse, at its full amplitude
+    (moving,) = disp.get_lines()
+    k = int(np.argmax(np.abs(dyn.displacement.sel(component="x").values).max(axis=0)))
+    np.testing.assert_array_equal(moving.get_ydata(), dyn.displacement.sel(component="x").values[:, k])
+    assert moving.get_label() == f"node {int(ds.node.values[k])}" and disp.get_ylabel() == "u_x [m] (relative)"
+    slip, opening = joint.get_lines()
+    np.testing.assert_array_equal(slip.get_ydata(), dyn.joint_slip.values[:, 0, 0])
+    assert slip.get_label() == "slip, point 0" and opening.get_label() == "opening, point 0"
+    drawn = {line.get_label(): line.get_ydata() for line in energy.get_lines()}
+    assert {"input", "kinetic", "joint_friction"} <= set(drawn)
+    assert "joint_bond_break" not in drawn  # zero throughout: not drawn
+    np.testing.assert_array_equal(drawn["joint_friction"], dyn.energy_joint_friction.values)
 
 
 def run_to_file(scene, path):

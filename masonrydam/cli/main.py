@@ -114,22 +114,37 @@ def _cmd_records(args):
 
 
 def _cmd_plot(args):
-    """Time histories (dynamic results) or step histories (static results) of a result file, as PNG:
-    ground acceleration, relative displacement of the chosen nodes, slip and opening of the chosen
-    joint points, and the energy balance."""
-    import numpy as np
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
+    """Time histories (dynamic results) or step histories (static results) of a result file, as PNG
+    (:func:`history_figure`)."""
     from ..results.files import check_output_path, open_result
 
     path = Path(args.result)
     out = check_output_path(args.output or f"{path.stem}.png", "-o")
     ds = open_result(path)  # an incomplete result warns (one line on the command line)
+    fig = history_figure(ds, path.name, args.component, args.nodes, args.joints)
+    fig.savefig(out, dpi=110)
+    print(f"wrote {out}")
+    return 0
+
+
+#: energy terms drawn by ``masonrydam plot`` (those that are not zero throughout)
+PLOTTED_ENERGIES = ("input", "external", "kinetic", "strain", "damping", "joint_stored", "joint_friction",
+                    "joint_bond_break", "joint_contact", "numerical", "error")
+
+
+def history_figure(ds, title: str, comp: str = "x", nodes=None, joints=None):
+    """The figure of ``masonrydam plot`` (a matplotlib Figure, not drawn to screen): ground acceleration
+    (dynamic results), relative displacement of ``nodes`` (node numbers; default: the recorded node that
+    moves most) in component ``comp``, slip and opening of the ``joints`` (joint point indices; default:
+    the one that slips most) and the energy balance (the terms of :data:`PLOTTED_ENERGIES` that are not
+    zero throughout), against time (dynamic) or the step number (static). Errors name the bad option."""
+    import numpy as np
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
     if not ds.sizes["step"]:
-        raise MasonrydamError(f"'{path}' has no steps to plot (status '{ds.attrs.get('status', '?')}': the run "
+        raise MasonrydamError(f"'{title}' has no steps to plot (status '{ds.attrs.get('status', '?')}': the run "
                               "stopped before its first converged step)")
-    comp = args.component
     if comp not in ds.component.values:
         raise MasonrydamError(f"--component must be one of {list(ds.component.values)}, got {comp!r}")
     dynamic = "time" in ds.variables and np.isfinite(ds.time.values).any()
@@ -139,22 +154,22 @@ def _cmd_plot(args):
     else:
         x, xlabel = np.arange(ds.sizes["step"]), "step"
     u = ds.displacement.sel(component=comp)
-    if args.nodes:
+    if nodes:
         pos = []
-        for n in args.nodes:
+        for n in nodes:
             hit = np.nonzero(ds.node.values == n)[0]
             if not len(hit):
                 raise MasonrydamError(f"--nodes: node {n} is not in the file (recorded nodes: "
-                                                 f"{ds.node.values[:10].tolist()}{' ...' if ds.sizes['node'] > 10 else ''})")
+                                      f"{ds.node.values[:10].tolist()}{' ...' if ds.sizes['node'] > 10 else ''})")
             pos.append(int(hit[0]))
     else:
         pos = [int(np.argmax(np.abs(u.values).max(axis=0)))] if ds.sizes["node"] else []
     njp = ds.sizes.get("joint_point", 0)
-    if args.joints:
-        bad = [j for j in args.joints if not 0 <= j < njp]
+    if joints:
+        bad = [j for j in joints if not 0 <= j < njp]
         if bad:
             raise MasonrydamError(f"--joints: joint point(s) {bad} not in the file (0 to {njp - 1})")
-        jpos = list(args.joints)
+        jpos = list(joints)
     elif njp:
         jpos = [int(np.argmax(np.abs(ds.joint_slip.values).max(axis=(0, 2))))]
     else:
@@ -178,7 +193,7 @@ def _cmd_plot(args):
                 ax.plot(x, ds.joint_opening.values[:, j], lw=0.8, ls="--", label=f"opening, point {j}")
             ax.set_ylabel("joint [m]")
         else:
-            for name in ("input", "external", "kinetic", "strain", "damping", "joint", "error"):
+            for name in PLOTTED_ENERGIES:
                 v = ds.get(f"energy_{name}")
                 if v is not None and np.abs(v.values).max() > 0:
                     ax.plot(x, v.values, lw=0.8, label=name)
@@ -186,10 +201,8 @@ def _cmd_plot(args):
         ax.set_xlabel(xlabel)
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=7, loc="best")
-    fig.suptitle(f"{path.name}: {ds.attrs.get('scene_name', '')} (completed = {ds.attrs.get('completed', '?')})")
-    fig.savefig(out, dpi=110)
-    print(f"wrote {out}")
-    return 0
+    fig.suptitle(f"{title}: {ds.attrs.get('scene_name', '')} (completed = {ds.attrs.get('completed', '?')})")
+    return fig
 
 
 def main(argv=None) -> int:

@@ -17,6 +17,13 @@ def default_periods(dt: float, n: int = 120, t_max: float = 5.0) -> np.ndarray:
 
 def plot_record(trace, path, damping: float = 0.05, periods=None, title: str | None = None):
     """Write the 4-panel figure of ``trace`` (acceleration in m/s2) to ``path`` (PNG); return the path."""
+    record_figure(trace, damping, periods, title).savefig(str(path), dpi=110)
+    return path
+
+
+def record_figure(trace, damping: float = 0.05, periods=None, title: str | None = None):
+    """The figure of :func:`plot_record` (a matplotlib Figure): acceleration (g), velocity (cm/s) and
+    displacement (cm) against time, and the pseudo-acceleration spectrum (g) at ``damping``."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -42,5 +49,4 @@ def plot_record(trace, path, damping: float = 0.05, periods=None, title: str | N
     axs[3].grid(True, which="both", alpha=0.3)
     if title:
         fig.suptitle(title)
-    fig.savefig(str(path), dpi=110)
-    return path
+    return fig

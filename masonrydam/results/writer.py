@@ -48,8 +48,14 @@ ENERGY_VARIABLES = {
     "joint": "work done on the joints (elastic energy stored plus energy dissipated by slip and opening)",
     "joint_stored": "change of elastic energy stored in the joints",
     "joint_dissipated": "energy dissipated in the joints (joint work minus the stored part)",
-    "error": "energy balance error: input + external - (kinetic + strain + damping + joint); numerical "
-             "dissipation of the integrator and the Newton tolerance",
+    "joint_friction": "energy dissipated by friction in the joints (traction times plastic slip)",
+    "joint_bond_break": "energy released where joint bonds broke (tension cut off, seed sec. 3.4)",
+    "joint_contact": "energy lost at joint impacts (points closing), less that gained where compressed points "
+                     "opened within a step (trapezoidal rule over a contact event)",
+    "numerical": "numerical dissipation of the time integrator (HHT, generalized-alpha: high-frequency "
+                 "damping; zero for the trapezoidal rule)",
+    "error": "energy balance error: input + external - (kinetic + strain + damping + joint_stored + "
+             "joint_friction + joint_bond_break + joint_contact + numerical): Newton tolerance and round-off",
 }
 
 

@@ -238,8 +238,8 @@ def dynamic_settings(st: dict, index: int, linear_solver: str = "auto"):
                            max_iterations=st["max_iterations"], force_tolerance=st["force_tolerance"],
                            energy_tolerance=st["energy_tolerance"], max_substeps=st["max_substeps"], mass=st["mass"],
                            damping=damping, linear_solver=linear_solver, low_rank_max=st["low_rank_max"],
-                           joint_space=st["joint_space"],
-                           key=f"stages[{index}].")
+                           joint_space=st["joint_space"], adaptive=st["adaptive"], tolerance=st["tolerance"],
+                           dt_min=st["dt_min"], key=f"stages[{index}].")
 
 
 def build_stages(scene: dict, mesh: Mesh, model: Model, base_dir: Path | None = None) -> list:
@@ -262,7 +262,10 @@ def build_stages(scene: dict, mesh: Mesh, model: Model, base_dir: Path | None = 
     for i, st in enumerate(scene["stages"]):
         if st["type"] == "dynamic":
             settings = dynamic_settings(st, i, scene["solver"]["linear_solver"])
-            gms = [build_ground_motion(spec, "xyz".index(c), f"stages[{i}].ground_motion.{c}", st["dt"], base_dir)
+            # a pulse is sampled at the analysis step (dt = "auto": at its smallest, so that the steps,
+            # not the samples, decide how sharply its start and end are resolved)
+            sample_dt = settings.dt_min if settings.adaptive else st["dt"]
+            gms = [build_ground_motion(spec, "xyz".index(c), f"stages[{i}].ground_motion.{c}", sample_dt, base_dir)
                    for c, spec in st["ground_motion"].items()]
             if st["steps"] is not None:
                 duration = st["steps"] * st["dt"]

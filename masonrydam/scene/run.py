@@ -7,12 +7,13 @@ import os
 import sys
 import tempfile
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
 
 from .._version import __version__
-from ..errors import OutputError, RunStopped
+from ..errors import AccuracyWarning, OutputError, RunStopped
 from ..materials import mohr_coulomb as mc
 from ..results.files import check_output_path, claim_working_file, partial_path, settle_partial
 from ..results.writer import OutputOptions, ResultWriter
@@ -243,6 +244,8 @@ def run(scene, output: str | os.PathLike | None = None, progress: bool = False, 
         os.unlink(work)
     if summary:
         print_summary(sc, mesh, model, eff, solver, stats, target, ds, dyn_solvers=dyn_solvers)
+    for text in filter(None, stats.get("energy_warnings", "").split(" | ")):
+        warnings.warn(text, AccuracyWarning, stacklevel=2)
     return ds
 
 
@@ -368,6 +371,10 @@ def _stats_attrs(solver, t_start, dyn_solvers=()):
         wall = sum(x.wall_time_s - x.output_time_s for x in d)
         out.update({
             "dynamic_steps": steps, "dynamic_substeps": sum(x.substeps for x in d),
+            "dynamic_steps_rejected": sum(x.steps_rejected for x in d),
+            # the smallest step taken: by dt = "auto" where a stage had it, else the smallest fixed dt
+            "dynamic_dt_smallest": float(min([x.dt_smallest for x in d if x.dt_largest > 0]
+                                             + [s.s.dt for s in dyn_solvers if not s.s.adaptive])),
             "dynamic_newton_iterations": sum(x.iterations for x in d),
             "dynamic_factorizations": sum(x.factorizations for x in d),
             "dynamic_reference_solver": ",".join(sorted(set().union(*(x.reference_solvers for x in d)))),
@@ -395,10 +402,28 @@ def _stats_attrs(solver, t_start, dyn_solvers=()):
             "dynamic_ms_per_step": round(1e3 * wall / max(steps, 1), 4),
             "energy_error_max_J": float(max(x.energy_error_max for x in d)),
             "energy_error_relative": float(max(x.energy_error_relative for x in d)),
+            "energy_numerical_relative": float(d[-1].energy_numerical / d[-1].energy_scale
+                                               if d[-1].energy_scale > 0 else 0.0),
+            "energy_contact_relative": float(d[-1].energy_contact / d[-1].energy_scale
+                                             if d[-1].energy_scale > 0 else 0.0),
+            "energy_warnings": " | ".join(_energy_warnings(dyn_solvers)),
             "static_residual_carried": float(d[0].static_residual),
             "dynamic_per_stage": json.dumps([p for x in d for p in x.per_stage]),
         })
     return out
+
+
+def _energy_warnings(dyn_solvers):
+    """The energy warnings of the run (:func:`~masonrydam.solvers.dynamic.energy_warnings`): the energy
+    terms are cumulative over the dynamic stages, so the last stage's solver speaks for the run."""
+    from ..solvers.dynamic import energy_warnings
+
+    if not dyn_solvers:
+        return []
+    last = dyn_solvers[-1]
+    s = last.s
+    dt = f"auto (tolerance {s.tolerance:g}, dt_min {s.dt_min:g} s)" if s.adaptive else f"{s.dt:g} s"
+    return energy_warnings(last.stats, s.integrator, dt)
 
 
 def _columns_note(columns, seconds, store_full=0):
@@ -442,7 +467,12 @@ def print_summary(sc, mesh, model, eff, solver, stats, path, ds, file=None, dyn_
     for dsol in dyn_solvers:
         for p in dsol.stats.per_stage:
             crit = f", dt_crit {p['dt_critical']:.3g} s" if p.get("dt_critical") else ""
-            lines.append(f"dynamic    : {p['stage']}: {p['steps']} steps of {p['dt']:g} s ({p['integrator']}{crit})")
+            if p["dt"] == "auto":
+                lines.append(f"dynamic    : {p['stage']}: {p['steps']} steps, dt = auto ({p['dt_smallest']:.3g} to "
+                             f"{p['dt_largest']:.3g} s, tolerance {p['tolerance']:g}), {p['steps_rejected']} "
+                             f"refused and retried smaller ({p['integrator']})")
+            else:
+                lines.append(f"dynamic    : {p['stage']}: {p['steps']} steps of {p['dt']:g} s ({p['integrator']}{crit})")
     if dyn_solvers:
         lines.append(f"dynamics   : {stats['dynamic_newton_iterations']} general Newton iterations, {stats['dynamic_substeps']} "
                      f"sub-step splits, {stats['dynamic_factorizations']} factorization(s) "
@@ -465,7 +495,9 @@ def print_summary(sc, mesh, model, eff, solver, stats, path, ds, file=None, dyn_
         else:
             lines.append("joint space: off (no nonlinear joints, an explicit scheme, or joint_space = 'off')")
         lines.append(f"energy     : balance error {stats['energy_error_max_J']:.3g} J "
-                     f"({100 * stats['energy_error_relative']:.3g} % of the largest energy term)")
+                     f"({100 * stats['energy_error_relative']:.3g} % of the largest energy term); numerical "
+                     f"dissipation {100 * stats['energy_numerical_relative']:.3g} %, contact events "
+                     f"{100 * stats['energy_contact_relative']:.3g} %")
     if "joint_state" in ds and ds.sizes.get("joint_point", 0):
         last = ds.joint_state.isel(step=-1).values
         lines.append(f"joints end : {int((last == 0).sum())} stick, {int((last == 1).sum())} slip, "

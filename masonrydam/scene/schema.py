@@ -292,7 +292,11 @@ INTEGRATORS = ("newmark_average", "newmark_linear", "hht", "generalized_alpha", 
 PULSE_SHAPES = ("rectangular", "half_sine")
 _DYNAMIC_KEYS = {"name", "type", "steps", "duration", "dt", "integrator", "alpha", "rho_inf", "mass", "damping",
                  "ground_motion", "output", "max_iterations", "max_substeps", "force_tolerance", "energy_tolerance",
-                 "low_rank_max", "joint_space"}
+                 "low_rank_max", "joint_space", "tolerance", "dt_min", "dt_max"}
+#: dt = "auto" without dt_max (and without output.dt): the largest step (s)
+AUTO_DT_MAX_DEFAULT = 0.01
+#: dt = "auto": default relative local error per step (see solvers.dynamic.DynamicSolver._step_error)
+AUTO_TOLERANCE_DEFAULT = 1e-5
 
 
 def _number(value, key, minimum=None, maximum=None, open_min=False):
@@ -447,8 +451,32 @@ def _dynamic_stage(s, key, dim, index):
                                          "stay applied, the excitation is 'ground_motion'")
     out = {"name": str(s.get("name", f"stage{index + 1}")), "type": "dynamic"}
     if "dt" not in s:
-        raise SceneError(f"{key}.dt", "is required for a dynamic stage (analysis time step, s)")
-    out["dt"] = _time(s["dt"], f"{key}.dt")
+        raise SceneError(f"{key}.dt", "is required for a dynamic stage (analysis time step, s, or \"auto\" for error-controlled steps)")
+    o = s.get("output", {})
+    if not isinstance(o, dict):
+        raise SceneError(f"{key}.output", f"expected a table, e.g. {{ stride = 10 }}, got {o!r}")
+    out_dt = None if "dt" not in o else _time(o["dt"], f"{key}.output.dt")
+    if s["dt"] == "auto":
+        # error-controlled steps: dt_max / 2^k down to dt_min (solvers.dynamic.DynamicSolver._run_adaptive)
+        out["adaptive"] = True
+        out["dt"] = _time(s.get("dt_max", out_dt or AUTO_DT_MAX_DEFAULT), f"{key}.dt_max")
+        out["dt_min"] = None if "dt_min" not in s else _time(s["dt_min"], f"{key}.dt_min")
+        if out["dt_min"] is not None and out["dt_min"] > out["dt"]:
+            raise SceneError(f"{key}.dt_min", f"{out['dt_min']:g} s is larger than dt_max = {out['dt']:g} s")
+        out["tolerance"] = _number(s.get("tolerance", AUTO_TOLERANCE_DEFAULT), f"{key}.tolerance", 0.0, 1.0,
+                                   open_min=True)
+    else:
+        for k in ("tolerance", "dt_min", "dt_max"):
+            if k in s:
+                raise SceneError(f"{key}.{k}", f"applies to dt = \"auto\" (error-controlled steps) only; dt is "
+                                               f"{s['dt']!r}")
+        if isinstance(s["dt"], str) and s["dt"].strip().lower() == "auto":
+            raise SceneError(f"{key}.dt", f"write dt = \"auto\" (lower case) for error-controlled steps")
+        out["adaptive"] = False
+        out["dt"] = _time(s["dt"], f"{key}.dt")
+        out["dt_min"] = None
+        out["tolerance"] = AUTO_TOLERANCE_DEFAULT
+    out["output_dt"] = out_dt
     if "steps" in s and "duration" in s:
         raise SceneError(f"{key}.steps", "give 'steps' or 'duration', not both")
     out["steps"] = _int(s["steps"], f"{key}.steps", 1) if "steps" in s else None
@@ -510,9 +538,18 @@ def _dynamic_stage(s, key, dim, index):
                                                  "[stages.ground_motion.x] record = \"elcentro_1940_ns_peknold\"")
     _check_keys(gm, set(COMPONENT_NAMES[:dim]), f"{key}.ground_motion")
     out["ground_motion"] = {c: _ground_component(v, f"{key}.ground_motion.{c}") for c, v in gm.items()}
-    o = s.get("output", {})
-    _check_keys(o, {"stride", "nodes", "joints"}, f"{key}.output")
-    out["output"] = {"stride": _int(o.get("stride", 1), f"{key}.output.stride", 1),
+    _check_keys(o, {"stride", "dt", "nodes", "joints"}, f"{key}.output")
+    stride = _int(o.get("stride", 1), f"{key}.output.stride", 1)
+    if out_dt is not None:
+        if "stride" in o:
+            raise SceneError(f"{key}.output.dt", "give 'stride' (every k-th step) or 'dt' (an output interval), not both")
+        ratio = out_dt / out["dt"]
+        stride = int(round(ratio))
+        if stride < 1 or abs(ratio - stride) > 1e-6 * ratio:
+            what = "dt_max" if out["adaptive"] else "dt"
+            raise SceneError(f"{key}.output.dt", f"{out_dt:g} s must be a whole multiple of the stage's {what} = "
+                                                 f"{out['dt']:g} s (the output lands on steps, not between them)")
+    out["output"] = {"stride": stride,
                      "nodes": None if "nodes" not in o else _selection(o["nodes"], f"{key}.output.nodes"),
                      "joints": None if "joints" not in o else _selection(o["joints"], f"{key}.output.joints")}
     return out

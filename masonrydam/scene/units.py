@@ -97,6 +97,9 @@ PLAUSIBLE: dict[str, Plausible] = {
     "stages.ground_motion.*.scale_to_pga": _GROUND_ACCELERATION,
     "stages.ground_motion.*.scale_to_sa.sa": _GROUND_ACCELERATION,
     "stages.dt": _TIME_STEP,  # analysis time step of a dynamic stage
+    "stages.dt_max": _TIME_STEP,  # dt = "auto": largest and smallest step
+    "stages.dt_min": _TIME_STEP,
+    "stages.output.dt": _TIME_STEP,  # output grid of a dynamic stage
     "stages.ground_motion.*.dt": _TIME_STEP,  # time step of a record (and of its resampling)
 }
 _INDEX = re.compile(r"\[\d+\]")

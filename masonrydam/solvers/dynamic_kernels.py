@@ -180,10 +180,10 @@ def newmark_residual(Ma, w_m, Cv, f_int, free, const, R):
 
 
 @numba.njit(cache=True)
-def step_works(free, u0, u1, pg0, pg1, fs, cv0, cv1, f0, f1, kc0, kc1, v1, mass_diag, mv1, out):
+def step_works(free, u0, u1, pg0, pg1, fs, cv0, cv1, f0, f1, kc0, kc1, v1, mass_diag, mv1, a0, a1, ma0, ma1, out):
     """Trapezoidal works of one step on the ``free`` (n,) DOFs (the energy balance of
     :meth:`~masonrydam.solvers.dynamic.DynamicSolver._record_energy`; Hughes 2000, sec. 9.1.4), with
-    ``du = u1 - u0`` (n_dof arrays ``u0, u1, f0, f1, kc0, kc1``; (n,) arrays ``pg*, fs, cv*, v1``):
+    ``du = u1 - u0`` (n_dof arrays ``u0, u1, f0, f1, kc0, kc1, a0, a1``; (n,) arrays ``pg*, fs, cv*, v1``):
 
         out[0] = du . (pg0 + pg1) / 2          work of the earthquake loads (J)
         out[1] = du . fs                       work of the constant loads
@@ -191,14 +191,25 @@ def step_works(free, u0, u1, pg0, pg1, fs, cv0, cv1, f0, f1, kc0, kc1, v1, mass_
         out[3] = du . (fj0 + fj1) / 2          joint work, fj = f_int - K_continuum u
         out[4] = v1 . M v1 / 2                 kinetic energy at the end (M = diag(mass_diag) when it has
                                                n entries, else ``mv1`` = M v1 from the caller)
+        out[5] = du . M (a0 + a1) / 2          inertia work (M a from ``ma0``, ``ma1`` for a full mass)
+        out[6] = du . M (a1 - a0)
+        out[7] = du . (f1 - f0)                change of the internal forces (continuum and joints)
+        out[8] = du . (cv1 - cv0)
+        out[9] = du . (pg1 - pg0)
 
-    One pass instead of a dozen indexed copies."""
+    out[5:] are the terms of the integrator's numerical dissipation (see ``_record_energy``). One pass
+    instead of a few dozen indexed copies."""
     n = free.shape[0]
     w_in = 0.0
     w_ext = 0.0
     w_damp = 0.0
     w_joint = 0.0
     kin = 0.0
+    w_inertia = 0.0
+    w_da = 0.0
+    w_df = 0.0
+    w_dcv = 0.0
+    w_dpg = 0.0
     lumped = mass_diag.shape[0] == n
     for i in range(n):
         j = free[i]
@@ -207,12 +218,88 @@ def step_works(free, u0, u1, pg0, pg1, fs, cv0, cv1, f0, f1, kc0, kc1, v1, mass_
         w_ext += fs[i] * du
         w_damp += (cv0[i] + cv1[i]) * du
         w_joint += ((f0[j] - kc0[j]) + (f1[j] - kc1[j])) * du
-        kin += v1[i] * (mass_diag[i] * v1[i] if lumped else mv1[i])
+        if lumped:
+            kin += v1[i] * mass_diag[i] * v1[i]
+            m0 = mass_diag[i] * a0[j]
+            m1 = mass_diag[i] * a1[j]
+        else:
+            kin += v1[i] * mv1[i]
+            m0 = ma0[i]
+            m1 = ma1[i]
+        w_inertia += (m0 + m1) * du
+        w_da += (m1 - m0) * du
+        w_df += (f1[j] - f0[j]) * du
+        w_dcv += (cv1[i] - cv0[i]) * du
+        w_dpg += (pg1[i] - pg0[i]) * du
     out[0] = 0.5 * w_in
     out[1] = w_ext
     out[2] = 0.5 * w_damp
     out[3] = 0.5 * w_joint
     out[4] = 0.5 * kin
+    out[5] = 0.5 * w_inertia
+    out[6] = w_da
+    out[7] = w_df
+    out[8] = w_dcv
+    out[9] = w_dpg
+
+
+@numba.njit(cache=True)
+def joint_step_energy(delta0, traction0, state0, delta1, traction1, state1, weight, out):
+    """Where the work of one joint set over a step went (J), point by point; arrays (n_elem, nip, dim)
+    for the relative displacements ``delta*`` (m) and tractions ``traction*`` (Pa) at the start (0)
+    and the end (1) of the step, (n_elem, nip, N_JOINT_STATE) for the law's states, (n_elem, nip)
+    ``weight`` (m2: integration weight x thickness).
+
+    A point's trapezoidal work ``W = w (t0 + t1) . (delta1 - delta0) / 2`` is split into
+
+        out[0] += W_slip  = w (tau0 + tau1) . (s_p1 - s_p0) / 2      friction (plastic slip s_p)
+        out[1] += bond    = W - dPsi - W_slip  if the bond broke in the step
+        out[2] += contact = W - dPsi - W_slip  if the point opened or closed in the step (not a bond
+                                               break): lost at an impact, gained (negative) at a release
+        out[3] += W - dPsi - W_slip            at the other points (zero up to round-off: checks the split)
+        out[4] += W
+
+    with the stored energy ``Psi = w (t_n^2 / kn + |tau|^2 / ks) / 2`` (kn, ks implied by the law:
+    ``t_n = kn delta_n`` and ``tau = ks (delta_s - s_p)`` at a closed point, Psi = 0 at an open one,
+    see :mod:`masonrydam.materials.mohr_coulomb`): with those relations the shear work of a closed
+    point is exactly dPsi_s + W_slip and the normal work exactly dPsi_n, so only a point whose
+    contact state changes leaves a remainder - the energy the trapezoidal rule cannot see in a jump of
+    the normal traction (Laursen & Chawla 1997, IJNME 40:863-886). Evaluated without kn and ks:
+    ``Psi_n = t_n delta_n / 2`` and ``Psi_s = tau . (delta_s - s_p) / 2``."""
+    ne, nip, dim = delta0.shape
+    ns = dim - 1
+    for i in range(ne):
+        for g in range(nip):
+            w = weight[i, g]
+            work = 0.0
+            psi0 = 0.0
+            psi1 = 0.0
+            slip_work = 0.0
+            for c in range(dim):
+                work += (traction0[i, g, c] + traction1[i, g, c]) * (delta1[i, g, c] - delta0[i, g, c])
+            work *= 0.5 * w
+            open0 = state0[i, g, 0] == 2.0
+            open1 = state1[i, g, 0] == 2.0
+            if not open0:
+                psi0 += traction0[i, g, dim - 1] * delta0[i, g, dim - 1]
+                for c in range(ns):
+                    psi0 += traction0[i, g, c] * (delta0[i, g, c] - state0[i, g, 2 + c])
+            if not open1:
+                psi1 += traction1[i, g, dim - 1] * delta1[i, g, dim - 1]
+                for c in range(ns):
+                    psi1 += traction1[i, g, c] * (delta1[i, g, c] - state1[i, g, 2 + c])
+            for c in range(ns):
+                slip_work += (traction0[i, g, c] + traction1[i, g, c]) * (state1[i, g, 2 + c] - state0[i, g, 2 + c])
+            slip_work *= 0.5 * w
+            rest = work - 0.5 * w * (psi1 - psi0) - slip_work
+            out[0] += slip_work
+            if state0[i, g, 1] == 0.0 and state1[i, g, 1] != 0.0:
+                out[1] += rest
+            elif open0 != open1:
+                out[2] += rest
+            else:
+                out[3] += rest
+            out[4] += work
 
 
 @numba.njit(cache=True)

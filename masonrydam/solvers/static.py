@@ -134,6 +134,53 @@ def check_mechanisms(model, stages) -> None:
             check_mechanism(model, st)
 
 
+def joint_mechanisms(model, limit: int = 4) -> list[str]:
+    """The joints that no longer hold a part in place in the trial joint state of ``model`` (the failed
+    attempt of a step), in words that name the mechanism and the part: per joint set and pair of
+    element groups it joins, "sliding" where no point sticks and at least one slides, "rocking" where
+    at least half the points are open and those still in contact (the hinge) lie within a quarter of
+    the joint's extent. At most ``limit`` entries (the most open first), then how many more. Empty if
+    no joint is in such a state (a joint whose points are all open leaves a free part, which
+    :func:`find_free_parts` names)."""
+    from ..materials.mohr_coulomb import OPEN, SLIP
+
+    names = [g.name for g in model.cgroups] + ["?"]
+    owner = np.full(model.n_nodes, len(model.cgroups))  # element group of each node (interfaces split nodes)
+    for i in range(len(model.cgroups) - 1, -1, -1):
+        owner[model.cgroups[i].conn.ravel()] = i
+    found = []
+    for g in model.igroups:
+        if not g.nonlinear:
+            continue
+        ns = g.conn.shape[1] // 2
+        codes = g.state_codes(trial=True)  # (ne, nip)
+        below, above = owner[g.conn[:, 0]], owner[g.conn[:, ns]]
+        for b, a in sorted(set(zip(below.tolist(), above.tolist()))):
+            elems = (below == b) & (above == a)
+            c = codes[elems].ravel()
+            x = g.points[elems].reshape(-1, model.dim)
+            n_open, n_slip = int((c == OPEN).sum()), int((c == SLIP).sum())
+            n_touch = len(c) - n_open
+            where = f"joint set '{g.name}' between element groups '{names[b]}' and '{names[a]}'"
+            if n_touch == 0:
+                continue
+            if n_touch == n_slip:
+                found.append((n_open / len(c), f"sliding: every point of {where} that still touches slides "
+                                                f"({n_slip} sliding, {n_open} open of {len(c)})"))
+                continue
+            touching = x[c != OPEN]
+            if 2 * n_open >= len(c) and np.ptp(touching, axis=0).max() <= 0.25 * np.ptp(x, axis=0).max():
+                hinge = ", ".join(f"{v:.4g}" for v in touching.mean(axis=0))
+                found.append((n_open / len(c), f"rocking: {n_open} of {len(c)} points of {where} are open; the "
+                                                f"part turns about the {n_touch} point(s) still in contact near "
+                                                f"({hinge}) m"))
+    found.sort(key=lambda item: -item[0])
+    out = [text for _, text in found[:limit]]
+    if len(found) > limit:
+        out.append(f"and {len(found) - limit} more joint(s) in such a state")
+    return out
+
+
 class StaticSolver:
     """Drives a :class:`~masonrydam.assembly.model.Model` through static stages.
 
@@ -475,6 +522,9 @@ class StaticSolver:
                 final = cuts > s.max_step_cuts or dl / 2.0 < nominal / 2.0 ** s.max_step_cuts
                 # a part that floats in the failed attempt (every joint around it open) is named
                 parts = find_free_parts(m, constrained, use_joint_state=True) if final else []
+                # otherwise the joints that gave way in that attempt name the mechanism and the part
+                hint = "" if parts or not final else "".join(f"; in the last attempt {t}"
+                                                             for t in joint_mechanisms(m))
                 m.revert()
                 if final:
                     if parts:
@@ -484,11 +534,12 @@ class StaticSolver:
                     if singular is not None:
                         raise MechanismError(
                             f"stage '{st.name}' at load factor {target:.4g}: singular stiffness ({singular}); "
-                            "a block may be rotating about a point contact or the load exceeds the collapse load")
+                            "a block may be rotating about a point contact or the load exceeds the collapse load"
+                            + hint)
                     raise ConvergenceError(
                         f"stage '{st.name}': no convergence at load factor {target:.6g} after "
                         f"{s.max_step_cuts} step cuts (last increment {dl:.3g}); the structure may have reached "
-                        "its collapse load under load control — use prescribed displacements, or more steps")
+                        "its collapse load under load control — use prescribed displacements, or more steps" + hint)
                 dlam = dl / 2.0
             # general and joint-space Newton iterations, as the result file's ``iterations``
             stage_stats["iterations"] = self.stats.iterations + self.stats.joint_space_iterations - it_before

@@ -341,7 +341,9 @@ def effects(scene: dict, model: Model) -> list[str]:
             what += f" (alpha {st['alpha']:g})"
         elif st["integrator"] == "generalized_alpha":
             what += f" (rho_inf {st['rho_inf']:g})"
-        out.append(f"dynamic stage '{st['name']}': {st['mass']} mass inertia, {what}, dt {st['dt']:g} s")
+        steps = (f"dt auto (tolerance {st['tolerance']:g}, dt_max {st['dt']:g} s)" if st.get("adaptive")
+                 else f"dt {st['dt']:g} s")
+        out.append(f"dynamic stage '{st['name']}': {st['mass']} mass inertia, {what}, {steps}")
         d = st["damping"]
         if d is None:
             out.append(f"dynamic stage '{st['name']}': no viscous damping")

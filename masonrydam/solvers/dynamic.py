@@ -1302,7 +1302,7 @@ class DynamicSolver:
 
     def _step_error(self, new, st, h, enforce=True):
         """Local error of the step st -> new for dt = "auto" (None when it is within the tolerance,
-        else why not). Two measures, the larger counts:
+        else why not). Three measures, the largest counts:
 
         - the Zienkiewicz-Xie estimate of the Newmark family, ``e = h^2 (beta - 1/6) (a_{n+1} - a_n)``
           (Zienkiewicz & Xie 1991, Earthquake Eng. Struct. Dyn. 20:871-887: the difference between the
@@ -1328,21 +1328,21 @@ class DynamicSolver:
         # Euclidean norms over the free DOFs, as Zienkiewicz & Xie: a joint's rattle, a few DOFs with
         # large accelerations, weighs by its share of the motion, not as much as the whole structure
         e_zx = h * h * abs(beta - 1.0 / 6.0) * float(np.linalg.norm(new.a[free] - st.a[free]))
-        self._u_peak = max(self._u_peak, float(np.linalg.norm(new.u[free] - self._u_stage0)))
-        eta_zx = e_zx / max(self._u_peak, ADAPTIVE_DISPLACEMENT_FLOOR * math.sqrt(len(free)))
+        u_peak = max(self._u_peak, float(np.linalg.norm(new.u[free] - self._u_stage0)))
+        eta_zx = e_zx / max(u_peak, ADAPTIVE_DISPLACEMENT_FLOOR * math.sqrt(len(free)))
         # the ground load between the step's ends: the velocity missed, over the velocity scale
-        self._v_peak = max(self._v_peak, float(np.max(np.abs(new.v[free]), initial=0.0)))
+        v_peak = max(self._v_peak, float(np.max(np.abs(new.v[free]), initial=0.0)))
         miss = max((g.chord_error(st.tau, new.tau) for g in self.ground.values()), default=0.0)
-        eta_input = miss / max(self._v_peak, self._pgv, 1e-300) if miss > 0 else 0.0
+        eta_input = miss / max(v_peak, self._pgv, 1e-300) if miss > 0 else 0.0
         scale = max(self._energy_scale, abs(new.energy["input"]), abs(new.energy["external"]), 1e-300)
         eta_event = abs(new.energy["joint_contact"] - st.energy["joint_contact"]) / scale
         if self._energy_scale <= 0:
             eta_event = 0.0
         eta = max(eta_zx, eta_input, eta_event)
-        eta = max(eta, eta_event)
         self._last_error = eta
         if eta <= s.tolerance or not enforce:  # at dt_min the step is taken whatever its error
             self._error_levels = 0
+            self._u_peak, self._v_peak = u_peak, v_peak  # the peaks of accepted steps only
             return None
         # error ~ h^3: the level that should bring it within 0.8 x the tolerance
         self._error_levels = max(1, int(math.ceil(math.log2((eta / (0.8 * s.tolerance)) ** (1.0 / 3.0)))))

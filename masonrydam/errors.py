@@ -67,9 +67,9 @@ class OutputError(MasonrydamError, OSError):
 
 
 class AccuracyWarning(UserWarning):
-    """A finished run whose numbers say it is not converged (e.g. an energy balance that needs energy
-    created at contact events to close, or large numerical dissipation): the results are kept, the
-    warning names the likely cause and the result attributes record it."""
+    """A finished run whose numbers say it is not converged (an energy balance whose error exceeds 1 % of
+    its largest term, or that needs energy created at contact events to close): the results are kept,
+    the warning names the likely cause and the result attributes record it."""
 
 
 class RunStopped(KeyboardInterrupt):

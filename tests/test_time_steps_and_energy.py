@@ -170,6 +170,7 @@ def test_rocking_impacts_are_a_named_loss():
     ({"dt": 0.004, "output": {"dt": 0.01}}, "stages[1].output.dt", "whole multiple"),
     ({"dt": 0.002, "output": {"dt": 0.01, "stride": 5}}, "stages[1].output.dt", "not both"),
     ({"dt": "auto", "integrator": "central_difference"}, "stages[1].dt", "implicit"),
+    ({"dt": "auto", "integrator": "newmark_linear"}, "stages[1].dt", "newmark_linear"),
 ])
 def test_auto_dt_scene_errors_name_the_key(stage, key, match):
     sc = sliding_scene(**stage)
@@ -200,3 +201,23 @@ def test_accuracy_study_quick_variant_runs_and_converges(capsys):
     assert rock and all(r["error"] < 5e-3 for r in rock)
     out = capsys.readouterr().out
     assert "| to get | on | use |" in out and "sliding_block (permanent slip)" in out
+
+
+def test_chord_error_is_the_exact_velocity_missed_by_a_linear_load():
+    """GroundMotion.chord_error, the input measure of dt = "auto": the integral of |a_g - chord| over a
+    step, worked by hand for a triangle, a sign change and the record's end.
+    - record 0, 1, 0 at 0.1 s, step [0, 0.2]: chord 0, area of the triangle 0.1;
+    - record 0, 1, -1 at 0.1 s, step [0, 0.2]: deviation 1 at 0.1 s, 0 at both ends, and the chord from
+      0 to -1 is subtracted: d(0) = 0, d(0.1) = 1.5, d(0.2) = 0, area 0.15;
+    - the same record from 0.1 to 0.3 (past its end at 0.2 s, where a_g jumps to 0): the chord runs
+      from 1 to 0; a_g - chord is 0 at 0.1, -1.5 just before 0.2 (a_g = -1, chord 0.5), -0.5 just after,
+      0 at 0.3: areas 0.075 + 0.025 = 0.1;
+    - a step with no sample inside and before the end: 0."""
+    g = GroundMotion(0, np.array([0.0, 1.0, 0.0]), 0.1)
+    assert g.chord_error(0.0, 0.2) == pytest.approx(0.1, rel=1e-12)
+    assert g.chord_error(0.02, 0.08) == 0.0
+    h = GroundMotion(0, np.array([0.0, 1.0, -1.0]), 0.1)
+    assert h.chord_error(0.0, 0.2) == pytest.approx(0.15, rel=1e-12)
+    assert h.chord_error(0.1, 0.3) == pytest.approx(0.1, rel=1e-9)
+    assert h.chord_error(0.2, 0.3) == pytest.approx(0.5 * 1.0 * 0.1, rel=1e-9)  # starts on the last sample
+    assert h.peak_velocity == pytest.approx(0.05, rel=1e-12)  # trapezoids: 0.05, then 0.05 + 0

@@ -374,7 +374,8 @@ def _stats_attrs(solver, t_start, dyn_solvers=()):
             "dynamic_steps_rejected": sum(x.steps_rejected for x in d),
             # the smallest step taken: by dt = "auto" where a stage had it, else the smallest fixed dt
             "dynamic_dt_smallest": float(min([x.dt_smallest for x in d if x.dt_largest > 0]
-                                             + [s.s.dt for s in dyn_solvers if not s.s.adaptive])),
+                                             + [s.s.dt for s in dyn_solvers if not s.s.adaptive],
+                                             default=float("nan"))),  # nan: no step was taken
             "dynamic_newton_iterations": sum(x.iterations for x in d),
             "dynamic_factorizations": sum(x.factorizations for x in d),
             "dynamic_reference_solver": ",".join(sorted(set().union(*(x.reference_solvers for x in d)))),
@@ -415,15 +416,17 @@ def _stats_attrs(solver, t_start, dyn_solvers=()):
 
 def _energy_warnings(dyn_solvers):
     """The energy warnings of the run (:func:`~masonrydam.solvers.dynamic.energy_warnings`): the energy
-    terms are cumulative over the dynamic stages, so the last stage's solver speaks for the run."""
+    terms are cumulative over the dynamic stages, so the last stage's solver speaks for the run, with the
+    largest balance error of any stage."""
     from ..solvers.dynamic import energy_warnings
 
     if not dyn_solvers:
         return []
     last = dyn_solvers[-1]
+    stats = dataclasses.replace(last.stats, energy_error_max=max(x.stats.energy_error_max for x in dyn_solvers))
     s = last.s
     dt = f"auto (tolerance {s.tolerance:g}, dt_min {s.dt_min:g} s)" if s.adaptive else f"{s.dt:g} s"
-    return energy_warnings(last.stats, s.integrator, dt)
+    return energy_warnings(stats, s.integrator, dt)
 
 
 def _columns_note(columns, seconds, store_full=0):

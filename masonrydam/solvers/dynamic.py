@@ -76,7 +76,8 @@ an impact and *created* where a compressed point opens; Laursen & Chawla 1997, I
 Armero & Petocz 1998, CMAME 158:269-300), and the integrator's numerical dissipation (HHT,
 generalized-alpha) is computed from the scheme's own equations (:meth:`DynamicSolver._record_energy`).
 Balance error = input + external - (kinetic + strain + damping + joint stored + friction + bond breaks
-+ contact + numerical): the Newton tolerance and round-off, nothing else. On the Koyna example at dt =
++ contact + numerical): the Newton tolerance and round-off (and, for central difference, the half step
+its damping force lags). On the Koyna example at dt =
 0.01 s the error of the old balance (14 % of its largest term) was numerical dissipation (36 % in the
 first 8 s) less energy created at contact events (53 %); at dt = 1.25 ms they are 0.6 % and +2.2 %
 (a net loss). :func:`energy_warnings` reports an error above 1 % and energy created at contact events
@@ -306,6 +307,9 @@ class DynamicSettings:
             if self.integrator == "central_difference":
                 raise SceneError(f"{k}dt", "dt = 'auto' needs an implicit integrator (central difference is bound to "
                                            "its critical step)")
+            if self.integrator == "newmark_linear":
+                raise SceneError(f"{k}dt", "dt = 'auto' estimates the error from beta - 1/6, which is zero for "
+                                           "newmark_linear: use hht, newmark_average or generalized_alpha")
             if not 0.0 < self.tolerance < 1.0:
                 raise SceneError(f"{k}tolerance", f"must be a relative local error in (0, 1), got {self.tolerance!r}")
             if self.dt_min is None:
@@ -383,21 +387,38 @@ class GroundMotion:
     def chord_error(self, t0: float, t1: float) -> float:
         """Integral over [t0, t1] of |a_g(t) - chord| (m/s), the chord being the straight line between
         a_g(t0) and a_g(t1): the velocity a step from t0 to t1 misses by taking the ground load as linear
-        over the step (the implicit schemes see its ends only). Zero when no sample lies inside."""
+        over the step (the implicit schemes see its ends only). Exact for the piecewise-linear record,
+        including its jump to zero after the last sample. Zero when the record is linear over the step."""
+        if t1 <= t0:
+            return 0.0
+        t_end = self._times[-1] * (1 + 1e-12)
+        a0, a1 = self.at(t0), self.at(t1)
+        # breakpoints of a_g inside the step: samples, and the record's end (a jump to zero)
         i0 = int(math.floor(t0 / self.dt)) + 1
         i1 = min(int(math.ceil(t1 / self.dt)) - 1, len(self.values) - 1)
-        if i1 < i0 or t1 <= t0:
-            return 0.0
-        # inside samples (beyond the record's end it is zero: the sample after the last is one too)
-        t_in = np.arange(i0, i1 + 1) * self.dt
+        t_in = np.arange(i0, i1 + 1) * self.dt if i1 >= i0 else np.zeros(0)
         t_in = t_in[(t_in > t0) & (t_in < t1)]
-        if len(t_in) == 0:
+        jump = t0 <= t_end < t1 and self.values[-1] != 0.0
+        if len(t_in) == 0 and not jump:
             return 0.0
-        a0, a1 = self.at(t0), self.at(t1)
-        dev = np.interp(t_in, self._times, self.values) - (a0 + (a1 - a0) * (t_in - t0) / (t1 - t0))
+        chord = lambda t: a0 + (a1 - a0) * (t - t0) / (t1 - t0)  # noqa: E731
         tt = np.concatenate(([t0], t_in, [t1]))
-        d = np.abs(np.concatenate(([0.0], dev, [0.0])))
-        return float(np.sum(0.5 * (d[1:] + d[:-1]) * np.diff(tt)))
+        f = np.array([a0] + [float(np.interp(x, self._times, self.values)) for x in t_in] + [a1])
+        if jump:  # a_g falls from the last sample to zero at t_end: split the segment there
+            k = int(np.searchsorted(tt, t_end, side="right"))
+            tt = np.concatenate((tt[:k], [t_end, t_end], tt[k:]))
+            f = np.concatenate((f[:k], [self.values[-1], 0.0], f[k:]))
+        d = f - np.array([chord(x) for x in tt])
+        total = 0.0
+        for k in range(len(tt) - 1):  # |linear| integrated exactly on each piece (sign changes too)
+            h, da, db = tt[k + 1] - tt[k], d[k], d[k + 1]
+            if h <= 0.0:
+                continue
+            if da * db >= 0.0:
+                total += 0.5 * (abs(da) + abs(db)) * h
+            else:
+                total += 0.5 * (da * da + db * db) / (abs(da) + abs(db)) * h
+        return float(total)
 
 
 @dataclass
@@ -429,9 +450,10 @@ class DynamicStage:
 
     @property
     def levels(self) -> int:
-        """dt = "auto": the smallest step is dt / 2^levels (0 for fixed steps)."""
+        """dt = "auto": the smallest step is dt / 2^levels, the smallest such step not below dt_min (0 for
+        fixed steps)."""
         s = self.settings
-        return int(math.ceil(math.log2(s.dt / s.dt_min) - 1e-9)) if s.adaptive else 0
+        return int(math.floor(math.log2(s.dt / s.dt_min) + 1e-9)) if s.adaptive else 0
 
 
 @dataclass
@@ -448,14 +470,17 @@ class DynamicState:
 
 ENERGY_KEYS = ("input", "external", "kinetic", "strain", "damping", "joint", "joint_stored", "joint_dissipated",
                "joint_friction", "joint_bond_break", "joint_contact", "numerical", "error")
+#: the terms whose largest magnitude so far scales the balance ("% of the largest energy term")
+ENERGY_SCALE_KEYS = ("input", "external", "kinetic", "strain", "joint", "damping")
 
 
 @dataclass
 class DynamicStats:
     steps: int = 0
     substeps: int = 0
-    #: dt = "auto": steps refused by the error control (their work is in the iteration counts), and the
-    #: smallest and largest steps taken (s)
+    #: dt = "auto": steps refused and retried smaller (by the error control, or because Newton or the
+    #: energy-growth check refused them; their work is in the iteration counts), and the smallest and
+    #: largest steps taken (s)
     steps_rejected: int = 0
     dt_smallest: float = math.inf
     dt_largest: float = 0.0
@@ -753,9 +778,12 @@ def energy_warnings(stats: "DynamicStats", integrator: str, dt: str) -> list[str
     out = []
     err = stats.energy_error_max / scale
     if err > ENERGY_WARNING_FRACTION:
+        cause = ("central difference lags the damping force half a step: dt is too large for the damping"
+                 if integrator == "central_difference" else
+                 "the Newton tolerances (force_tolerance, energy_tolerance) are too loose for this run, or steps "
+                 "were accepted at their last halving")
         out.append(f"the energy balance misses by {100 * err:.3g} % of its largest term ({stats.energy_error_max:.3g} "
-                   "J): the Newton tolerances (force_tolerance, energy_tolerance) are too loose for this run, or "
-                   "steps were accepted at their last halving")
+                   f"J): {cause}")
     created = -stats.energy_contact / scale
     if created > ENERGY_WARNING_FRACTION:
         out.append(f"joint contact events created {100 * created:.3g} % of the largest energy term "
@@ -1020,7 +1048,7 @@ class DynamicSolver:
                             "strain0": 0.5 * float(u @ st.Kc_u) - en.get("strain", 0.0),
                             "stored0": self._joint_stored() - en.get("joint_stored", 0.0)}
             st.energy = en
-            self._energy_scale = max([abs(x) for x in en.values()] + [0.0])
+            self._energy_scale = max(abs(en.get(key, 0.0)) for key in ENERGY_SCALE_KEYS)
             self._iters_since_record = 0
             self._last_emitted_t = None if record_initial else st.t
             if record_initial:
@@ -1107,6 +1135,14 @@ class DynamicSolver:
         step for the energy split of :meth:`_record_energy` (and the start of the next)."""
         return [(g.delta.copy(), g.traction.copy(), g.state_trial.copy()) for g in self.model.igroups]
 
+    def _restore_joint_fields(self, st):
+        """After a refused step: the joints' relative displacements and tractions of the committed state
+        ``st`` (``revert`` restores the law's state only), so that a retry accepted without a new
+        evaluation (residual within tolerance at the predictor) records the right joint energies."""
+        for g, (d, t, _) in zip(self.model.igroups, st.joints):
+            g.delta[...] = d
+            g.traction[...] = t
+
     def _record_energy(self, st, prev):
         """Accumulate the works of the step prev -> st (Hughes 2000, sec. 9.1.4) and the balance error.
 
@@ -1122,7 +1158,7 @@ class DynamicSolver:
         value is the dissipation plus a bounded "algorithmic energy" of order h^2 a.M a; Krenk 2006, Comput.
         Methods Appl. Mech. Eng. 195:6110-6124). For central difference ``numerical`` is the kinematic
         part ``-h^2/8 d(a.M a)`` alone (its damping force lags half a step; that lag stays in ``error``).
-        What is left, ``error``, is the Newton tolerance and round-off."""
+        What is left, ``error``, is the Newton tolerance and round-off (and central difference's damping lag)."""
         free = self.free
         e = dict(prev.energy)
         v0f, v1f = prev.v[free], st.v[free]
@@ -1173,8 +1209,7 @@ class DynamicSolver:
 
     def _accept_energy(self, st):
         e = st.energy
-        self._energy_scale = max(self._energy_scale, abs(e["input"]), abs(e["external"]), abs(e["kinetic"]),
-                                 abs(e["strain"]), abs(e["joint"]), abs(e["damping"]))
+        self._energy_scale = max([self._energy_scale] + [abs(e[key]) for key in ENERGY_SCALE_KEYS])
         g = self._energy_growth(e)
         if g > self.stats.energy_growth_max:
             self.stats.energy_growth_max = g
@@ -1263,12 +1298,13 @@ class DynamicSolver:
                 def check(new, old, h, enforce=level < top):
                     return self._step_error(new, old, h, enforce)
 
-                # below dt_min a step is only halved for Newton's sake: from dt_min on, a joint-space
-                # iteration that does not converge goes on in the general path instead
+                # a joint-space iteration that does not converge goes on in the general path at every
+                # level (the error decides the step size); below dt_min a step is halved for Newton's sake only
                 ok, new, why = self._implicit_try(st, t_end, h, can_split=level < top, error_check=check,
                                                   split_joint_space=False)
                 if not ok:
                     self.model.revert()
+                    self._restore_joint_fields(st)
                     self.stats.steps_rejected += 1
                     if level >= last_level:
                         self._fail(stage, st, ConvergenceError(
@@ -1356,6 +1392,7 @@ class DynamicSolver:
         if ok:
             return new
         self.model.revert()
+        self._restore_joint_fields(st)
         if level >= self.s.max_substeps:
             self._fail(stage, st, ConvergenceError(
                 f"dynamic stage '{stage.name}': no convergence in the step from t = {st.t:.6g} s to "

@@ -471,7 +471,7 @@ def _dynamic_stage(s, key, dim, index):
                 raise SceneError(f"{key}.{k}", f"applies to dt = \"auto\" (error-controlled steps) only; dt is "
                                                f"{s['dt']!r}")
         if isinstance(s["dt"], str) and s["dt"].strip().lower() == "auto":
-            raise SceneError(f"{key}.dt", f"write dt = \"auto\" (lower case) for error-controlled steps")
+            raise SceneError(f"{key}.dt", "write dt = \"auto\" (lower case) for error-controlled steps")
         out["adaptive"] = False
         out["dt"] = _time(s["dt"], f"{key}.dt")
         out["dt_min"] = None

@@ -254,6 +254,9 @@ class DynamicSettings:
     stability_safety: fraction of the critical step allowed for conditionally stable schemes;
     joint_space: "auto" | "on" | "off" - Newton condensed on the nonlinear joints
     (:mod:`.joint_space`; "auto" and "on": whenever the model has nonlinear joints);
+    adaptive: dt = "auto" (``dt`` is then the largest step, ``tolerance`` the relative local error per step
+    and ``dt_min`` (s) the smallest step, default dt / 2^ADAPTIVE_DEFAULT_LEVELS; see
+    :meth:`DynamicSolver._run_adaptive`);
     key: scene key prefix used in error messages (e.g. ``"stages[1]."``).
     """
 

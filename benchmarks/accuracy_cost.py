@@ -52,6 +52,8 @@ for p in (ROOT, ROOT / "tests", Path(__file__).resolve().parent):
 
 from _common import cpu_model, pin_one_thread  # noqa: E402
 
+from masonrydam.scene.schema import set_time_steps  # noqa: E402
+
 G = 9.80665
 EXAMPLES = ROOT / "examples"
 
@@ -77,10 +79,8 @@ def koyna_scene(law="mohr_coulomb", dt=0.01, duration=8.0, element_size=1.45, or
         if integration is not None:
             joint["integration"] = integration
         sc["joints"][name] = joint
-    st = sc["stages"][1]
-    for key in ("steps", "dt_max", "tolerance"):
-        st.pop(key, None)
-    st.update(duration=duration, dt=dt, integrator=integrator)
+    st = set_time_steps(sc["stages"][1], dt, duration=duration)
+    st["integrator"] = integrator
     if integrator != "hht":
         st.pop("alpha", None)
     if force_tolerance is not None:
@@ -95,12 +95,7 @@ def koyna_scene(law="mohr_coulomb", dt=0.01, duration=8.0, element_size=1.45, or
 
 def wall_scene(dt=0.005, duration=None, force_tolerance=None, **stage) -> dict:
     sc = _example("wall_el_centro.toml")
-    st = sc["stages"][-1]
-    for key in ("steps", "dt_max", "tolerance"):
-        st.pop(key, None)
-    if duration is not None:
-        st["duration"] = duration
-    st["dt"] = dt
+    st = set_time_steps(sc["stages"][-1], dt, duration=duration)
     if force_tolerance is not None:
         st["force_tolerance"] = force_tolerance
     st["output"] = {"dt": 0.01 if dt == "auto" else dt * max(1, round(0.01 / dt)), "nodes": ["top"]}

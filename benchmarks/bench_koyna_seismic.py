@@ -41,13 +41,13 @@ def scene(law: str, steps: int, element_size: float) -> dict:
     ``element_size`` (m) and, for ``law = "linear"``, every joint linear with the same stiffnesses."""
     import tomllib
 
+    from masonrydam.scene.schema import set_time_steps
+
     sc = tomllib.loads(SCENE_FILE.read_text())
     sc["model"]["name"] = f"koyna_{law}"
     sc["mesh"]["parameters"]["element_size"] = element_size
-    st = sc["stages"][1]
-    for key in ("duration", "dt_max", "tolerance"):  # the example's error-controlled steps: fixed ones here
-        st.pop(key, None)
-    st.update(dt=0.01, steps=steps, output={"stride": 10, "nodes": ["crest"]})
+    # the example's dt = "auto": fixed steps here
+    set_time_steps(sc["stages"][1], 0.01, steps=steps)["output"] = {"stride": 10, "nodes": ["crest"]}
     if law == "linear":
         for name, joint in sc["joints"].items():
             sc["joints"][name] = {"law": "linear", "normal_stiffness": joint["normal_stiffness"],

@@ -39,10 +39,9 @@ def koyna(steps: int, stride: int, element_size: float = 1.45, all_nodes: bool =
     the scene's [output] section (precision, compression, ...)."""
     sc = tomllib.loads(SCENE_FILE.read_text())
     sc["mesh"]["parameters"]["element_size"] = element_size
-    dyn = sc["stages"][1]
-    for key in ("duration", "dt_max", "tolerance"):  # the example's error-controlled steps: fixed ones here
-        dyn.pop(key, None)
-    dyn.update(dt=0.01, steps=steps)
+    from masonrydam.scene.schema import set_time_steps
+
+    dyn = set_time_steps(sc["stages"][1], 0.01, steps=steps)  # the example's dt = "auto": fixed steps here
     dyn["output"] = {"stride": stride} if all_nodes else {"stride": stride, "nodes": ["crest"]}
     sc["output"] = dict(output or {})
     return sc

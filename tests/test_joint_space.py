@@ -405,12 +405,11 @@ def _koyna_scene(steps, element_size=3.0):
     import tomllib
     from pathlib import Path
 
+    from masonrydam.scene.schema import set_time_steps
+
     sc = tomllib.loads((Path(__file__).resolve().parents[1] / "examples" / "koyna_el_centro.toml").read_text())
     sc["mesh"]["parameters"]["element_size"] = element_size
-    st = sc["stages"][1]
-    for key in ("duration", "dt_max", "tolerance"):  # the example's error-controlled steps: fixed ones here
-        st.pop(key, None)
-    st.update(dt=0.01, steps=steps)
+    st = set_time_steps(sc["stages"][1], 0.01, steps=steps)  # the example's dt = "auto": fixed steps here
     st["output"] = {"stride": 50, "nodes": ["crest"]}
     return sc
 

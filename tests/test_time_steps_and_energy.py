@@ -106,15 +106,13 @@ def koyna_section(dt, duration=4.0):
     import tomllib
     from pathlib import Path
 
+    from masonrydam.scene.schema import set_time_steps
     from masonrydam.scene.scene import Scene
 
     examples = Path(__file__).resolve().parents[1] / "examples"
     sc = tomllib.loads((examples / "koyna_el_centro.toml").read_text())
     sc["mesh"]["parameters"]["element_size"] = 2.9
-    st = sc["stages"][1]
-    for key in ("steps", "dt_max", "tolerance"):
-        st.pop(key, None)
-    st.update(dt=dt, duration=duration, output={"dt": 0.01, "nodes": ["crest"]})
+    set_time_steps(sc["stages"][1], dt, duration=duration)["output"] = {"dt": 0.01, "nodes": ["crest"]}
     return Scene(sc, base_dir=examples)
 
 

@@ -290,9 +290,11 @@ def _selection(value, key):
 STAGE_TYPES = ("static", "dynamic")
 INTEGRATORS = ("newmark_average", "newmark_linear", "hht", "generalized_alpha", "central_difference")
 PULSE_SHAPES = ("rectangular", "half_sine")
+#: keys of a dynamic stage that apply to dt = "auto" only
+AUTO_STEP_KEYS = ("tolerance", "dt_min", "dt_max")
 _DYNAMIC_KEYS = {"name", "type", "steps", "duration", "dt", "integrator", "alpha", "rho_inf", "mass", "damping",
                  "ground_motion", "output", "max_iterations", "max_substeps", "force_tolerance", "energy_tolerance",
-                 "low_rank_max", "joint_space", "tolerance", "dt_min", "dt_max"}
+                 "low_rank_max", "joint_space", *AUTO_STEP_KEYS}
 #: dt = "auto" without dt_max (and without output.dt): the largest step (s)
 AUTO_DT_MAX_DEFAULT = 0.01
 #: dt = "auto": default relative local error per step (see solvers.dynamic.DynamicSolver._step_error)
@@ -444,6 +446,22 @@ def _ground_component(d, key):
     return out
 
 
+def set_time_steps(stage: dict, dt, *, steps=None, duration=None) -> dict:
+    """Give the dynamic stage ``stage`` of a scene dictionary (as read from TOML, changed in place and
+    returned) other time steps: ``dt`` a step (s) or ``"auto"``, and ``steps`` or ``duration`` as its new
+    length where one is given (else it keeps its own). The keys of dt = "auto" it had
+    (:data:`AUTO_STEP_KEYS`) are dropped; give new ones after this call. For scripts and benchmarks
+    that run a bundled example with settings of their own."""
+    for k in AUTO_STEP_KEYS:
+        stage.pop(k, None)
+    if steps is not None or duration is not None:
+        stage.pop("steps", None)
+        stage.pop("duration", None)
+        stage.update({"steps": steps} if steps is not None else {"duration": duration})
+    stage["dt"] = dt
+    return stage
+
+
 def _dynamic_stage(s, key, dim, index):
     _check_keys(s, _DYNAMIC_KEYS, key)
     if "loads" in s:
@@ -466,7 +484,7 @@ def _dynamic_stage(s, key, dim, index):
         out["tolerance"] = _number(s.get("tolerance", AUTO_TOLERANCE_DEFAULT), f"{key}.tolerance", 0.0, 1.0,
                                    open_min=True)
     else:
-        for k in ("tolerance", "dt_min", "dt_max"):
+        for k in AUTO_STEP_KEYS:
             if k in s:
                 raise SceneError(f"{key}.{k}", f"applies to dt = \"auto\" (error-controlled steps) only; dt is "
                                                f"{s['dt']!r}")

@@ -404,24 +404,20 @@ class GroundMotion:
         jump = t0 <= t_end < t1 and self.values[-1] != 0.0
         if len(t_in) == 0 and not jump:
             return 0.0
-        chord = lambda t: a0 + (a1 - a0) * (t - t0) / (t1 - t0)  # noqa: E731
         tt = np.concatenate(([t0], t_in, [t1]))
-        f = np.array([a0] + [float(np.interp(x, self._times, self.values)) for x in t_in] + [a1])
+        f = np.concatenate(([a0], np.interp(t_in, self._times, self.values), [a1]))
         if jump:  # a_g falls from the last sample to zero at t_end: split the segment there
             k = int(np.searchsorted(tt, t_end, side="right"))
             tt = np.concatenate((tt[:k], [t_end, t_end], tt[k:]))
             f = np.concatenate((f[:k], [self.values[-1], 0.0], f[k:]))
-        d = f - np.array([chord(x) for x in tt])
-        total = 0.0
-        for k in range(len(tt) - 1):  # |linear| integrated exactly on each piece (sign changes too)
-            h, da, db = tt[k + 1] - tt[k], d[k], d[k + 1]
-            if h <= 0.0:
-                continue
-            if da * db >= 0.0:
-                total += 0.5 * (abs(da) + abs(db)) * h
-            else:
-                total += 0.5 * (da * da + db * db) / (abs(da) + abs(db)) * h
-        return float(total)
+        d = f - (a0 + (a1 - a0) * (tt - t0) / (t1 - t0))
+        # |d| is linear on each piece: integrated exactly, also where d changes sign inside it (one pass
+        # in numpy: a step of dt_max over a pulse sampled at dt_min holds a thousand samples)
+        da, db, h = d[:-1], d[1:], np.diff(tt)
+        same = da * db >= 0.0
+        width = np.abs(da) + np.abs(db)
+        piece = np.where(same, 0.5 * width, 0.5 * (da * da + db * db) / np.where(same, 1.0, width))
+        return float(np.sum(piece * h))
 
 
 @dataclass

@@ -7,7 +7,7 @@ import math
 import numpy as np
 
 from masonrydam.errors import SceneError
-from masonrydam.scene.units import quantity
+from masonrydam.units import quantity
 
 from .grid import Rect, rectangles_to_mesh
 from .grid3d import Box, boxes_to_mesh, rotation_matrix

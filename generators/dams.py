@@ -81,7 +81,7 @@ from masonrydam.elements.shapes import ELEMENT_TYPES
 from masonrydam.errors import MeshError, SceneError
 from masonrydam.mesh.interfaces import element_facets, insert_interfaces
 from masonrydam.mesh.model import CellBlock, FacetSet, Mesh
-from masonrydam.scene.units import quantity
+from masonrydam.units import quantity
 
 from ._gmsh import entity_elements, get_nodes, gmsh_session, tags_to_index
 

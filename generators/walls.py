@@ -158,7 +158,7 @@ def check_bond(bond, key: str) -> str:
 
 
 def _length_value(v, key: str) -> float:
-    from masonrydam.scene.units import quantity
+    from masonrydam.units import quantity
 
     return quantity(v, "length", key)
 

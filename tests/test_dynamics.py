@@ -25,7 +25,7 @@ import pytest
 import scipy.optimize
 
 import masonrydam
-from masonrydam import loads as L
+from masonrydam.effects import loads as L
 from masonrydam.assembly.dofmap import DofMap
 from masonrydam.assembly.groups import ContinuumGroup
 from masonrydam.assembly.model import Model

@@ -27,7 +27,7 @@ import pytest
 import scipy.optimize
 
 import masonrydam
-from masonrydam import loads as L
+from masonrydam.effects import loads as L
 from masonrydam.errors import ConvergenceError, MechanismError
 from masonrydam.materials import mohr_coulomb as mc
 from masonrydam.solvers.dynamic import DynamicSettings, DynamicSolver, DynamicStage, GroundMotion

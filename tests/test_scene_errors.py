@@ -25,7 +25,7 @@ from masonrydam.cli.main import main
 from masonrydam.errors import SceneError
 from masonrydam.scene.scene import Scene
 from masonrydam.scene.schema import normalize
-from masonrydam.scene.units import quantity
+from masonrydam.units import quantity
 
 
 def base_scene() -> dict:

@@ -1,7 +1,7 @@
 """Scene validation gaps of issue 22: implausible magnitudes (unit slips), NaN and infinity, NumPy
 values from Python, and ``masonrydam check`` finding the mechanisms that ``run`` finds.
 
-Plausible ranges (masonrydam/scene/units.py, PLAUSIBLE) lie orders of magnitude beyond real values:
+Plausible ranges (masonrydam/units.py, PLAUSIBLE) lie orders of magnitude beyond real values:
 Young's modulus of masonry and concrete 1-50 GPa, steel 210 GPa (so 1e30 Pa, or '30e9 MPa', is a
 slip); joint stiffnesses 1e9-1e13 N/m3 (Lourenco & Rots 1997: kn = 82 N/mm3 = 8.2e10 N/m3, so 82
 is N/mm3 typed as N/m3); joint cohesion and tensile strength kPa to a few MPa; seismic time steps
@@ -17,7 +17,7 @@ from masonrydam.cli.main import main
 from masonrydam.errors import MechanismError, SceneError
 from masonrydam.scene.scene import Scene
 from masonrydam.scene.schema import normalize
-from masonrydam.scene.units import PLAUSIBLE, SI_UNIT, plausible
+from masonrydam.units import PLAUSIBLE, SI_UNIT, plausible
 from test_scene_errors import BASE_TOML, base_scene, expect_scene_error, modified, no_solve  # noqa: F401
 
 G = 9.80665

@@ -7,6 +7,7 @@
     masonrydam records list                  the bundled ground-motion records
     masonrydam records show NAME [-o PNG]    a record's measures (PGA, PGV, PGD, Arias, D5-95, CAV) and plot
     masonrydam plot OUT.nc [--nodes N ..] [--joints J ..] -o PNG   histories from a result file
+    masonrydam assess OUT.nc [--step N] [--condition C] [--csv F]  stability of the joint lines (dams)
 """
 from __future__ import annotations
 
@@ -124,6 +125,28 @@ def _cmd_plot(args):
     fig = history_figure(ds, path.name, args.component, args.nodes, args.joints)
     fig.savefig(out, dpi=110)
     print(f"wrote {out}")
+    return 0
+
+
+def _cmd_assess(args):
+    """Stability table of the joint lines of a result with a reservoir, at one step, against the criteria
+    of a load condition (:func:`masonrydam.results.assess.assessment_report`); exit code 0 whether or not
+    the sections meet them."""
+    from ..results import assess
+    from ..results.files import check_output_path, open_result
+
+    path = Path(args.result)
+    csv_out = check_output_path(args.csv, "--csv") if args.csv else None
+    ds = open_result(path)  # an incomplete result warns (one line on the command line)
+    i = assess.select_step(ds, args.step, path.name)
+    lines, _ = assess.assessment_report(ds, i, args.condition, path.name)
+    print("\n".join(lines))
+    if args.all_steps:
+        print()
+        print("\n".join(assess.over_steps_report(ds, args.condition)))
+    if csv_out is not None:
+        assess.write_assessment_csv(ds, i, csv_out, args.condition)
+        print(f"wrote {csv_out}")
     return 0
 
 
@@ -249,6 +272,22 @@ def main(argv=None) -> int:
     pl.add_argument("--component", default="x", help="displacement component (default x)")
     pl.add_argument("-o", "--output", help="PNG file (default: RESULT.png in the current folder)")
     pl.set_defaults(func=_cmd_plot)
+    a = sub.add_parser("assess", help="stability of a dam's joint lines (sliding, resultant, cracking) at one step",
+                       description="Table of the stability sections (base and lift joints) of a result whose "
+                                   "scene has a [reservoir], at one step, against the criteria of a load "
+                                   "condition (USACE EM 1110-2-2100, 2005): '!' marks a failing value. Exit "
+                                   "code 0 when the table is printed, whether or not the criteria are met; "
+                                   "2 for a result without sections or a step not in the file.")
+    a.add_argument("result", help="result file written by `masonrydam run`")
+    a.add_argument("--step", type=int, help="step, as in the file's step coordinate; negative: from the end "
+                                            "(default: the last step, -1)")
+    a.add_argument("--condition", choices=["usual", "unusual", "extreme"], default="usual",
+                   help="load condition whose criteria apply: sliding factor 1.5 / 1.3 / 1.1, resultant in the "
+                        "middle third / middle half / the line (default usual)")
+    a.add_argument("--csv", metavar="FILE", help="also write the table to FILE (SI units, full precision, flags)")
+    a.add_argument("--all-steps", action="store_true", help="also print each section's lowest sliding factor "
+                                                             "and largest cracked ratio over all steps, and where")
+    a.set_defaults(func=_cmd_assess)
     args = p.parse_args(argv)
     try:
         with warnings.catch_warnings():

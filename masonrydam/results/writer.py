@@ -101,7 +101,8 @@ class ResultWriter:
                               + [f"energy_{name}" for name in ENERGY_VARIABLES])
 
     def __init__(self, path, coords, nodes, joint_points, dim, attrs: dict, dynamic: bool = False,
-                 options: OutputOptions | None = None):
+                 options: OutputOptions | None = None, sections: dict | None = None, water: bool = False,
+                 pore_pressure: bool = False, elements: dict | None = None):
         self.path = str(path)
         self.dim = dim
         self.dynamic = bool(dynamic)
@@ -161,6 +162,17 @@ class ResultWriter:
         v = self._var("joint_state", "i1", ("step", "joint_point"), "1", "joint state: 0 stick, 1 slip, 2 open")
         v.flag_values = STATE_FLAGS["flag_values"]
         v.flag_meanings = STATE_FLAGS["flag_meanings"]
+        if pore_pressure:
+            self._var("joint_pore_pressure", "f8", ("step", "joint_point"), "Pa",
+                      "pore pressure (uplift) inside the joint; joint_traction_normal is the effective traction")
+        if water:
+            self._var("reservoir_level", "f8", ("step",), "m", "reservoir water level (vertical coordinate)")
+            self._var("tailwater_level", "f8", ("step",), "m", "tailwater level (vertical coordinate; NaN: none)",
+                      fill_value=np.nan)
+        if sections:
+            self._section_variables(sections)
+        if elements:
+            self._element_variables(elements)
         if self.dynamic:
             self._dynamic_variables()
         nc.Conventions = "CF-1.8"
@@ -188,6 +200,41 @@ class ResultWriter:
         self._in_buffer = 0  # steps in the buffers, not yet in the file
         self._last_flush = time.monotonic()
         self._fast_append = hasattr(netCDF4.Variable, "_put")
+
+    def _section_variables(self, sec):
+        """The joint lines assessed for stability (:mod:`masonrydam.results.assess`): dimension ``section``
+        with its names, lengths and joint sets, and a variable per measure on (step, section)."""
+        from .assess import SECTION_VARIABLES
+
+        self.nc.createDimension("section", len(sec["names"]))
+        self._string_coord("section", ("section",), sec["names"], "joint line (joint set, or set/k from the bottom)")
+        self._string_coord("section_joint_set", ("section",), sec["set_names"], "joint set of the joint line")
+        self._var("section_length", "f8", ("section",), "m", "length of the joint line from its upstream to its "
+                                                              "downstream end")[:] = sec["length"]
+        comps = ["x", "y", "z"][: self.dim]
+        for k, c in enumerate(comps):
+            self._var(f"section_{c}", "f8", ("section",), "m", f"{c} coordinate of the centre of the joint line")[:] = \
+                sec["centre"][:, k]
+        for name, (units, long_name) in SECTION_VARIABLES.items():
+            self._var(name, "f8", ("step", "section"), units, long_name)
+
+    def _element_variables(self, el):
+        """Continuum stress per element (``[output] stress = "element"``): dimension ``element`` (every
+        continuum element, element group after group) with its group and centroid, and ``stress`` on
+        (step, element, stress_component)."""
+        names = ["xx", "yy", "xy"] if self.dim == 2 else ["xx", "yy", "zz", "xy", "yz", "zx"]
+        self.nc.createDimension("element", len(el["group"]))
+        self.nc.createDimension("stress_component", len(names))
+        self._string_coord("stress_component", ("stress_component",), names, "stress component (Voigt order)")
+        v = self._var("element_group", "i4", ("element",), "1", "element group index (see attribute group_names)")
+        v[:] = el["group"]
+        v.group_names = json.dumps(el["group_names"])
+        for k, c in enumerate(["x", "y", "z"][: self.dim]):
+            self._var(f"element_{c}", "f8", ("element",), "m", f"{c} coordinate of the element centroid")[:] = \
+                el["centroid"][:, k]
+        self._var("stress", "f8", ("step", "element", "stress_component"), "Pa",
+                  "continuum stress, mean of the element's integration points (tension positive; 2D plane "
+                  "strain szz not included)")
 
     def _dynamic_variables(self):
         nc = self.nc
@@ -270,12 +317,14 @@ class ResultWriter:
             self.nc.sync()
         self._last_flush = time.monotonic()
 
-    def write_step(self, stage, load_factor, iterations, displacement, reaction, joints, dynamic=None):
+    def write_step(self, stage, load_factor, iterations, displacement, reaction, joints, dynamic=None, extra=None):
         """Add one converged step (written with its block, see :class:`OutputOptions`).
         displacement, reaction: (n_out, dim); joints: dict opening (n_jp,), slip (n_jp, dim-1),
         plastic_slip, t_normal, t_shear, state; dynamic (time-history files, dynamic steps): dict time
         (s), velocity, acceleration, acceleration_absolute (n_out, dim), ground_acceleration (dim,),
-        energy (dict name -> J)."""
+        energy (dict name -> J); extra: values of the optional step variables the writer was created
+        with (``joint_pore_pressure``, ``reservoir_level``, ``tailwater_level``, the section measures,
+        ``stress``)."""
         if dynamic is not None and not self.dynamic:
             raise ValueError("this writer was created without dynamic=True")
         i = self._in_buffer
@@ -305,6 +354,8 @@ class ResultWriter:
             buf["joint_traction_normal"][i] = joints["t_normal"]
             buf["joint_traction_shear"][i] = joints["t_shear"]
             buf["joint_state"][i] = joints["state"]
+        for name, value in (extra or {}).items():
+            buf[name][i] = value
         self.n += 1
         self._in_buffer = i + 1
         if self._in_buffer == self.block_steps or time.monotonic() - self._last_flush >= self.options.flush_seconds:

@@ -247,7 +247,7 @@ def build_stages(scene: dict, mesh: Mesh, model: Model, base_dir: Path | None = 
 
     A dynamic stage keeps the supports and holds the DOFs prescribed by the last static stage at their
     values (they move with the ground); its ground motion is read and scaled here."""
-    from .. import loads as L
+    from ..effects import loads as L
     from ..solvers.dynamic import DynamicStage
 
     dim = mesh.dim
@@ -259,6 +259,11 @@ def build_stages(scene: dict, mesh: Mesh, model: Model, base_dir: Path | None = 
     stages = []
     weight = None
     held = np.zeros(model.n_dof, dtype=bool)
+    reservoir = water_levels = None
+    if scene.get("reservoir"):
+        from ..effects.reservoir import Reservoir
+
+        reservoir = Reservoir(scene["reservoir"], mesh, model, scene["model"]["thickness"])
     for i, st in enumerate(scene["stages"]):
         if st["type"] == "dynamic":
             settings = dynamic_settings(st, i, scene["solver"]["linear_solver"])
@@ -280,7 +285,15 @@ def build_stages(scene: dict, mesh: Mesh, model: Model, base_dir: Path | None = 
         incr = np.zeros(model.n_dof)
         for j, ld in enumerate(st["loads"]):
             key = f"stages[{i}].loads[{j}]"
-            if ld["type"] == "self_weight":
+            if ld["type"] == "reservoir":  # the water rises to its level over the stage (effects.reservoir)
+                start = reservoir.empty() if water_levels is None else water_levels[1]
+                end = reservoir.full(ld["level"]) if water_levels is None else \
+                    (ld["level"] if ld["level"] is not None else start[0],) + tuple(start[1:])
+                if water_levels is None and ld["level"] is not None and ld["level"] <= reservoir.face.bottom:
+                    raise SceneError(f"{key}.level", f"{ld['level']:g} m is not above the lowest point of the face "
+                                                     f"'{reservoir.face.name}' ({reservoir.face.bottom:g} m)")
+                water_levels = (start, end)
+            elif ld["type"] == "self_weight":
                 if weight is None:
                     weight = L.self_weight(model, scene["model"]["gravity"])
                 force += ld["factor"] * weight
@@ -305,7 +318,15 @@ def build_stages(scene: dict, mesh: Mesh, model: Model, base_dir: Path | None = 
                         raise SceneError(f"{key}.set", f"prescribes component {c} on nodes that are supports")
                     presc[d] = True
                     incr[d] = v
-        stages.append(StaticStage(st["name"], st["steps"], force, presc, incr, supports.copy()))
+        water = None
+        if water_levels is not None:
+            from ..effects.reservoir import StageWater
+
+            start, end = water_levels
+            water = StageWater(reservoir, start, end)
+            water_levels = (end, end)  # later stages keep the water where this one left it
+        stages.append(StaticStage(st["name"], st["steps"], force, presc, incr, supports.copy(), water=water,
+                                  until_failure=st.get("until_failure", False)))
         held = presc.copy()
     return stages
 
@@ -324,40 +345,6 @@ def effects(scene: dict, model: Model) -> list[str]:
         out.append("Mohr-Coulomb joints with slip, opening and re-contact (seed sec. 3.4): " + ", ".join(sorted(set(mc_sets))))
     if lin_sets:
         out.append("linear elastic joints: " + ", ".join(sorted(set(lin_sets))))
-    kinds = {ld["type"] for st in scene["stages"] if st["type"] == "static" for ld in st["loads"]}
-    facet = "edge" if model.dim == 2 else "face"
-    names = {"self_weight": "self-weight", "nodal": "nodal forces", "traction": f"{facet} tractions",
-             "pressure": f"{facet} pressures", "displacement": "prescribed displacements (displacement control)"}
-    out += [names[k] for k in sorted(kinds)]
-    dyn = [st for st in scene["stages"] if st["type"] == "dynamic"]
-    if not dyn:
-        out.append("static analysis (no inertia, no damping)")
-        return out
-    integ = {"newmark_average": "Newmark average acceleration", "newmark_linear": "Newmark linear acceleration",
-             "hht": "HHT-alpha", "generalized_alpha": "generalized-alpha", "central_difference": "central difference"}
-    for st in dyn:
-        what = integ[st["integrator"]]
-        if st["integrator"] == "hht":
-            what += f" (alpha {st['alpha']:g})"
-        elif st["integrator"] == "generalized_alpha":
-            what += f" (rho_inf {st['rho_inf']:g})"
-        steps = (f"dt auto (tolerance {st['tolerance']:g}, dt_max {st['dt']:g} s)" if st.get("adaptive")
-                 else f"dt {st['dt']:g} s")
-        out.append(f"dynamic stage '{st['name']}': {st['mass']} mass inertia, {what}, {steps}")
-        d = st["damping"]
-        if d is None:
-            out.append(f"dynamic stage '{st['name']}': no viscous damping")
-        else:
-            which = "continuum stiffness only (joints excluded)" if d["exclude_joints"] else "continuum and joint stiffness"
-            if "ratio" in d:
-                out.append(f"dynamic stage '{st['name']}': Rayleigh damping {100 * d['ratio']:g} % at "
-                           f"{d['frequencies'][0]:g} and {d['frequencies'][1]:g} Hz, stiffness part on the {which}")
-            else:
-                out.append(f"dynamic stage '{st['name']}': Rayleigh damping alpha {d['alpha']:g} 1/s, beta {d['beta']:g} s, "
-                           f"stiffness part on the {which}")
-        comps = []
-        for c, g in st["ground_motion"].items():
-            src = g.get("record") or g.get("file") or (f"{g['pulse']['shape']} pulse" if "pulse" in g else "values")
-            comps.append(f"{c}: {src}")
-        out.append(f"dynamic stage '{st['name']}': uniform base excitation, relative formulation ({'; '.join(comps)})")
-    return out
+    from ..effects import simulated
+
+    return out + simulated(scene, model)

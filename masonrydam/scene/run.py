@@ -183,15 +183,26 @@ def run(scene, output: str | os.PathLike | None = None, progress: bool = False, 
     if target is not None:
         claim_working_file(work)
     options = OutputOptions(**{f.name: s["output"][f.name] for f in dataclasses.fields(OutputOptions)})
+    water = _Water(model, static_stages, jgroups)
+    if water.reservoir is not None:
+        attrs["reservoir_downstream_direction"] = [float(v) for v in water.reservoir.downstream]
     try:
         writer = ResultWriter(work, mesh.points, nodes, _joint_points(jgroups, set_names, dim), dim, attrs,
-                              dynamic=bool(dyn_stages), options=options)
+                              dynamic=bool(dyn_stages), options=options, sections=water.section_info(),
+                              water=water.reservoir is not None, pore_pressure=water.uplift is not None,
+                              elements=_element_info(model) if s["output"]["stress"] == "element" else None)
     except OSError as exc:  # e.g. another run holds the working file (HDF5 file lock), disk full
         if target is None:
             os.unlink(work)
         raise OutputError(f"cannot write the result file '{work}': {exc.strerror or exc}") from None
     last_iters = {"n": 0}
     stopper = StopRequests()
+
+    def stress(u):  # the continuum stress where the scene asks for it ([output] stress)
+        if s["output"]["stress"] == "none":
+            return {}
+        return {"stress": np.concatenate([g.stress(model.coords, u).mean(axis=1) for g in model.cgroups])}
+
     n_static = len(static_stages)
 
     def on_step(si, st, lam, u, f_int, f_ext):
@@ -202,7 +213,7 @@ def run(scene, output: str | os.PathLike | None = None, progress: bool = False, 
         last_iters["n"] = done
         with stopper.writing():
             writer.write_step(si, lam, iters, u.reshape(-1, dim)[nodes], r.reshape(-1, dim)[nodes],
-                              _joint_results(jgroups, dim))
+                              _joint_results(jgroups, dim), extra=dict(water.extra(st, lam), **stress(u)))
         status = stopper.requested()
         end_of_run = si == n_static - 1 and lam >= 1.0 - 1e-12 and not dyn_stages
         if status is not None and not end_of_run:
@@ -215,9 +226,9 @@ def run(scene, output: str | os.PathLike | None = None, progress: bool = False, 
         bar = _Progress(len(stages), progress)
         solver = StaticSolver(model, settings, on_step=on_step, progress=bar)
         u = solver.run(static_stages) if static_stages else np.zeros(model.n_dof)
-        if dyn_stages:
+        if dyn_stages and solver.limit is None:
             _run_dynamic(model, static_stages, dyn_stages, stages, u, writer, nodes, jgroups, dim, bar, dyn_solvers,
-                         stopper)
+                         stopper, water, stress)
         with stopper.closing():  # solved: a request from here on changes nothing
             bar.close()
             stats = _stats_attrs(solver, t_start, dyn_solvers)
@@ -313,15 +324,18 @@ def _dynamic_attrs(stages) -> dict:
     return out
 
 
-def _run_dynamic(model, static_stages, dyn_stages, stages, u, writer, nodes, jgroups, dim, bar, dyn_solvers, stopper):
+def _run_dynamic(model, static_stages, dyn_stages, stages, u, writer, nodes, jgroups, dim, bar, dyn_solvers, stopper,
+                 water, stress):
     """Run the dynamic stages from the static state ``u`` (and the joint state committed in the model);
-    ``stopper`` (:class:`StopRequests`) is asked after every step."""
+    ``stopper`` (:class:`StopRequests`) is asked after every step; ``water``: the run's :class:`_Water`
+    (the static water and pore forces stay applied)."""
     from ..solvers.dynamic import DynamicSolver
     from ..solvers.modal import MassMatrix
 
     f_static = np.zeros(model.n_dof)
     for st in static_stages:
         f_static += st.force
+    f_static += water.static_force()
     masses = {}
     v = a = energy = None
     t = 0.0
@@ -347,11 +361,81 @@ def _run_dynamic(model, static_stages, dyn_stages, stages, u, writer, nodes, jgr
                                   dynamic={"time": rec["t"], "velocity": rec["v"].reshape(-1, dim)[nodes],
                                            "acceleration": rec["a"].reshape(-1, dim)[nodes],
                                            "acceleration_absolute": rec["a_abs"].reshape(-1, dim)[nodes],
-                                           "ground_acceleration": rec["ag"], "energy": rec["energy"]})
+                                           "ground_acceleration": rec["ag"], "energy": rec["energy"]},
+                                  extra=dict(water.extra(None, None), **stress(rec["u"])))
 
         state = ds.run(st, u0=u, v0=v, a0=None, f_static=f_static, equilibrate=(k == 0), t0=t, energy0=energy,
                        on_step=on_step, record_initial=(k == 0))
         u, v, t, energy = state.u, state.v, state.t, state.energy
+
+
+def _element_info(model) -> dict:
+    """Groups and centroids of the continuum elements, for ``[output] stress = "element"``."""
+    return {"group": np.concatenate([np.full(g.n_elem, i) for i, g in enumerate(model.cgroups)]),
+            "group_names": [g.name for g in model.cgroups],
+            "centroid": np.vstack([model.coords[g.conn].mean(axis=1) for g in model.cgroups])}
+
+
+class _Water:
+    """What a run records of the water of its scene (:mod:`masonrydam.effects.reservoir`): the levels,
+    the pore pressures of the recorded joints and the stability measures of the joint lines
+    (:mod:`masonrydam.results.assess`). A scene without a reservoir records none of them."""
+
+    def __init__(self, model, static_stages, jgroups):
+        from ..results.assess import SectionAssessment, assessed_lines
+
+        self.stages = [st for st in static_stages if st.water is not None]
+        self.reservoir = self.stages[0].water.reservoir if self.stages else None
+        self.uplift = None if self.reservoir is None else self.reservoir.uplift
+        self.last = None  # (stage, load factor) of the last static step with water
+        self.assessment = None
+        self._record_groups = [model.igroups.index(g) for g in jgroups]
+        if self.reservoir is not None:
+            lines = assessed_lines(model, self.reservoir)
+            if lines is not None and lines.horizontal.any():
+                self.assessment = SectionAssessment(model, lines)
+
+    def section_info(self):
+        a = self.assessment
+        if a is None:
+            return None
+        L, k = a.lines, a.keep
+        return {"names": a.names, "set_names": [L.set_names[i] for i in k], "length": L.length[k],
+                "centre": L.centre[k]}
+
+    def extra(self, st, lam) -> dict:
+        """Step values for the writer; ``st``/``lam``: the static stage and load factor (None: a dynamic
+        step, which keeps the water of the last static step)."""
+        if self.reservoir is None:
+            return {}
+        if st is not None:
+            if st.water is None:
+                return self._values((self.reservoir.face.bottom, None, None))
+            self.last = (st, lam)
+        if self.last is None:
+            return self._values((self.reservoir.face.bottom, None, None))
+        stage, lam = self.last
+        return self._values(stage.water.levels(lam))
+
+    def _values(self, levels) -> dict:
+        out = {"reservoir_level": levels[0], "tailwater_level": np.nan if levels[1] is None else levels[1]}
+        p = None
+        if self.uplift is not None:
+            p = self.uplift.pressure
+            out["joint_pore_pressure"] = np.concatenate(
+                [np.zeros(0)] + [self.uplift.group_pressure(i) if self.uplift.group_pressure(i) is not None
+                                 else np.zeros(self.uplift.model.igroups[i].n_elem * self.uplift.model.igroups[i].nip)
+                                 for i in self._record_groups])
+        if self.assessment is not None:
+            lines_up = p is not None and self.assessment.lines is self.uplift.lines
+            out.update(self.assessment.measures(self.uplift.line_forces() if lines_up else None))
+        return out
+
+    def static_force(self):
+        """The water and pore forces (n_dof,) N at the end of the static stages (committed joint states)."""
+        if not self.stages:
+            return 0.0
+        return self.stages[-1].water.total(1.0, trial=False)
 
 
 def _stats_attrs(solver, t_start, dyn_solvers=()):
@@ -365,6 +449,11 @@ def _stats_attrs(solver, t_start, dyn_solvers=()):
            "joint_space_flexibility_s": round(st.joint_space_flexibility_s, 4),
            "step_cuts": st.step_cuts, "solve_wall_time_s": round(st.wall_time_s, 4),
            "total_wall_time_s": round(time.perf_counter() - t_start, 4), "per_stage": json.dumps(st.per_stage)}
+    if solver.limit is not None:
+        out["limit_state"] = _limit_text(solver)
+        out["limit_load_factor"] = float(solver.limit["load_factor"])
+        if "water_level" in solver.limit:
+            out["limit_reservoir_level"] = float(solver.limit["water_level"])
     if dyn_solvers:
         d = [x.stats for x in dyn_solvers]
         steps = sum(x.steps for x in d)
@@ -412,6 +501,16 @@ def _stats_attrs(solver, t_start, dyn_solvers=()):
             "dynamic_per_stage": json.dumps([p for x in d for p in x.per_stage]),
         })
     return out
+
+
+def _limit_text(solver) -> str:
+    """Where a stage with ``until_failure`` found no equilibrium, in words (with the water level)."""
+    lim = solver.limit
+    text = (f"stage '{lim['stage']}': no equilibrium beyond load factor {lim['load_factor']:.6g} "
+            f"(tried {lim['failed_at']:.6g}): {lim['reason']}")
+    if "water_level" in lim:
+        text += f"; reservoir level reached {lim['water_level']:.6g} m (tried {lim['water_level_tried']:.6g} m)"
+    return text
 
 
 def _energy_warnings(dyn_solvers):
@@ -505,6 +604,15 @@ def print_summary(sc, mesh, model, eff, solver, stats, path, ds, file=None, dyn_
         last = ds.joint_state.isel(step=-1).values
         lines.append(f"joints end : {int((last == 0).sum())} stick, {int((last == 1).sum())} slip, "
                      f"{int((last == 2).sum())} open")
+    if "limit_state" in stats:
+        lines.append(f"limit      : {stats['limit_state']}")
+    if "section" in ds.dims and ds.sizes.get("step", 0):
+        last = ds.isel(step=-1)
+        sf = last.sliding_safety_factor.values
+        k = int(np.nanargmin(np.where(np.isfinite(sf), sf, np.inf)))
+        lines.append(f"stability  : {ds.sizes['section']} joint lines; lowest sliding factor {sf[k]:.3g} on "
+                     f"'{str(last.section.values[k])}', largest cracked ratio "
+                     f"{float(np.nanmax(last.cracked_length_ratio.values)):.3g} (masonrydam assess FILE)")
     u = ds.displacement.isel(step=-1)
     umax = float(np.abs(u).max())
     lines.append(f"max |u|    : {umax:.4g} m")

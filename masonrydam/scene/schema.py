@@ -7,7 +7,6 @@ converts quantities to SI, fills defaults and returns a new plain dictionary. Ev
 from __future__ import annotations
 
 import copy
-import difflib
 import inspect
 
 import numpy as np
@@ -15,13 +14,19 @@ import numpy as np
 from ..elements.quadrature import QUADRATURE_SCHEMES
 from ..errors import SceneError
 from ..solvers.linear import LINEAR_SOLVERS
-from .units import finite, plausible, quantity
+from ..checks import COMPONENT_NAMES
+from ..checks import boolean as _bool
+from ..checks import check_keys as _check_keys
+from ..checks import choice as _choice
+from ..checks import components as _components
+from ..checks import integer as _int
+from ..checks import number as _number
+from ..checks import positive as _positive
+from ..checks import seconds as _time
+from ..checks import vector as _vector
+from ..units import quantity
 
-COMPONENT_NAMES = ("x", "y", "z")
 JOINT_LAWS = ("mohr_coulomb", "linear")
-LOAD_TYPES = ("self_weight", "nodal", "traction", "pressure", "edge_traction", "edge_pressure", "displacement")
-#: 2D names of the facet loads (kept as aliases; the facets are edges in 2D and faces in 3D)
-LOAD_ALIASES = {"edge_traction": "traction", "edge_pressure": "pressure"}
 HYPOTHESES = ("plane_stress", "plane_strain")
 G_STANDARD = 9.80665
 
@@ -45,62 +50,6 @@ def plain(value):
     if isinstance(value, (str, int, float, bool)) or value is None:
         return value
     return copy.deepcopy(value)
-
-
-def _check_keys(d: dict, allowed, where: str):
-    if not isinstance(d, dict):
-        raise SceneError(where, f"expected a table, got {type(d).__name__}")
-    for k in d:
-        if k not in allowed:
-            close = difflib.get_close_matches(k, list(allowed), n=1)
-            hint = f"; did you mean '{close[0]}'?" if close else f"; known keys: {', '.join(sorted(allowed))}"
-            raise SceneError(f"{where}.{k}" if where else k, f"unknown key{hint}")
-
-
-def _choice(value, options, key):
-    if value not in options:
-        raise SceneError(key, f"must be one of {list(options)}, got {value!r}")
-    return value
-
-
-def _int(value, key, minimum=None):
-    if isinstance(value, bool) or not isinstance(value, int):
-        raise SceneError(key, f"expected an integer, got {value!r}")
-    if minimum is not None and value < minimum:
-        raise SceneError(key, f"must be >= {minimum}, got {value}")
-    return value
-
-
-def _bool(value, key):
-    if not isinstance(value, bool):
-        raise SceneError(key, f"expected true or false, got {value!r}")
-    return value
-
-
-def _positive(value, dimension, key, allow_zero=False):
-    v = quantity(value, dimension, key)  # finite, and in the plausible range of the key
-    if v < 0 if allow_zero else v <= 0:
-        raise SceneError(key, f"must be {'>= 0' if allow_zero else '> 0'}, got {value!r}")
-    return v
-
-
-def _vector(value, dimension, key, dim):
-    if not isinstance(value, (list, tuple)) or len(value) != dim:
-        raise SceneError(key, f"expected a list of {dim} values, got {value!r}")
-    return [quantity(v, dimension, f"{key}[{i}]") for i, v in enumerate(value)]
-
-
-def _components(value, key, dim):
-    if isinstance(value, str):
-        value = [value]
-    if not isinstance(value, (list, tuple)) or not value:
-        raise SceneError(key, f"expected a list of components from {COMPONENT_NAMES[:dim]}, got {value!r}")
-    for c in value:
-        if c not in COMPONENT_NAMES[:dim]:
-            raise SceneError(key, f"unknown component {c!r}; use {list(COMPONENT_NAMES[:dim])}")
-    if len(set(value)) != len(value):
-        raise SceneError(key, f"repeated component in {value!r}")
-    return list(value)
 
 
 def _model(d):
@@ -230,32 +179,14 @@ def _joint(name, d):
 
 
 def _load(d, key, dim):
+    """One load of a static stage, normalised by the effect that owns its type (:mod:`masonrydam.effects`)."""
+    from ..effects import load_types
+
+    types = load_types()
     if not isinstance(d, dict) or "type" not in d:
         raise SceneError(f"{key}.type", "every load needs a 'type'")
-    t = LOAD_ALIASES.get(_choice(d["type"], LOAD_TYPES, f"{key}.type"), d["type"])
-    if t == "self_weight":
-        _check_keys(d, {"type", "factor"}, key)
-        return {"type": t, "factor": _number(d.get("factor", 1.0), f"{key}.factor")}
-    if "set" not in d:
-        raise SceneError(f"{key}.set", "is required")
-    if t == "nodal":
-        _check_keys(d, {"type", "set", "force"}, key)
-        return {"type": t, "set": str(d["set"]), "force": _vector(d.get("force"), "force", f"{key}.force", dim)}
-    if t == "traction":
-        _check_keys(d, {"type", "set", "traction"}, key)
-        return {"type": t, "set": str(d["set"]), "traction": _vector(d.get("traction"), "stress", f"{key}.traction", dim)}
-    if t == "pressure":
-        _check_keys(d, {"type", "set", "pressure"}, key)
-        if "pressure" not in d:
-            raise SceneError(f"{key}.pressure", "is required (Pa, positive pushes into the body)")
-        return {"type": t, "set": str(d["set"]), "pressure": quantity(d["pressure"], "stress", f"{key}.pressure")}
-    _check_keys(d, {"type", "set", "components", "value"}, key)
-    comps = _components(d.get("components"), f"{key}.components", dim)
-    val = d.get("value")
-    if not isinstance(val, (list, tuple)) or len(val) != len(comps):
-        raise SceneError(f"{key}.value", f"expected {len(comps)} value(s) for components {comps}, got {val!r}")
-    return {"type": t, "set": str(d["set"]), "components": comps,
-            "value": [quantity(v, "length", f"{key}.value[{i}]") for i, v in enumerate(val)]}
+    _choice(d["type"], tuple(types), f"{key}.type")
+    return types[d["type"]](d, key, dim)
 
 
 def _solver(d):
@@ -299,36 +230,6 @@ _DYNAMIC_KEYS = {"name", "type", "steps", "duration", "dt", "integrator", "alpha
 AUTO_DT_MAX_DEFAULT = 0.01
 #: dt = "auto": default relative local error per step (see solvers.dynamic.DynamicSolver._step_error)
 AUTO_TOLERANCE_DEFAULT = 1e-5
-
-
-def _number(value, key, minimum=None, maximum=None, open_min=False):
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise SceneError(key, f"expected a number, got {value!r}")
-    try:
-        v = finite(float(value), key, value)
-    except OverflowError:
-        raise SceneError(key, "the integer given is too large for a number") from None
-    if minimum is not None and (v <= minimum if open_min else v < minimum):
-        raise SceneError(key, f"must be {'>' if open_min else '>='} {minimum:g}, got {value!r}")
-    if maximum is not None and v > maximum:
-        raise SceneError(key, f"must be <= {maximum:g}, got {value!r}")
-    return v
-
-
-def _time(value, key):
-    """A time in s (plain number, or a string '<number> s' / '<number> ms'); finite, > 0 and, for a
-    time step, in the plausible range of units.PLAUSIBLE."""
-    given = value
-    if isinstance(value, str):
-        parts = value.split()
-        factor = {"s": 1.0, "ms": 1e-3}.get(parts[-1]) if len(parts) == 2 else None
-        if factor is None:
-            raise SceneError(key, f"cannot read {value!r} as a time; write a number of seconds or e.g. '10 ms'")
-        try:
-            value = float(parts[0]) * factor
-        except ValueError:
-            raise SceneError(key, f"cannot read {value!r} as a time") from None
-    return plausible(_number(value, key, 0.0, open_min=True), "time", key, given)
 
 
 #: processing steps of a ground-motion component (``processing = [{ step = "...", ... }, ...]``, applied in
@@ -573,6 +474,26 @@ def _dynamic_stage(s, key, dim, index):
     return out
 
 
+def _check_reservoir_loads(stages, parts):
+    """A reservoir load needs the [reservoir] section, and the section a stage that applies it; one
+    reservoir load per stage."""
+    used = False
+    for i, st in enumerate(stages):
+        if st["type"] != "static":
+            continue
+        found = [j for j, ld in enumerate(st["loads"]) if ld["type"] == "reservoir"]
+        if found and "reservoir" not in parts:
+            raise SceneError(f"stages[{i}].loads[{found[0]}].type", "a reservoir load needs a [reservoir] section "
+                                                                    "(level, density, face, ...)")
+        if len(found) > 1:
+            raise SceneError(f"stages[{i}].loads[{found[1]}]", "one reservoir load per stage (give the level "
+                                                               "the stage raises the water to)")
+        used = used or bool(found)
+    if "reservoir" in parts and not used:
+        raise SceneError("reservoir", "no static stage applies the water: add { type = \"reservoir\" } to the loads "
+                                      "of a stage")
+
+
 def _output_options(d: dict) -> dict:
     """How steps reach the file (:class:`~masonrydam.results.writer.OutputOptions`)."""
     from ..results.writer import OutputOptions
@@ -590,8 +511,12 @@ def _output_options(d: dict) -> dict:
 def normalize(raw: dict) -> dict:
     """Validate ``raw`` and return the normalised scene (SI floats, defaults filled). NumPy values in
     ``raw`` are taken as the plain Python values they hold (:func:`plain`)."""
+    from ..effects import sections
+
     raw = plain(raw)
-    _check_keys(raw, {"model", "mesh", "materials", "joints", "supports", "stages", "solver", "output"}, "")
+    effect_sections = sections()
+    _check_keys(raw, {"model", "mesh", "materials", "joints", "supports", "stages", "solver", "output",
+                      *effect_sections}, "")
     for req in ("mesh", "materials", "stages"):
         if req not in raw:
             raise SceneError(req, "section is required")
@@ -628,13 +553,17 @@ def normalize(raw: dict) -> dict:
         if st and st[-1]["type"] == "dynamic":
             raise SceneError(f"{key}.type", "static stages must come before the dynamic stages (the dynamic "
                                             "stages continue from the static state)")
-        _check_keys(s, {"name", "type", "steps", "loads"}, key)
+        _check_keys(s, {"name", "type", "steps", "loads", "until_failure"}, key)
         loads = s.get("loads", [])
         if not isinstance(loads, list):
             raise SceneError(f"{key}.loads", "expected an array of tables [[stages.loads]]")
         st.append({"name": str(s.get("name", f"stage{i + 1}")), "type": "static",
                    "steps": _int(s.get("steps", 1), f"{key}.steps", 1),
+                   "until_failure": _bool(s.get("until_failure", False), f"{key}.until_failure"),
                    "loads": [_load(ld, f"{key}.loads[{j}]", dim) for j, ld in enumerate(loads)]})
+        if st[-1]["until_failure"] and i != len(stages) - 1:
+            raise SceneError(f"{key}.until_failure", "applies to the last stage only (the run ends where the stage "
+                                                     "finds no equilibrium)")
     names = [s["name"] for s in st]
     if len(set(names)) != len(names):
         raise SceneError("stages", f"stage names must be unique, got {names}")
@@ -644,8 +573,11 @@ def normalize(raw: dict) -> dict:
         if (a["nodes"], a["joints"]) != (b["nodes"], b["joints"]):
             raise SceneError(f"stages[{j}].output", f"selects other nodes or joints than stages[{i}].output; the "
                                                     "result file has one node and joint selection for all stages")
+    effect_parts = {name: norm(raw[name], model) for name, norm in effect_sections.items() if name in raw}
+    _check_reservoir_loads(st, effect_parts)
     out_raw = raw.get("output", {})
-    _check_keys(out_raw, {"nodes", "joints", "precision", "compression", "buffer_steps", "flush_seconds"}, "output")
+    _check_keys(out_raw, {"nodes", "joints", "precision", "compression", "buffer_steps", "flush_seconds", "stress"},
+                "output")
     return {
         "model": model,
         "mesh": _mesh(raw["mesh"]),
@@ -654,7 +586,9 @@ def normalize(raw: dict) -> dict:
         "supports": sup,
         "stages": st,
         "solver": _solver(raw.get("solver", {})),
+        **effect_parts,
         "output": {"nodes": _selection(out_raw.get("nodes", "all"), "output.nodes"),
+                   "stress": _choice(out_raw.get("stress", "none"), ("none", "element"), "output.stress"),
                    "joints": _selection(out_raw.get("joints", "all"), "output.joints"),
                    **_output_options(out_raw)},
     }

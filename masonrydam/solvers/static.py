@@ -75,6 +75,12 @@ class StaticStage:
     name; steps: nominal number of increments; force: (n_dof,) N applied in full at lambda = 1;
     prescribed: (n_dof,) bool DOFs driven in this stage; increment: (n_dof,) m displacement increment
     of those DOFs over the stage; supports: (n_dof,) bool DOFs held at zero.
+
+    water: loads that are not proportional to the load factor (:class:`~masonrydam.effects.reservoir.StageWater`:
+    ``external(lam)``, the total face forces at ``lam``, computed once per increment; ``pore(lam)``, pore
+    forces that follow the joints' trial states, computed at every iteration where ``state_dependent``);
+    until_failure: a step that finds no equilibrium ends the stage and the analysis (the load factor
+    reached is the limit, :attr:`StaticSolver.limit`) instead of failing it.
     """
 
     name: str
@@ -83,6 +89,8 @@ class StaticStage:
     prescribed: np.ndarray
     increment: np.ndarray
     supports: np.ndarray
+    water: object = None
+    until_failure: bool = False
 
 
 #: a static stage whose joint set is too large for the dense flexibility (JOINT_SPACE_MAX) is condensed
@@ -200,6 +208,10 @@ class StaticSolver:
         self._js_dofmap = None
         self._initial = None  # modified Newton: initial stiffness factorization per constraint set
         self._initial_dofmap = None
+        self._state_load = None  # forces that follow the joint states in the current step (see _newton)
+        #: where a stage with ``until_failure`` found no equilibrium: dict stage, load_factor (the last
+        #: converged), failed_at (the load factor tried), reason; None if none did
+        self.limit = None
 
     # -- linear algebra -------------------------------------------------------------------------
     def _factorize(self, K):
@@ -242,11 +254,14 @@ class StaticSolver:
                            dof_nodes=self._dof_nodes)
 
     # -- one step ---------------------------------------------------------------------------------
-    def _newton(self, u, f_ext, can_cut=False):
+    def _newton(self, u, f_ext, can_cut=False, state_load=None):
         """One step from the trial state ``u``: in joint space first (where it applies), then by the
         general Newton iterations; with ``can_cut``, a step whose joint-space iteration does not
         converge is given up at once (the caller halves it, which is cheaper than the general path's
-        tangent factorizations, as in the dynamic solver)."""
+        tangent factorizations, as in the dynamic solver). ``state_load()``: external forces that
+        follow the joints' trial states (pore pressures in cracks), added to ``f_ext`` after each
+        evaluation; the tangent does not see them (a fixed-point iteration on them)."""
+        self._state_load = state_load
         self.model.set_open_tangent(OPEN_TANGENT_REGULAR)
         try:
             js = self._joint_space()
@@ -323,7 +338,7 @@ class StaticSolver:
 
         m, free = self.model, self.model.dofmap.free
         f_int, _ = m.evaluate(u, want_tangent=False)
-        R = (f_int - f_ext)[free]
+        R = (f_int - self._with_state_load(f_ext))[free]
         r0_norm = float(np.linalg.norm(R))
         ref = max(float(np.linalg.norm(f_ext[free])), float(np.linalg.norm(f_int[free])), r0_norm, 1e-30)
         cols0, secs0 = js.columns.computed, js.columns.seconds
@@ -370,13 +385,14 @@ class StaticSolver:
             f_int, K = m.evaluate(u, want_tangent=want_K)
             if stabilized:
                 m.latch_broken_bonds()
-            r_full = f_ext - f_int
+            f_now = self._with_state_load(f_ext)
+            r_full = f_now - f_int
             if not np.isfinite(r_full).all():
                 raise NumericalError("NaN or infinity in the residual (check loads and stiffnesses)")
             r = r_full[free]
             if it == 0 and r0_norm is None:
                 r0_norm = float(np.linalg.norm(r))
-            ref = max(np.linalg.norm(f_ext), np.linalg.norm(f_int), r0_norm, 1e-30)
+            ref = max(np.linalg.norm(f_now), np.linalg.norm(f_int), r0_norm, 1e-30)
             rn = float(np.linalg.norm(r))
             self._status(f"iteration {it}, residual {rn / ref:.1e}")
             force_ok = rn <= s.force_tolerance * ref
@@ -397,7 +413,7 @@ class StaticSolver:
                     m.set_open_tangent(OPEN_TANGENT_STABILIZED)
                     m.latch_broken_bonds()
                     f_int, K = m.evaluate(u, want_tangent=True)
-                    r = (f_ext - f_int)[free]
+                    r = (self._with_state_load(f_ext) - f_int)[free]
                 elif stabilized:
                     # the pattern has settled: back to the consistent tangent. The initial stiffness of
                     # open points converges only linearly, and where many points are open (contraction
@@ -407,7 +423,7 @@ class StaticSolver:
                         stabilized = False
                         m.set_open_tangent(OPEN_TANGENT_REGULAR)
                         f_int, K = m.evaluate(u, want_tangent=True)
-                        r = (f_ext - f_int)[free]
+                        r = (self._with_state_load(f_ext) - f_int)[free]
                         seen = set()
                 seen.add(sig)
                 prev_sig = sig
@@ -443,7 +459,7 @@ class StaticSolver:
             trial = u.copy()
             trial[free] += s * du
             f_int, _ = m.evaluate(trial, want_tangent=False)
-            g = float(du @ (f_ext - f_int)[free])
+            g = float(du @ (self._with_state_load(f_ext) - f_int)[free])
             if not np.isfinite(g):
                 return 0.5
             if abs(g) <= 0.5 * abs(g0):
@@ -457,6 +473,11 @@ class StaticSolver:
             s = float(np.clip(s_new, 0.1, 1.0))
         self.stats.line_searches += 1
         return s
+
+    def _with_state_load(self, f_ext):
+        """``f_ext`` plus the forces that follow the joints' trial states (see :meth:`_newton`)."""
+        load = getattr(self, "_state_load", None)
+        return f_ext if load is None else f_ext + load()
 
     # -- stages -----------------------------------------------------------------------------------
     def run(self, stages: list[StaticStage], u0: np.ndarray | None = None):
@@ -495,16 +516,23 @@ class StaticSolver:
                 trial = u.copy()
                 trial[st.prescribed] = u_start[st.prescribed] + target * st.increment[st.prescribed]
                 f_ext = f_base + target * st.force
+                state_load = None
+                if st.water is not None:  # not proportional to the load factor: recomputed per increment
+                    f_ext = f_ext + st.water.external(target)
+                    if st.water.state_dependent:
+                        state_load = (lambda target=target: st.water.pore(target))
                 singular = None
                 try:
                     # a step that can still be cut is cut where its joint-space iteration fails
                     can_cut = cuts + 1 <= s.max_step_cuts and dl / 2.0 >= nominal / 2.0 ** s.max_step_cuts
                     self._where = f"{st.name}: load factor {target:.4g}" + (f" ({cuts} cuts)" if cuts else "")
-                    ok, u_new, iters, f_int = self._newton(trial, f_ext, can_cut)
+                    ok, u_new, iters, f_int = self._newton(trial, f_ext, can_cut, state_load)
                 except SingularMatrix as exc:
                     ok, singular = False, exc
                 if ok:
                     u = u_new
+                    if state_load is not None:  # (the trial states are those of the converged solution)
+                        f_ext = f_ext + state_load()
                     m.commit()
                     lam = target
                     self.stats.steps += 1
@@ -525,7 +553,19 @@ class StaticSolver:
                 # otherwise the joints that gave way in that attempt name the mechanism and the part
                 hint = "" if parts or not final else "".join(f"; in the last attempt {t}"
                                                              for t in joint_mechanisms(m))
+                if final and st.water is not None and hasattr(st.water, "failure_hint"):
+                    hint += st.water.failure_hint()
                 m.revert()
+                if final and st.until_failure:
+                    what = ("a part lost every support" if parts else "singular stiffness" if singular is not None
+                            else "no convergence") + hint
+                    self.limit = {"stage": st.name, "load_factor": lam, "failed_at": target, "reason": what}
+                    if st.water is not None:  # the water level reached and the one tried
+                        self.limit["water_level"] = st.water.levels(lam)[0]
+                        self.limit["water_level_tried"] = st.water.levels(target)[0]
+                    self.stats.per_stage.append(dict(stage_stats, iterations=self.stats.iterations
+                                                     + self.stats.joint_space_iterations - it_before))
+                    return u
                 if final:
                     if parts:
                         raise MechanismError(

@@ -1,4 +1,4 @@
-"""External loads as full-DOF force vectors (N).
+"""External loads as full-DOF force vectors (N): the load types of a static stage.
 
 - self-weight: consistent body forces ``rho * g`` of every continuum group (kernel in
   :mod:`masonrydam.elements.continuum`);
@@ -12,8 +12,11 @@ from __future__ import annotations
 import numpy as np
 
 from ..assembly.sparsity import scatter_vector
+from ..checks import check_keys, components, number, vector
 from ..elements.quadrature import gauss_legendre_1d
 from ..elements.shapes import shape_functions
+from ..errors import SceneError
+from ..units import quantity
 
 
 def self_weight(model, gravity) -> np.ndarray:
@@ -92,3 +95,78 @@ def edge_traction(model, facet_type: str, facets: np.ndarray, thickness: float, 
                   pressure: float | None = None, owner_centroids: np.ndarray | None = None) -> np.ndarray:
     """2D name of :func:`facet_traction` (kept for existing callers)."""
     return facet_traction(model, facet_type, facets, thickness, traction, pressure, owner_centroids)
+
+
+# -- scene schema: the load types of a static stage ([[stages.loads]]) ----------------------------------
+def _self_weight(d, key, dim):
+    check_keys(d, {"type", "factor"}, key)
+    return {"type": "self_weight", "factor": number(d.get("factor", 1.0), f"{key}.factor")}
+
+
+def _needs_set(d, key):
+    if "set" not in d:
+        raise SceneError(f"{key}.set", "is required")
+    return str(d["set"])
+
+
+def _nodal(d, key, dim):
+    check_keys(d, {"type", "set", "force"}, key)
+    return {"type": "nodal", "set": _needs_set(d, key), "force": vector(d.get("force"), "force", f"{key}.force", dim)}
+
+
+def _traction(d, key, dim):
+    check_keys(d, {"type", "set", "traction"}, key)
+    return {"type": "traction", "set": _needs_set(d, key),
+            "traction": vector(d.get("traction"), "stress", f"{key}.traction", dim)}
+
+
+def _pressure(d, key, dim):
+    check_keys(d, {"type", "set", "pressure"}, key)
+    s = _needs_set(d, key)
+    if "pressure" not in d:
+        raise SceneError(f"{key}.pressure", "is required (Pa, positive pushes into the body)")
+    return {"type": "pressure", "set": s, "pressure": quantity(d["pressure"], "stress", f"{key}.pressure")}
+
+
+def _displacement(d, key, dim):
+    check_keys(d, {"type", "set", "components", "value"}, key)
+    s = _needs_set(d, key)
+    comps = components(d.get("components"), f"{key}.components", dim)
+    val = d.get("value")
+    if not isinstance(val, (list, tuple)) or len(val) != len(comps):
+        raise SceneError(f"{key}.value", f"expected {len(comps)} value(s) for components {comps}, got {val!r}")
+    return {"type": "displacement", "set": s, "components": comps,
+            "value": [quantity(v, "length", f"{key}.value[{i}]") for i, v in enumerate(val)]}
+
+
+#: load type -> normaliser (``edge_traction`` and ``edge_pressure``: the 2D names of the facet loads)
+LOAD_TYPES = {"self_weight": _self_weight, "nodal": _nodal, "traction": _traction, "pressure": _pressure,
+              "edge_traction": _traction, "edge_pressure": _pressure, "displacement": _displacement}
+
+
+def _load_kinds(scene):
+    return {ld["type"] for st in scene["stages"] if st["type"] == "static" for ld in st["loads"]}
+
+
+def _describe(kind, text):
+    def describe(scene, model):
+        if kind not in _load_kinds(scene):
+            return []
+        return [text.format(facet="edge" if model.dim == 2 else "face")]
+    return describe
+
+
+def _effects():
+    from . import Effect
+
+    ref = "consistent nodal forces (Zienkiewicz & Taylor, The Finite Element Method, vol. 1, ch. 6)"
+    rows = [("displacement", "prescribed displacements (displacement control)", "load type 'displacement'"),
+            ("nodal", "nodal forces", "load type 'nodal'"),
+            ("pressure", "{facet} pressures", "load type 'pressure' (or 'edge_pressure')"),
+            ("self_weight", "self-weight", "load type 'self_weight' (gravity of [model])"),
+            ("traction", "{facet} tractions", "load type 'traction' (or 'edge_traction')")]
+    return [Effect(name, asked, __name__, ref, "tests/test_system.py, tests/test_solid3d.py", _describe(name, text))
+            for name, text, asked in rows]
+
+
+EFFECTS = _effects()

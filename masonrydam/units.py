@@ -15,7 +15,7 @@ from fnmatch import fnmatchcase
 
 import numpy as np
 
-from ..errors import SceneError
+from .errors import SceneError
 
 # unit -> (dimension, factor to SI)
 _UNITS = {
@@ -96,6 +96,18 @@ PLAUSIBLE: dict[str, Plausible] = {
     "stages.ground_motion.*.pulse.amplitude": _GROUND_ACCELERATION,
     "stages.ground_motion.*.scale_to_pga": _GROUND_ACCELERATION,
     "stages.ground_motion.*.scale_to_sa.sa": _GROUND_ACCELERATION,
+    "reservoir.density": Plausible(
+        "the density of water", "density", 500.0, 3000.0,
+        "did you give t/m3 (or g/cm3) as kg/m3? write e.g. '{v:g} t/m3'",
+        "did you give a unit weight in N/m3 (9810 for water)? a density is in kg/m3 (1000 for water)"),
+    "reservoir.silt.submerged_density": Plausible(
+        "a submerged density of silt", "density", 10.0, 1.2e4,
+        "did you give t/m3 (or g/cm3) as kg/m3? write e.g. '{v:g} t/m3'",
+        "did you give a unit weight in N/m3? a density is in kg/m3 (submerged silt about 900-1200)"),
+    "reservoir.level": _LENGTH,
+    "reservoir.*.level": _LENGTH,
+    "reservoir.uplift.drains.distance": _LENGTH,
+    "stages.loads.level": _LENGTH,
     "stages.dt": _TIME_STEP,  # analysis time step of a dynamic stage
     "stages.dt_max": _TIME_STEP,  # dt = "auto": largest and smallest step
     "stages.dt_min": _TIME_STEP,

@@ -1,0 +1,299 @@
+"""Water on a dam: the reservoir, the tailwater and the silt, as a scene section and as stage loads.
+
+Scene::
+
+    [reservoir]
+    level = 91.75          # water surface, m on the vertical axis (the axis gravity acts along)
+    density = 1000.0       # kg/m3
+    face = "upstream_face" # facet set; only its part below the level is loaded
+    tailwater = { level = 5.0, face = "downstream_face" }
+    silt = { level = 12.0, submerged_density = 1100.0, lateral_coefficient = 0.5 }
+    uplift = { joints = ["base_joint", "lift_joints"] }   # masonrydam.effects.uplift
+
+A static stage applies it with the load ``{ type = "reservoir" }``: the water rises from an empty
+reservoir (the lowest point of the face) to ``level`` over the stage's increments, the tailwater and
+the silt with it. ``{ type = "reservoir", level = 120.0 }`` raises the water from the level reached
+so far to 120 m. Pressure is not proportional to the level, so the face and pore pressures are
+recomputed at every increment (one facet integration per increment; the pore pressures at every
+Newton iteration, one sparse product). Later stages keep the water at the level reached; the dynamic
+stages keep the static water forces (dynamic water: added mass, acoustic reservoir, is another
+effect).
+
+Loads (:mod:`masonrydam.effects.hydrostatics`, integrated exactly over the wetted part of each
+facet): hydrostatic pressure ``rho_w g (level - z)`` normal to the face, so that on an inclined or
+stepped face the water weight above the face comes with it; tailwater the same on its face; silt as
+the geostatic stress of a submerged soil layer, vertical ``gamma' (level_silt - z)`` and horizontal
+``K`` times that (USACE EM 1110-2-2200, Gravity Dam Design, 1995, sec. 3-5; USBR Design of Small Dams,
+1987, sec. 5.6), on the reservoir's face, in addition to the water pressure.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..checks import check_keys, number, positive
+from ..errors import SceneError
+from ..units import quantity
+from . import uplift as _uplift
+
+#: default facet sets (the names of the dam generators)
+DEFAULT_FACE = "upstream_face"
+DEFAULT_TAILWATER_FACE = "downstream_face"
+
+
+def _level(value, key):
+    return quantity(value, "length", key)
+
+
+def normalize_section(d, model: dict) -> dict:
+    """The ``[reservoir]`` section; ``model``: the normalised ``[model]`` section (gravity)."""
+    key = "reservoir"
+    check_keys(d, {"level", "density", "face", "tailwater", "silt", "uplift"}, key)
+    if "level" not in d:
+        raise SceneError(f"{key}.level", "is required (the water surface, m on the vertical axis)")
+    g = np.asarray(model["gravity"], dtype=float)
+    gnorm = float(np.linalg.norm(g))
+    axis = int(np.argmax(np.abs(g)))
+    if gnorm == 0.0 or np.linalg.norm(np.delete(g, axis)) > 1e-9 * gnorm:
+        raise SceneError("model.gravity", f"a reservoir needs gravity along a coordinate axis (the vertical the water "
+                                          f"levels are measured on), got {model['gravity']}")
+    out = {"level": _level(d["level"], f"{key}.level"),
+           "density": positive(d.get("density", 1000.0), "density", f"{key}.density"),
+           "face": _face_name(d.get("face", DEFAULT_FACE), f"{key}.face"),
+           "vertical_axis": axis, "gravity": gnorm, "tailwater": None, "silt": None, "uplift": None}
+    if "tailwater" in d:
+        tk = f"{key}.tailwater"
+        t = d["tailwater"]
+        check_keys(t, {"level", "face"}, tk)
+        if "level" not in t:
+            raise SceneError(f"{tk}.level", "is required (m on the vertical axis)")
+        out["tailwater"] = {"level": _level(t["level"], f"{tk}.level"),
+                            "face": _face_name(t.get("face", DEFAULT_TAILWATER_FACE), f"{tk}.face")}
+    if "silt" in d:
+        sk = f"{key}.silt"
+        s = d["silt"]
+        check_keys(s, {"level", "submerged_density", "lateral_coefficient", "face"}, sk)
+        for req in ("level", "submerged_density"):
+            if req not in s:
+                raise SceneError(f"{sk}.{req}", "is required (silt surface, m; submerged density, kg/m3)")
+        level = _level(s["level"], f"{sk}.level")
+        if level > out["level"]:
+            raise SceneError(f"{sk}.level", f"{level:g} m is above the reservoir level {out['level']:g} m")
+        out["silt"] = {"level": level,
+                       "submerged_density": positive(s["submerged_density"], "density", f"{sk}.submerged_density"),
+                       "lateral_coefficient": number(s.get("lateral_coefficient", 0.5), f"{sk}.lateral_coefficient",
+                                                     0.0, 3.0, open_min=True),
+                       "face": _face_name(s.get("face", out["face"]), f"{sk}.face")}
+    if "uplift" in d:
+        out["uplift"] = _uplift.normalize(d["uplift"], f"{key}.uplift")
+    return out
+
+
+def _face_name(value, key):
+    if not isinstance(value, str):
+        raise SceneError(key, f"expected the name of a facet set, got {value!r}")
+    return value
+
+
+def normalize_load(d, key, dim) -> dict:
+    """The stage load ``{ type = "reservoir" [, level = ...] }``."""
+    check_keys(d, {"type", "level"}, key)
+    return {"type": "reservoir", "level": None if "level" not in d else _level(d["level"], f"{key}.level")}
+
+
+SECTIONS = {"reservoir": normalize_section}
+LOAD_TYPES = {"reservoir": normalize_load}
+
+
+class _Face:
+    """A loaded facet set: type, facets (n, nfn), inward points (n, dim), elevation range (m) and key."""
+
+    def __init__(self, mesh, name, key, vertical_axis):
+        from ..scene.build import _owner_centroids
+
+        if name not in mesh.facet_sets:
+            what = "edge" if mesh.dim == 2 else "face"
+            raise SceneError(key, f"no facet ({what}) set '{name}' in the mesh (facet sets: {sorted(mesh.facet_sets)})")
+        fs = mesh.facet_sets[name]
+        self.name, self.key, self.type = name, key, fs.type
+        self.facets = np.asarray(fs.facets, dtype=np.int64)
+        self.inward = _owner_centroids(mesh, self.facets)
+        z = mesh.points[np.unique(self.facets), vertical_axis]
+        self.bottom, self.top = float(z.min()), float(z.max())
+
+
+class Reservoir:
+    """The water of a scene's ``[reservoir]`` section on ``model`` (built from ``mesh``)."""
+
+    def __init__(self, spec: dict, mesh, model, thickness: float):
+        self.spec = spec
+        self.model = model
+        self.thickness = thickness
+        self.vertical = ax = spec["vertical_axis"]
+        self.unit_weight = spec["density"] * spec["gravity"]
+        self.face = _Face(mesh, spec["face"], "reservoir.face", ax)
+        if spec["level"] <= self.face.bottom:
+            raise SceneError("reservoir.level", f"{spec['level']:g} m is not above the lowest point of the face "
+                                                f"'{self.face.name}' ({self.face.bottom:g} m): no water would touch it")
+        self.tail = None
+        if spec["tailwater"] is not None:
+            t = spec["tailwater"]
+            self.tail = _Face(mesh, t["face"], "reservoir.tailwater.face", ax)
+            if t["level"] <= self.tail.bottom:
+                raise SceneError("reservoir.tailwater.level", f"{t['level']:g} m is not above the lowest point of "
+                                                              f"the face '{self.tail.name}' ({self.tail.bottom:g} m); "
+                                                              "remove the tailwater if there is none")
+        self.silt = None
+        if spec["silt"] is not None:
+            s = spec["silt"]
+            self.silt = _Face(mesh, s["face"], "reservoir.silt.face", ax)
+            if s["level"] <= self.silt.bottom:
+                raise SceneError("reservoir.silt.level", f"{s['level']:g} m is not above the lowest point of the face "
+                                                         f"'{self.silt.name}' ({self.silt.bottom:g} m)")
+        self.downstream = self._downstream(mesh)
+        self.uplift = None
+        if spec["uplift"] is not None:
+            self.uplift = _uplift.Uplift(spec["uplift"], model, self.unit_weight, ax, self.downstream,
+                                         "reservoir.uplift")
+
+    def _downstream(self, mesh):
+        """Horizontal unit vector pointing downstream: minus the area-weighted horizontal part of the
+        upstream face's outward normal."""
+        f = self.face
+        X = mesh.points[f.facets]
+        dim = mesh.dim
+        if dim == 2:
+            t = X[:, 1] - X[:, 0]
+            n = np.stack([t[:, 1], -t[:, 0]], axis=1)
+        elif f.type.startswith("tri"):
+            n = np.cross(X[:, 1] - X[:, 0], X[:, 2] - X[:, 0])
+        else:  # quadrilaterals: the cross product of the diagonals of the corners
+            n = np.cross(X[:, 2] - X[:, 0], X[:, 3] - X[:, 1])
+        mid = X.mean(axis=1)
+        flip = np.einsum("nk,nk->n", f.inward - mid, n) > 0
+        n[flip] *= -1
+        n[:, self.vertical] = 0.0
+        total = n.sum(axis=0)
+        norm = float(np.linalg.norm(total))
+        if norm == 0.0:
+            raise SceneError("reservoir.face", f"the face '{f.name}' has no horizontal extent to push on (is it the "
+                                               "upstream face of the dam?)")
+        return -total / norm
+
+    def face_force(self, level: float, tail: float | None, silt: float | None) -> np.ndarray:
+        """Nodal forces (n_dof,) N of the water at ``level``, the tailwater at ``tail`` and the silt at
+        ``silt`` (m; None: none)."""
+        from .hydrostatics import facet_pressure_forces
+
+        m = self.model
+        f = np.zeros(m.n_dof)
+        kw = dict(vertical_axis=self.vertical, thickness=self.thickness)
+        for face, lev, gamma, K in ((self.face, level, self.unit_weight, None),
+                                    (self.tail, tail, self.unit_weight, None),
+                                    (self.silt, silt, None if self.silt is None else
+                                     self.spec["silt"]["submerged_density"] * self.spec["gravity"],
+                                     None if self.silt is None else self.spec["silt"]["lateral_coefficient"])):
+            if face is None or lev is None or lev <= face.bottom:
+                continue
+            f += facet_pressure_forces(m.coords, face.type, face.facets, face.inward, surface_level=lev,
+                                       unit_weight=gamma, lateral_coefficient=K, **kw)
+        return f
+
+    def empty(self) -> tuple:
+        """Levels (reservoir, tailwater, silt) of an empty reservoir: the lowest points of the faces."""
+        return (self.face.bottom, None if self.tail is None else self.tail.bottom,
+                None if self.silt is None else self.silt.bottom)
+
+    def full(self, level: float | None = None) -> tuple:
+        """Levels (reservoir, tailwater, silt) of the scene, the reservoir at ``level`` if given."""
+        s = self.spec
+        return (s["level"] if level is None else level, None if s["tailwater"] is None else s["tailwater"]["level"],
+                None if s["silt"] is None else s["silt"]["level"])
+
+
+class StageWater:
+    """The water of one static stage: levels going linearly in the load factor from ``start`` to
+    ``end`` (tuples reservoir, tailwater, silt, m); the solver asks for the face forces once per
+    increment (:meth:`external`) and for the pore forces at every iteration (:meth:`pore`)."""
+
+    def __init__(self, reservoir: Reservoir, start: tuple, end: tuple):
+        self.reservoir, self.start, self.end = reservoir, start, end
+        self._cache = (None, None)
+
+    def levels(self, lam: float) -> tuple:
+        return tuple(None if a is None else a + lam * (b - a) for a, b in zip(self.start, self.end))
+
+    def external(self, lam: float) -> np.ndarray:
+        """Face forces (n_dof,) N at load factor ``lam`` (cached for the last ``lam``)."""
+        if self._cache[0] != lam:
+            self._cache = (lam, self.reservoir.face_force(*self.levels(lam)))
+        return self._cache[1]
+
+    @property
+    def state_dependent(self) -> bool:
+        return self.reservoir.uplift is not None
+
+    def pore(self, lam: float, trial: bool = True) -> np.ndarray:
+        """Pore-pressure forces (n_dof,) N at ``lam`` with the joints' trial (or committed) states."""
+        up = self.reservoir.uplift
+        if up is None:
+            return np.zeros(self.reservoir.model.n_dof)
+        level, tail, _ = self.levels(lam)
+        return up.force(up.pore_pressure(level, tail, trial, step=(id(self), lam) if trial else None))
+
+    def failure_hint(self) -> str:
+        """The joint lines whose cracks grew most in the failed attempt of a step (trial states against
+        the committed ones), in words, for the message of a stage that found no equilibrium."""
+        from ..materials.mohr_coulomb import OPEN, SLIP
+
+        up = self.reservoir.uplift
+        if up is None:
+            return ""
+        L = up.lines
+        w = L.weight
+        total = np.bincount(L.line, weights=w, minlength=L.n_lines)
+        words = []
+        for trial in (False, True):
+            codes = L.gather([g.state_codes(trial=trial) for g in L.groups])
+            words.append((np.bincount(L.line, weights=w * (codes == OPEN), minlength=L.n_lines) / total,
+                          np.bincount(L.line, weights=w * (codes == SLIP), minlength=L.n_lines) / total))
+        (open0, _), (open1, slip1) = words
+        order = np.argsort(-(open1 - open0))[:2]
+        parts = [f"'{L.names[k]}' open over {100 * open1[k]:.0f} % (was {100 * open0[k]:.0f} %), sliding over "
+                 f"{100 * slip1[k]:.0f} %" for k in order if open1[k] > open0[k] or slip1[k] > 0.99]
+        return ("; in the last attempt joint line " + ", ".join(parts)) if parts else ""
+
+    def total(self, lam: float, trial: bool = True) -> np.ndarray:
+        return self.external(lam) + self.pore(lam, trial)
+
+
+def describe(scene, model) -> list[str]:
+    r = scene.get("reservoir")
+    if not r:
+        return []
+    facet = "edges" if model.dim == 2 else "faces"
+    out = [f"reservoir: hydrostatic pressure normal to the wetted {facet} of '{r['face']}' (density {r['density']:g} "
+           f"kg/m3, level {r['level']:g} m), integrated exactly over partly wet {facet}"]
+    floods = [ld["level"] for st in scene["stages"] if st["type"] == "static" for ld in st["loads"]
+              if ld["type"] == "reservoir" and ld["level"] is not None]
+    if floods:
+        out[0] += f"; raised to {', '.join(f'{x:g}' for x in floods)} m in stage(s)"
+    if r["tailwater"]:
+        out.append(f"tailwater: hydrostatic pressure on '{r['tailwater']['face']}' up to {r['tailwater']['level']:g} m")
+    if r["silt"]:
+        s = r["silt"]
+        out.append(f"silt: geostatic load on '{s['face']}' up to {s['level']:g} m (submerged density "
+                   f"{s['submerged_density']:g} kg/m3, lateral coefficient {s['lateral_coefficient']:g}; USACE "
+                   "EM 1110-2-2200 sec. 3-5)")
+    return out
+
+
+def _effects():
+    from . import Effect
+
+    return [Effect("reservoir", "[reservoir] with a { type = \"reservoir\" } load in a static stage", __name__,
+                   "hydrostatics (White, Fluid Mechanics, ch. 2); USBR Design of Small Dams (1987) sec. 5.6; "
+                   "USACE EM 1110-2-2200 (1995) ch. 3", "tests/test_reservoir.py, tests/test_hydrostatics.py",
+                   describe)]
+
+
+EFFECTS = _effects()

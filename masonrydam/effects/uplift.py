@@ -1,0 +1,277 @@
+"""Uplift: the pore pressure of the reservoir water inside the joints of a dam.
+
+The scene asks for it in ``[reservoir]``::
+
+    uplift = { joints = ["base_joint", "lift_joints"], drains = { distance = 5.0, efficiency = 0.67 },
+               cracked = "full_head" }
+
+Pore pressure p (Pa) acts inside the joint: the joint law works on the effective normal traction
+(what the interface kernel computes from the relative displacement), and the total traction on the
+faces is the effective one minus p along the normal. The pore pressure therefore pushes the two faces
+apart: at an integration point with weight w and unit normal n (bottom to top), the top face gets
+``+N_a p n w`` and the bottom face ``-N_a p n w``, added to the external forces (a matrix built once,
+one sparse product per evaluation).
+
+Profile along each line of a joint set (:class:`~masonrydam.assembly.joint_lines.JointLines`), with
+the piezometric head h (m) interpolated linearly in the distance s from the upstream end and
+``p = rho_w g max(h - z, 0)`` at the point's elevation z:
+
+- no drains: h from the reservoir level at the heel to the tailwater level at the toe (the toe's own
+  elevation where there is no tailwater above it): the linear uplift of USBR, Design of Small Dams
+  (1987), sec. 5.7, and USACE EM 1110-2-2200 Gravity Dam Design (1995), fig. 3-3;
+- drains at ``distance`` from the upstream end with ``efficiency`` E: h at the drain line
+  ``= h_tail + (1 - E) (h_reservoir - h_tail)``, linear between heel, drain line and toe (USBR 1987,
+  sec. 5.7; USACE EM 1110-2-2200, sec. 3-3; FERC Engineering Guidelines ch. 3, 2016, sec. 3-3.4);
+- cracked parts (the run of open points that starts at the heel of a strip, updated at every
+  Newton iteration as the crack grows): ``cracked = "full_head"`` puts the full reservoir head in the
+  crack, and the profile over the rest of the line runs from full head at the crack tip to the
+  tailwater at the toe (through the drain line if the crack has not reached it; drains past the crack
+  tip are taken as ineffective, EM 1110-2-2200 sec. 4-4, FERC sec. 3-3.5); ``"unchanged"`` keeps the
+  profile of the intact joint; ``"none"`` takes no pressure in the crack (drained) and keeps the
+  profile elsewhere.
+
+The tangent does not see the pore pressure (it changes with the joint state, not smoothly with the
+displacement): the Newton iterations of a step with a growing crack converge as a fixed point.
+"""
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..checks import check_keys, choice, number, positive
+from ..errors import SceneError
+
+CRACKED = ("full_head", "unchanged", "none")
+
+
+def normalize(d, key: str) -> dict:
+    """The ``uplift`` table of ``[reservoir]``."""
+    check_keys(d, {"joints", "drains", "cracked"}, key)
+    joints = d.get("joints")
+    if isinstance(joints, str):
+        joints = [joints]
+    if not isinstance(joints, list) or not joints or not all(isinstance(j, str) for j in joints):
+        raise SceneError(f"{key}.joints", f"expected a list of joint set names, e.g. [\"base_joint\", \"lift_joints\"], "
+                                          f"got {d.get('joints')!r}")
+    out = {"joints": list(joints), "cracked": choice(d.get("cracked", "full_head"), CRACKED, f"{key}.cracked"),
+           "drains": None}
+    if "drains" in d:
+        dk = f"{key}.drains"
+        dr = d["drains"]
+        check_keys(dr, {"distance", "efficiency"}, dk)
+        for req in ("distance", "efficiency"):
+            if req not in dr:
+                raise SceneError(f"{dk}.{req}", "is required (distance of the drain line from the upstream face, m; "
+                                                "efficiency from 0 to 1)")
+        out["drains"] = {"distance": positive(dr["distance"], "length", f"{dk}.distance"),
+                         "efficiency": number(dr["efficiency"], f"{dk}.efficiency", 0.0, 1.0)}
+    return out
+
+
+class Uplift:
+    """Pore pressures in the joint sets named by ``spec`` (normalised ``uplift`` table) of ``model``.
+
+    unit_weight: rho_w g (N/m3); vertical_axis; downstream: horizontal unit vector (dim,); key: the
+    scene key of the table (for errors)."""
+
+    def __init__(self, spec: dict, model, unit_weight: float, vertical_axis: int, downstream, key: str):
+        from ..assembly.joint_lines import JointLines
+
+        names = sorted({g.name for g in model.igroups})
+        for j in spec["joints"]:
+            if j not in names:
+                raise SceneError(f"{key}.joints", f"'{j}' is not a joint set of the mesh (joint sets: {names})")
+        self.spec, self.key = spec, key
+        self.model = model
+        self.gamma = float(unit_weight)
+        self.group_index = [i for i, g in enumerate(model.igroups) if g.name in spec["joints"]]
+        self.lines = JointLines(model, [model.igroups[i] for i in self.group_index], downstream, vertical_axis)
+        self._samples(model)
+        self.pressure = np.zeros(self.lines.n_points)  # the last computed pore pressures at the joint points (Pa)
+        self.sample_pressure = np.zeros(len(self.samples["s"]))  # and at the samples
+        self._latch_step, self._latched_tip = None, None  # the crack tips filled in this step attempt
+
+    def _samples(self, model):
+        """Where the pore pressure is integrated into nodal forces: Gauss points on each interface face,
+        the faces that the drain line crosses split along it (:func:`~.hydrostatics.region_points`), so
+        that the piecewise-linear profile is integrated exactly (the joint's own lumped points would
+        misplace the uplift's moment by O(h^2), and a kink inside an element its resultant).
+
+        Sets ``self.matrix`` (n_dof, n_samples): nodal forces of a unit pressure at each sample (``N_a w
+        n`` on the top face, minus that on the bottom face), and the samples' ``s``, ``elevation``,
+        ``line``, ``strip`` and ``weight`` (m2)."""
+        from ..elements.shapes import shape_functions
+        from ..mesh.model import INTERFACE_FACE_TYPE
+        from .hydrostatics import region_points
+
+        L, dim = self.lines, model.dim
+        d = L.downstream
+        up = np.zeros(dim)
+        up[L.vertical_axis] = 1.0
+        across = np.cross(up, d) if dim == 3 else None
+        drains = self.spec["drains"]
+        rows, cols, vals = [], [], []
+        parts = {k: [] for k in ("s", "elevation", "line", "strip", "weight")}
+        n_samples = 0
+        for gi, sl in zip(self.group_index, L.slices):
+            g = model.igroups[gi]
+            ns = g.conn.shape[1] // 2
+            face = INTERFACE_FACE_TYPE[g.type]
+            X = model.coords[g.conn[:, :ns]]  # (ne, ns, dim) bottom face
+            pts_line = L.line[sl].reshape(g.n_elem, g.nip)
+            pts_s = L.s[sl].reshape(g.n_elem, g.nip)
+            pts_x = L.x[sl].reshape(g.n_elem, g.nip, dim)
+            s0 = (pts_x[:, 0] @ d) - pts_s[:, 0]  # (ne,) offset of s along each element's line
+            s_nodes = X @ d - s0[:, None]
+            if drains is None:
+                pieces = [region_points(face, s_nodes, float(s_nodes.max()) + 1.0)]
+            else:
+                pieces = [region_points(face, s_nodes, drains["distance"]),
+                          region_points(face, -s_nodes, -drains["distance"])]
+            for e, xi, w in pieces:
+                if len(e) == 0:
+                    continue
+                N, dN = shape_functions(face, xi)
+                Xe = X[e]
+                x = np.einsum("pa,pad->pd", N, Xe)
+                a1 = np.einsum("pa,pad->pd", dN[:, 0], Xe)
+                A = np.stack([a1[:, 1], -a1[:, 0]], axis=1) if dim == 2 else \
+                    np.cross(a1, np.einsum("pa,pad->pd", dN[:, 1], Xe))
+                J = np.linalg.norm(A, axis=1)
+                n = A / J[:, None]
+                n *= np.sign(np.einsum("pd,pd->p", n, g.frame[e, 0, dim - 1, :]))[:, None]  # bottom to top
+                wt = w * J * g.thickness[e]
+                idx = n_samples + np.arange(len(e))
+                n_samples += len(e)
+                for a in range(ns):
+                    for side, sign in ((g.conn[e, ns + a], 1.0), (g.conn[e, a], -1.0)):
+                        for k in range(dim):
+                            v = sign * N[:, a] * wt * n[:, k]
+                            keep = v != 0.0
+                            rows.append((side * dim + k)[keep])
+                            cols.append(idx[keep])
+                            vals.append(v[keep])
+                parts["s"].append(x @ d - s0[e])
+                parts["elevation"].append(x[:, L.vertical_axis])
+                parts["line"].append(pts_line[e, 0])
+                parts["weight"].append(wt)
+                if across is None:
+                    parts["strip"].append(L.strip[sl].reshape(g.n_elem, g.nip)[e, 0])
+                else:  # the strip of the element's point nearest across the line
+                    t_pts = pts_x[e] @ across  # (P, nip)
+                    near = np.argmin(np.abs(t_pts - (x @ across)[:, None]), axis=1)
+                    parts["strip"].append(L.strip[sl].reshape(g.n_elem, g.nip)[e, near])
+        self.samples = {k: np.concatenate(v) for k, v in parts.items()}
+        self.matrix = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                                    shape=(model.n_dof, n_samples))
+
+    def _heads(self, level: float, tail: float | None):
+        L = self.lines
+        h_up = np.full(L.n_lines, float(level))
+        h_tail = L.toe_elevation.copy() if tail is None else np.maximum(L.toe_elevation, float(tail))
+        return h_up, h_tail
+
+    def _profile(self, s, length, h_up, h_tail, start):
+        """Head (m) at distance ``s`` of lines of ``length`` whose profile starts (full head ``h_up``) at
+        ``start`` (0, or the crack tip) and ends at the toe with ``h_tail``; through the drain line where
+        it lies past ``start`` and before the toe."""
+        span = np.maximum(length - start, 1e-300)
+        f = np.clip((s - start) / span, 0.0, 1.0)
+        h = h_up + (h_tail - h_up) * f
+        dr = self.spec["drains"]
+        if dr is None:
+            return h
+        d = dr["distance"]
+        h_drain = h_tail + (1.0 - dr["efficiency"]) * (h_up - h_tail)
+        active = (d > start) & (d < length)
+        up = np.clip((s - start) / np.maximum(d - start, 1e-300), 0.0, 1.0)
+        down = np.clip((s - d) / np.maximum(length - d, 1e-300), 0.0, 1.0)
+        h_drained = np.where(s <= d, h_up + (h_drain - h_up) * up, h_drain + (h_tail - h_drain) * down)
+        return np.where(active, h_drained, h)
+
+    def _pressure_at(self, s, elevation, line, strip, h_up, h_tail, tip, cracked):
+        """Pore pressure (Pa) at points of distance ``s``, ``elevation``, ``line`` and ``strip``; ``tip``
+        (n_strips,) the crack tips (-1: none), ``cracked`` (bool per point) the points in a crack."""
+        L = self.lines
+        h = self._profile(s, L.length[line], h_up[line], h_tail[line], 0.0)
+        if tip is not None:
+            if self.spec["cracked"] == "full_head":
+                t = tip[strip]
+                behind = (t >= 0) & ~cracked
+                h = np.where(behind, self._profile(s, L.length[line], h_up[line], h_tail[line], np.maximum(t, 0.0)), h)
+                h = np.where(cracked, h_up[line], h)
+            else:  # "none": a drained crack
+                h = np.where(cracked, -np.inf, h)
+        return np.where(L.horizontal[line], self.gamma * np.maximum(h - elevation, 0.0), 0.0)
+
+    def pore_pressure(self, level: float, tail: float | None, trial: bool = True, step=None) -> np.ndarray:
+        """Pore pressures for the reservoir ``level`` and tailwater ``tail`` (m; None: no tailwater), with
+        the cracks of the joints' trial (or committed) states: at the samples (returned; see
+        :meth:`force`) and at the joint points (kept in ``self.pressure``, for the results).
+
+        ``step``: a key of the step attempt being iterated (its load factor). Within one attempt a crack
+        that water has entered stays filled (its tip never moves back): the pore pressure jumps where
+        a point opens, and a crack tip allowed to move back and forth between two points made Newton
+        cycle without end (a Koyna flood stopped at a sliding factor of 1.07 for that reason alone). The
+        crack of the converged step is the state's own: the next attempt starts from it."""
+        from ..materials.mohr_coulomb import OPEN
+
+        L, S = self.lines, self.samples
+        h_up, h_tail = self._heads(level, tail)
+        tip = cracked = None
+        if self.spec["cracked"] != "unchanged":
+            codes = L.gather([g.state_codes(trial=trial) for g in L.groups])
+            cracked, tip = L.leading_open(codes == OPEN)
+            if trial and step is not None:
+                if step == self._latch_step:
+                    tip = np.maximum(tip, self._latched_tip)
+                    cracked = (tip[L.strip] >= 0) & (L.s <= tip[L.strip])
+                self._latch_step, self._latched_tip = step, tip
+            if not cracked.any():
+                tip = cracked = None
+        self.pressure = self._pressure_at(L.s, L.elevation, L.line, L.strip, h_up, h_tail, tip, cracked)
+        in_crack = None if tip is None else (tip[S["strip"]] >= 0) & (S["s"] <= tip[S["strip"]])
+        self.sample_pressure = self._pressure_at(S["s"], S["elevation"], S["line"], S["strip"], h_up, h_tail, tip,
+                                                 in_crack)
+        return self.sample_pressure
+
+    def force(self, pressure: np.ndarray) -> np.ndarray:
+        """Nodal forces (n_dof,) N of the pore pressures ``pressure`` at the samples."""
+        return self.matrix @ pressure
+
+    def line_forces(self) -> np.ndarray:
+        """Resultant (n_lines,) N of the last computed pore pressures on each line."""
+        S = self.samples
+        return np.bincount(S["line"], weights=self.sample_pressure * S["weight"], minlength=self.lines.n_lines)
+
+    def group_pressure(self, igroup_index: int) -> np.ndarray | None:
+        """The last computed pore pressures of interface group ``igroup_index`` of the model, (n_elem * nip,),
+        or None for a group without uplift."""
+        if igroup_index not in self.group_index:
+            return None
+        return self.pressure[self.lines.slices[self.group_index.index(igroup_index)]]
+
+
+def describe(scene, model) -> list[str]:
+    r = scene.get("reservoir")
+    if not r or not r.get("uplift"):
+        return []
+    u = r["uplift"]
+    drains = ("no drains" if u["drains"] is None else
+              f"drain line {u['drains']['distance']:g} m from the upstream face, efficiency {u['drains']['efficiency']:g}")
+    crack = {"full_head": "full reservoir head in cracks from the heel, updated as they grow",
+             "unchanged": "cracks keep the intact profile", "none": "no pressure in cracks (drained)"}[u["cracked"]]
+    return [f"uplift: pore pressure in joint sets {', '.join(u['joints'])} (effective normal traction in the joint "
+            f"law), linear from reservoir to tailwater head, {drains}; {crack} (USBR 1987, USACE EM 1110-2-2200); "
+            "kept at its static value in dynamic stages"]
+
+
+def _effects():
+    from . import Effect
+
+    return [Effect("uplift", "[reservoir] uplift = { joints = [...] }", __name__,
+                   "USBR Design of Small Dams (1987) sec. 5.7; USACE EM 1110-2-2200 (1995) sec. 3-3, 4-4; FERC "
+                   "Engineering Guidelines ch. 3 (2016)", "tests/test_reservoir.py", describe)]
+
+
+EFFECTS = _effects()

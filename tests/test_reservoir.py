@@ -183,6 +183,7 @@ def test_flood_until_the_base_slides():
     assert "sliding" in ds.attrs["limit_state"] and "reservoir level reached" in ds.attrs["limit_state"]
     assert float(ds.reservoir_level.isel(step=-1)) == pytest.approx(ds.attrs["limit_reservoir_level"])
     assert last(ds, "sliding_safety_factor") == pytest.approx(1.0, rel=0.01)
+    assert ds.attrs["limit_kind"] == "sliding"
 
 
 def test_no_reservoir_pays_nothing():
@@ -325,6 +326,8 @@ def test_koyna_reservoir_example_on_a_coarse_mesh():
     assert 95.0 < level < 131.75
     assert f"reservoir level reached {level:.6g} m" in ds.attrs["limit_state"]
     assert "joint line 'lift_joints/" in ds.attrs["limit_state"]
+    # a failure of the section (its crack runs, it slides or overturns), not a stalled iteration
+    assert ds.attrs["limit_kind"] in ("crack", "sliding", "overturning"), ds.attrs["limit_state"]
 
 
 def test_dam_3d_reservoir_example_is_valid():
@@ -334,3 +337,24 @@ def test_dam_3d_reservoir_example_is_valid():
     s = Scene(_example("dam_3d_reservoir.toml")).normalized
     assert s["reservoir"]["uplift"]["joints"] == ["base_joint", "lift_joints"]
     assert s["mesh"]["parameters"]["n_monoliths"] == 20
+
+
+def test_static_water_stays_applied_in_a_dynamic_stage():
+    """The dynamic stages keep the static water and pore forces: with a ground motion of zero the dam
+    stays where the reservoir stage left it (a missing water force would set it swinging by the
+    thrust over the stiffness, about the static displacement itself), and the pore pressures and the
+    level are carried into the dynamic steps unchanged."""
+    scene = dam_scene(h_size=3.0)
+    scene["stages"].append({"name": "still", "type": "dynamic", "dt": 0.01, "steps": 20,
+                            "ground_motion": {"x": {"values": [0.0, 0.0], "dt": 0.01}}})
+    ds = masonrydam.run(scene)
+    static = ds.where(ds.stage == 1, drop=True).isel(step=-1)
+    dyn = ds.where(ds.stage == 2, drop=True)
+    u0 = static.displacement.values
+    drift = np.abs(dyn.displacement.values - u0[None]).max()
+    assert np.abs(u0).max() > 1e-4
+    assert drift < 1e-6 * np.abs(u0).max()
+    np.testing.assert_allclose(dyn.joint_pore_pressure.values, static.joint_pore_pressure.values[None].repeat(
+        dyn.sizes["step"], axis=0), rtol=0, atol=0)
+    assert (dyn.reservoir_level.values == 28.0).all()
+    np.testing.assert_allclose(dyn.sliding_safety_factor.values[-1], static.sliding_safety_factor.values, rtol=1e-6)

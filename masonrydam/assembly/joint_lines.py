@@ -12,7 +12,8 @@ face), merged where two pieces lie at the same elevation and overlap across the 
 an opening cuts a lift into pieces that are still one sliding plane); pieces side by side across the
 width (monoliths separated by contraction joints) stay separate lines. Names: the joint set's name
 for a set with one line, else ``set/k`` with k = 1, 2, ... from the lowest line up (3D: then along
-the width).
+the width), counting the lines closer to horizontal than vertical; the others (the risers of a
+benched abutment in a base joint) are ``set/steep-k``.
 """
 from __future__ import annotations
 
@@ -155,6 +156,15 @@ class JointLines:
             if n else np.zeros(0)
         w = np.bincount(line, weights=self.weight, minlength=n_lines)
         self.horizontal = np.bincount(line, weights=nv * self.weight, minlength=n_lines) > np.sqrt(0.5) * w
+        # numbers count the horizontal lines of a set; the others are named set/steep-k
+        for set_name in sorted(set(set_names)):
+            ids = [i for i in range(n_lines) if set_names[i] == set_name]
+            flat = [i for i in ids if self.horizontal[i]]
+            steep = [i for i in ids if not self.horizontal[i]]
+            for k, i in enumerate(flat):
+                names[i] = set_name if len(flat) == 1 and not steep else f"{set_name}/{k + 1}"
+            for k, i in enumerate(steep):
+                names[i] = f"{set_name}/steep-{k + 1}"
         # points in (strip, s) order, and where each strip starts in that order (cracks grow from the heel)
         self.order = np.lexsort((s, strip))
         counts = np.bincount(strip, minlength=n_strips)

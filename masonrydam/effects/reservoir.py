@@ -105,9 +105,10 @@ LOAD_TYPES = {"reservoir": normalize_load}
 
 
 class _Face:
-    """A loaded facet set: type, facets (n, nfn), inward points (n, dim), elevation range (m) and key."""
+    """A loaded facet set: type, facets (n, nfn), inward points (n, dim), elevation range (m) and key;
+    ``level`` (m) must lie above its lowest point (else a SceneError naming ``level_key``, with ``hint``)."""
 
-    def __init__(self, mesh, name, key, vertical_axis):
+    def __init__(self, mesh, name, key, vertical_axis, level, level_key, hint):
         from ..scene.build import _owner_centroids
 
         if name not in mesh.facet_sets:
@@ -119,6 +120,9 @@ class _Face:
         self.inward = _owner_centroids(mesh, self.facets)
         z = mesh.points[np.unique(self.facets), vertical_axis]
         self.bottom, self.top = float(z.min()), float(z.max())
+        if level <= self.bottom:
+            raise SceneError(level_key, f"{level:g} m is not above the lowest point of the face '{name}' "
+                                        f"({self.bottom:g} m): {hint}")
 
 
 class Reservoir:
@@ -130,25 +134,14 @@ class Reservoir:
         self.thickness = thickness
         self.vertical = ax = spec["vertical_axis"]
         self.unit_weight = spec["density"] * spec["gravity"]
-        self.face = _Face(mesh, spec["face"], "reservoir.face", ax)
-        if spec["level"] <= self.face.bottom:
-            raise SceneError("reservoir.level", f"{spec['level']:g} m is not above the lowest point of the face "
-                                                f"'{self.face.name}' ({self.face.bottom:g} m): no water would touch it")
-        self.tail = None
-        if spec["tailwater"] is not None:
-            t = spec["tailwater"]
-            self.tail = _Face(mesh, t["face"], "reservoir.tailwater.face", ax)
-            if t["level"] <= self.tail.bottom:
-                raise SceneError("reservoir.tailwater.level", f"{t['level']:g} m is not above the lowest point of "
-                                                              f"the face '{self.tail.name}' ({self.tail.bottom:g} m); "
-                                                              "remove the tailwater if there is none")
-        self.silt = None
-        if spec["silt"] is not None:
-            s = spec["silt"]
-            self.silt = _Face(mesh, s["face"], "reservoir.silt.face", ax)
-            if s["level"] <= self.silt.bottom:
-                raise SceneError("reservoir.silt.level", f"{s['level']:g} m is not above the lowest point of the face "
-                                                         f"'{self.silt.name}' ({self.silt.bottom:g} m)")
+        self.face = _Face(mesh, spec["face"], "reservoir.face", ax, spec["level"], "reservoir.level",
+                          "no water would touch it")
+        self.tail = None if spec["tailwater"] is None else \
+            _Face(mesh, spec["tailwater"]["face"], "reservoir.tailwater.face", ax, spec["tailwater"]["level"],
+                  "reservoir.tailwater.level", "remove the tailwater if there is none")
+        self.silt = None if spec["silt"] is None else \
+            _Face(mesh, spec["silt"]["face"], "reservoir.silt.face", ax, spec["silt"]["level"], "reservoir.silt.level",
+                  "remove the silt if there is none")
         self.downstream = self._downstream(mesh)
         self.uplift = None
         if spec["uplift"] is not None:
@@ -218,6 +211,7 @@ class StageWater:
     def __init__(self, reservoir: Reservoir, start: tuple, end: tuple):
         self.reservoir, self.start, self.end = reservoir, start, end
         self._cache = (None, None)
+        self.last_failure = None  # see failure_hint
 
     def levels(self, lam: float) -> tuple:
         return tuple(None if a is None else a + lam * (b - a) for a, b in zip(self.start, self.end))
@@ -258,6 +252,9 @@ class StageWater:
                           np.bincount(L.line, weights=w * (codes == SLIP), minlength=L.n_lines) / total))
         (open0, _), (open1, slip1) = words
         order = np.argsort(-(open1 - open0))[:2]
+        k = int(order[0])
+        #: the line whose crack grew most in the failed attempt: name, open fraction before and after
+        self.last_failure = {"line": L.names[k], "open_before": float(open0[k]), "open_after": float(open1[k])}
         parts = [f"'{L.names[k]}' open over {100 * open1[k]:.0f} % (was {100 * open0[k]:.0f} %), sliding over "
                  f"{100 * slip1[k]:.0f} %" for k in order if open1[k] > open0[k] or slip1[k] > 0.99]
         return ("; in the last attempt joint line " + ", ".join(parts)) if parts else ""

@@ -232,10 +232,17 @@ def run(scene, output: str | os.PathLike | None = None, progress: bool = False, 
         with stopper.closing():  # solved: a request from here on changes nothing
             bar.close()
             stats = _stats_attrs(solver, t_start, dyn_solvers)
+            if solver.limit is not None and water.last_measures is not None:
+                stats["limit_kind"], text = water.diagnosis()
+                stats["limit_state"] += "; " + text
             writer.close(True, "completed", stats)
             if target is not None:
                 os.replace(work, target)
     except BaseException as exc:
+        from ..errors import ConvergenceError, MechanismError
+
+        if isinstance(exc, (ConvergenceError, MechanismError)) and water.last_measures is not None:
+            exc.add_note(water.diagnosis()[1])
         with stopper.closing():
             if bar is not None:
                 bar.close()
@@ -389,6 +396,7 @@ class _Water:
         self.uplift = None if self.reservoir is None else self.reservoir.uplift
         self.last = None  # (stage, load factor) of the last static step with water
         self.assessment = None
+        self.last_measures = None  # the section measures of the last recorded step
         self._record_groups = [model.igroups.index(g) for g in jgroups]
         if self.reservoir is not None:
             lines = assessed_lines(model, self.reservoir)
@@ -428,8 +436,41 @@ class _Water:
                                  for i in self._record_groups])
         if self.assessment is not None:
             lines_up = p is not None and self.assessment.lines is self.uplift.lines
-            out.update(self.assessment.measures(self.uplift.line_forces() if lines_up else None))
+            self.last_measures = self.assessment.measures(self.uplift.line_forces() if lines_up else None)
+            out.update(self.last_measures)
         return out
+
+    def diagnosis(self) -> tuple[str, str]:
+        """What the joint lines say about a stage that found no equilibrium, from the last converged
+        state (the recorded section measures): ``(kind, text)`` with kind ``"sliding"`` (a line's sliding
+        factor within 5 % of 1), ``"overturning"`` (a line open over 90 % of its length or its resultant
+        within 5 % of its toe), ``"crack"`` (in the failed attempt a crack grew over more than a fifth
+        of its line: unstable crack growth) or ``"convergence"`` (none of these: every line still holds
+        with margin, so the stage most likely stopped because the joint iterations did not converge, not
+        because the dam failed)."""
+        m = self.last_measures  # (the tractions of the model are those of the failed attempt)
+        names = self.assessment.names
+        sf, cr = m["sliding_safety_factor"], m["cracked_length_ratio"]
+        where = m["resultant_position"] / np.maximum(self.assessment.lines.length[self.assessment.keep], 1e-300)
+        k, j = int(np.argmin(sf)), int(np.argmax(cr))
+        text = (f"at the last converged step the lowest sliding factor is {sf[k]:.3g} ('{names[k]}') and the "
+                f"largest cracked length {100 * cr[j]:.0f} % ('{names[j]}')")
+        failed = [st.water.last_failure for st in self.stages if st.water.last_failure is not None]
+        grow = failed[-1] if failed else None
+        if sf[k] < 1.05:
+            return "sliding", text + f": '{names[k]}' slides"
+        if cr[j] > 0.9 or np.nanmax(where) > 0.95:
+            i = j if cr[j] > 0.9 else int(np.nanargmax(where))
+            return "overturning", text + f": the resultant on '{names[i]}' reaches its toe"
+        if grow is not None and grow["open_after"] - grow["open_before"] > 0.2:
+            return "crack", text + (f"; in the failed attempt the crack of '{grow['line']}' ran from "
+                                    f"{100 * grow['open_before']:.0f} % to {100 * grow['open_after']:.0f} % of its "
+                                    "length in one small increment: unstable crack growth (with uplift in the "
+                                    "crack), a failure of the section")
+        return "convergence", text + ("; every joint line still holds with margin: the stage most likely stopped "
+                                      "because the joint iterations did not converge (joints on tiny tractions "
+                                      "changing state), not because the dam failed; more steps or other "
+                                      "solver settings may pass it")
 
     def static_force(self):
         """The water and pore forces (n_dof,) N at the end of the static stages (committed joint states)."""

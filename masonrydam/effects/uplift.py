@@ -210,10 +210,10 @@ class Uplift:
         :meth:`force`) and at the joint points (kept in ``self.pressure``, for the results).
 
         ``step``: a key of the step attempt being iterated (its load factor). Within one attempt a crack
-        that water has entered stays filled (its tip never moves back): the pore pressure jumps where
-        a point opens, and a crack tip allowed to move back and forth between two points made Newton
-        cycle without end (a Koyna flood stopped at a sliding factor of 1.07 for that reason alone). The
-        crack of the converged step is the state's own: the next attempt starts from it."""
+        that water has entered stays filled (its tip never moves back), so that the fixed-point
+        iteration on the pore pressure, which jumps where a point opens, is monotone in the crack's
+        extent and cannot cycle between two tips. The next attempt starts from the crack of the
+        converged state."""
         from ..materials.mohr_coulomb import OPEN
 
         L, S = self.lines, self.samples

@@ -16,7 +16,11 @@ def _dynamic_stages(scene):
 
 
 def _static_only(scene, model):
-    return [] if _dynamic_stages(scene) else ["static analysis (no inertia, no damping)"]
+    if _dynamic_stages(scene):
+        return []
+    if any(st["type"] == "modal" for st in scene["stages"]):
+        return ["no time integration (static and modal stages: no damping)"]
+    return ["static analysis (no inertia, no damping)"]
 
 
 def _inertia(scene, model):
@@ -61,6 +65,11 @@ def _ground_motion(scene, model):
     return out
 
 
+def _modes(scene, model):
+    return [f"modal stage '{st['name']}': {st['modes']} lowest modes of the static state ({st['mass']} mass; "
+            "sticking joint points elastic, open points free)" for st in scene["stages"] if st["type"] == "modal"]
+
+
 def _effects():
     from . import Effect
 
@@ -70,6 +79,9 @@ def _effects():
         Effect("inertia", "a stage with type = 'dynamic'", __name__,
                "Newmark 1959; Hilber, Hughes & Taylor 1977; Chung & Hulbert 1993", "tests/test_dynamics.py",
                _inertia),
+        Effect("modes", "a stage with type = 'modal'", __name__,
+               "generalized eigenproblem K phi = omega^2 M phi (Chopra, Dynamics of Structures, ch. 10, 13)",
+               "tests/test_modal_stage.py", _modes),
         Effect("damping", "stages.damping", __name__, "Rayleigh damping (Chopra, Dynamics of Structures, sec. 11.4)",
                "tests/test_dynamics.py", _damping),
         Effect("ground_motion", "stages.ground_motion", __name__,

@@ -102,7 +102,7 @@ class ResultWriter:
 
     def __init__(self, path, coords, nodes, joint_points, dim, attrs: dict, dynamic: bool = False,
                  options: OutputOptions | None = None, sections: dict | None = None, water: bool = False,
-                 pore_pressure: bool = False, elements: dict | None = None):
+                 pore_pressure: bool = False, elements: dict | None = None, modes: int | None = None):
         self.path = str(path)
         self.dim = dim
         self.dynamic = bool(dynamic)
@@ -173,6 +173,8 @@ class ResultWriter:
             self._section_variables(sections)
         if elements:
             self._element_variables(elements)
+        if modes:
+            self._mode_variables(modes)
         if self.dynamic:
             self._dynamic_variables()
         nc.Conventions = "CF-1.8"
@@ -235,6 +237,30 @@ class ResultWriter:
         self._var("stress", "f8", ("step", "element", "stress_component"), "Pa",
                   "continuum stress, mean of the element's integration points (tension positive; 2D plane "
                   "strain szz not included)")
+
+    def _mode_variables(self, n):
+        """The modes of a modal stage (NaN until it has run): dimension ``mode`` (1, 2, ...)."""
+        self.nc.createDimension("mode", n)
+        self._var("mode", "i4", ("mode",), "1", "mode number, by increasing frequency")[:] = np.arange(1, n + 1)
+        self._var("frequency", "f8", ("mode",), "Hz", "natural frequency", fill_value=np.nan)
+        self._var("period", "f8", ("mode",), "s", "natural period", fill_value=np.nan)
+        self._var("mode_shape", "f8", ("mode", "node", "component"), "kg-0.5",
+                  "mode shape, mass-normalised (phi^T M phi = 1)", fill_value=np.nan)
+        self._var("effective_mass", "f8", ("mode", "component"), "kg",
+                  "effective modal mass per direction (Gamma^2 for mass-normalised modes)", fill_value=np.nan)
+        self._var("effective_mass_ratio", "f8", ("mode", "component"), "1",
+                  "effective modal mass over the mass on the free DOFs, per direction", fill_value=np.nan)
+
+    def write_modes(self, frequency, period, shape, effective_mass, ratio):
+        """The results of a modal stage: frequency, period (n_modes,), shape (n_modes, n_out, dim),
+        effective mass and its ratio (n_modes, dim); written at once (not per step)."""
+        nc = self.nc
+        nc["frequency"][:] = frequency
+        nc["period"][:] = period
+        nc["mode_shape"][:] = shape
+        nc["effective_mass"][:] = effective_mass
+        nc["effective_mass_ratio"][:] = ratio
+        nc.sync()
 
     def _dynamic_variables(self):
         nc = self.nc

@@ -265,6 +265,11 @@ def build_stages(scene: dict, mesh: Mesh, model: Model, base_dir: Path | None = 
 
         reservoir = Reservoir(scene["reservoir"], mesh, model, scene["model"]["thickness"])
     for i, st in enumerate(scene["stages"]):
+        if st["type"] == "modal":
+            from ..solvers.modal import ModalStage
+
+            stages.append(ModalStage(st["name"], st["modes"], st["mass"] == "lumped", supports | held))
+            continue
         if st["type"] == "dynamic":
             settings = dynamic_settings(st, i, scene["solver"]["linear_solver"])
             # a pulse is sampled at the analysis step (dt = "auto": at its smallest, so that the steps,

@@ -151,8 +151,11 @@ def run(scene, output: str | os.PathLike | None = None, progress: bool = False, 
     mesh = build_mesh(s, sc.base_dir)
     model = build_model(s, mesh)
     stages = build_stages(s, mesh, model, sc.base_dir)
-    static_stages = [st for st in stages if not isinstance(st, DynamicStage)]
+    from ..solvers.modal import ModalStage
+
+    static_stages = [st for st in stages if not isinstance(st, (DynamicStage, ModalStage))]
     dyn_stages = [st for st in stages if isinstance(st, DynamicStage)]
+    modal_stage = next((st for st in stages if isinstance(st, ModalStage)), None)
     settings = SolverSettings(**s["solver"])
     backend = resolve_backend(settings.linear_solver, n_dof=model.n_dof, dim=mesh.dim)
     eff = effects(s, model)
@@ -190,7 +193,8 @@ def run(scene, output: str | os.PathLike | None = None, progress: bool = False, 
         writer = ResultWriter(work, mesh.points, nodes, _joint_points(jgroups, set_names, dim), dim, attrs,
                               dynamic=bool(dyn_stages), options=options, sections=water.section_info(),
                               water=water.reservoir is not None, pore_pressure=water.uplift is not None,
-                              elements=_element_info(model) if s["output"]["stress"] == "element" else None)
+                              elements=_element_info(model) if s["output"]["stress"] == "element" else None,
+                              modes=None if modal_stage is None else modal_stage.modes)
     except OSError as exc:  # e.g. another run holds the working file (HDF5 file lock), disk full
         if target is None:
             os.unlink(work)
@@ -226,12 +230,17 @@ def run(scene, output: str | os.PathLike | None = None, progress: bool = False, 
         bar = _Progress(len(stages), progress)
         solver = StaticSolver(model, settings, on_step=on_step, progress=bar)
         u = solver.run(static_stages) if static_stages else np.zeros(model.n_dof)
+        if modal_stage is not None and solver.limit is None:
+            modal = _run_modal(model, modal_stage, u, writer, nodes, dim)
+            bar(stages.index(modal_stage), 1.0)
         if dyn_stages and solver.limit is None:
             _run_dynamic(model, static_stages, dyn_stages, stages, u, writer, nodes, jgroups, dim, bar, dyn_solvers,
                          stopper, water, stress)
         with stopper.closing():  # solved: a request from here on changes nothing
             bar.close()
             stats = _stats_attrs(solver, t_start, dyn_solvers)
+            if modal_stage is not None and solver.limit is None:
+                stats["modal_stage"] = modal_stage.name
             if solver.limit is not None and water.last_measures is not None:
                 stats["limit_kind"], text = water.diagnosis()
                 stats["limit_state"] += "; " + text
@@ -374,6 +383,17 @@ def _run_dynamic(model, static_stages, dyn_stages, stages, u, writer, nodes, jgr
         state = ds.run(st, u0=u, v0=v, a0=None, f_static=f_static, equilibrate=(k == 0), t0=t, energy0=energy,
                        on_step=on_step, record_initial=(k == 0))
         u, v, t, energy = state.u, state.v, state.t, state.energy
+
+
+def _run_modal(model, stage, u, writer, nodes, dim):
+    """The modes of the static state ``u`` (joint states as committed), written to the result file."""
+    from ..solvers.modal import modal_analysis
+
+    model.set_constraints(stage.supports)
+    res = modal_analysis(model, stage.modes, lumped=stage.lumped, u=u)
+    writer.write_modes(res.frequencies, res.periods, res.modes.T.reshape(len(res.frequencies), -1, dim)[:, nodes],
+                       res.effective_mass, res.effective_mass_ratio)
+    return res
 
 
 def _element_info(model) -> dict:
@@ -647,6 +667,15 @@ def print_summary(sc, mesh, model, eff, solver, stats, path, ds, file=None, dyn_
                      f"{int((last == 2).sum())} open")
     if "limit_state" in stats:
         lines.append(f"limit      : {stats['limit_state']}")
+    if "frequency" in ds:
+        comps = [str(c) for c in ds.component.values]
+        lines.append(f"modes      : stage '{stats.get('modal_stage', '')}', effective mass ratio (% of the free mass) "
+                     "per direction")
+        lines.append("             mode  f (Hz)    T (s)    " + "  ".join(f"{c:>6}" for c in comps))
+        for k in range(ds.sizes["mode"]):
+            r = ds.effective_mass_ratio.values[k]
+            lines.append(f"             {k + 1:4d}  {float(ds.frequency[k]):8.4g}  {float(ds.period[k]):7.4g}  "
+                         + "  ".join(f"{100 * v:6.2f}" for v in r))
     if "section" in ds.dims and ds.sizes.get("step", 0):
         last = ds.isel(step=-1)
         sf = last.sliding_safety_factor.values

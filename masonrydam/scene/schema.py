@@ -218,7 +218,7 @@ def _selection(value, key):
     raise SceneError(key, f"expected 'all' or a list of set names, got {value!r}")
 
 
-STAGE_TYPES = ("static", "dynamic")
+STAGE_TYPES = ("static", "modal", "dynamic")
 INTEGRATORS = ("newmark_average", "newmark_linear", "hht", "generalized_alpha", "central_difference")
 PULSE_SHAPES = ("rectangular", "half_sine")
 #: keys of a dynamic stage that apply to dt = "auto" only
@@ -550,9 +550,18 @@ def normalize(raw: dict) -> dict:
         if kind == "dynamic":
             st.append(_dynamic_stage(s, key, dim, i))
             continue
-        if st and st[-1]["type"] == "dynamic":
-            raise SceneError(f"{key}.type", "static stages must come before the dynamic stages (the dynamic "
-                                            "stages continue from the static state)")
+        if kind == "modal":
+            if any(x["type"] != "static" for x in st):
+                raise SceneError(f"{key}.type", "one modal stage, after the static stages and before the dynamic "
+                                                "ones (it takes the modes of the static state)")
+            _check_keys(s, {"name", "type", "modes", "mass"}, key)
+            st.append({"name": str(s.get("name", f"stage{i + 1}")), "type": "modal",
+                       "modes": _int(s.get("modes", 6), f"{key}.modes", 1),
+                       "mass": _choice(s.get("mass", "consistent"), ("lumped", "consistent"), f"{key}.mass")})
+            continue
+        if st and st[-1]["type"] in ("dynamic", "modal"):
+            raise SceneError(f"{key}.type", "static stages must come before the modal and dynamic stages (they "
+                                            "continue from the static state)")
         _check_keys(s, {"name", "type", "steps", "loads", "until_failure"}, key)
         loads = s.get("loads", [])
         if not isinstance(loads, list):

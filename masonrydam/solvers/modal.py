@@ -326,3 +326,15 @@ def modal_analysis(model, n_modes: int, lumped: bool = False, u: np.ndarray | No
     with np.errstate(divide="ignore"):
         periods = np.where(omegas > 0, 2.0 * np.pi / np.where(omegas > 0, omegas, 1.0), np.inf)
     return ModalResult(omegas / (2.0 * np.pi), omegas, periods, modes, L, L**2, free_mass)
+
+
+@dataclass
+class ModalStage:
+    """A modal stage: the ``modes`` lowest modes of the model in the state the static stages left it
+    (sticking joint points elastic, open points free), ``lumped`` or consistent mass, with ``supports``
+    (n_dof,) bool held (the supports and the DOFs prescribed by the last static stage)."""
+
+    name: str
+    modes: int
+    lumped: bool
+    supports: np.ndarray

@@ -65,7 +65,7 @@ from math import comb
 import numpy as np
 
 from ..elements.quadrature import gauss_legendre_1d, tensor_rule
-from ..elements.shapes import ELEMENT_TYPES, reference_nodes, shape_functions
+from ..elements.shapes import ELEMENT_TYPES, facet_area_normal, reference_nodes, shape_functions
 
 __all__ = ["facet_pressure_forces", "collapsed_triangle_rule", "region_points"]
 
@@ -174,13 +174,8 @@ def _nodal_forces_at_points(N, dN, X, w, sign, surface_level, unit_weight, axis,
     """Nodal forces (P, nfn, dim) of the integration points: N (P, nfn), dN (P, r, nfn),
     X (P, nfn, dim) facet node coordinates, w (P,) weights (incl. the thickness in 2D),
     sign (P,) +-1 turning the parametric normal outward."""
-    dim = X.shape[2]
     x = np.einsum("pa,pad->pd", N, X)
-    a1 = np.einsum("pa,pad->pd", dN[:, 0], X)
-    if dim == 2:
-        A = np.stack([a1[:, 1], -a1[:, 0]], axis=1)
-    else:
-        A = np.cross(a1, np.einsum("pa,pad->pd", dN[:, 1], X))
+    A = facet_area_normal(dN, X)
     T = _traction_times_area(A * sign[:, None], x[:, axis], surface_level, unit_weight, axis, K)
     return np.einsum("p,pa,pd->pad", w, N, T)
 
@@ -445,9 +440,7 @@ def facet_pressure_forces(coords, facet_type, facets, inward_points, *, surface_
         centre = np.array([[1.0 / 3.0, 1.0 / 3.0]])
     Nc, dNc = shape_functions(facet_type, centre)
     xc = np.einsum("a,nad->nd", Nc[0], X)
-    a1 = np.einsum("a,nad->nd", dNc[0, 0], X)
-    Ac = np.stack([a1[:, 1], -a1[:, 0]], axis=1) if dim == 2 else np.cross(
-        a1, np.einsum("a,nad->nd", dNc[0, 1], X))
+    Ac = facet_area_normal(dNc[0], X)
     sign = np.where(np.einsum("nd,nd->n", inward_points - xc, Ac) > 0.0, -1.0, 1.0)
 
     if fully_wet.any():
@@ -455,11 +448,7 @@ def facet_pressure_forces(coords, facet_type, facets, inward_points, *, surface_
         N, dN = shape_functions(facet_type, pts)
         Xw = X[fully_wet]
         x = np.einsum("qa,nad->nqd", N, Xw)
-        t1 = np.einsum("qa,nad->nqd", dN[:, 0], Xw)
-        if dim == 2:
-            A = np.stack([t1[..., 1], -t1[..., 0]], axis=-1)
-        else:
-            A = np.cross(t1, np.einsum("qa,nad->nqd", dN[:, 1], Xw))
+        A = facet_area_normal(dN[None], Xw[:, None])  # (n, q, dim)
         A *= sign[fully_wet, None, None]
         T = _traction_times_area(A, x[..., axis], s, gamma, axis, K)
         F = np.einsum("q,qa,nqd->nad", w * scale, N, T)
@@ -467,11 +456,8 @@ def facet_pressure_forces(coords, facet_type, facets, inward_points, *, surface_
 
     if partial.any():
         idx = np.flatnonzero(partial)
-        if dim == 2:
-            loc, pts, w = _wet_points_lines(facet_type, xv[idx], s)
-        else:
-            loc, pts, w = _wet_points_faces(facet_type, xv[idx], s, int(max_subdivision),
-                                                float(subdivision_tol))
+        loc, pts, w = region_points(facet_type, xv[idx], s, max_subdivision=int(max_subdivision),
+                                    subdivision_tol=float(subdivision_tol))
         if len(loc):
             gid = idx[loc]
             N, dN = shape_functions(facet_type, pts)

@@ -14,7 +14,7 @@ import numpy as np
 from ..assembly.sparsity import scatter_vector
 from ..checks import check_keys, components, number, vector
 from ..elements.quadrature import gauss_legendre_1d
-from ..elements.shapes import shape_functions
+from ..elements.shapes import facet_area_normal, shape_functions
 from ..errors import SceneError
 from ..units import quantity
 
@@ -70,11 +70,7 @@ def facet_traction(model, facet_type: str, facets: np.ndarray, thickness: float 
     X = model.coords[facets]  # (n, nfn, dim)
     scale = thickness if dim == 2 else 1.0
     for q in range(len(wg)):
-        a1 = np.einsum("j,njk->nk", dN[q, 0], X)
-        if dim == 2:
-            normal = np.stack([a1[:, 1], -a1[:, 0]], axis=1)
-        else:
-            normal = np.cross(a1, np.einsum("j,njk->nk", dN[q, 1], X))
+        normal = facet_area_normal(dN[q], X)
         jac = np.linalg.norm(normal, axis=1)
         if pressure is not None:
             outward = normal / jac[:, None]

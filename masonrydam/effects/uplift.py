@@ -100,7 +100,7 @@ class Uplift:
         Sets ``self.matrix`` (n_dof, n_samples): nodal forces of a unit pressure at each sample (``N_a w
         n`` on the top face, minus that on the bottom face), and the samples' ``s``, ``elevation``,
         ``line``, ``strip`` and ``weight`` (m2)."""
-        from ..elements.shapes import shape_functions
+        from ..elements.shapes import facet_area_normal, shape_functions
         from ..mesh.model import INTERFACE_FACE_TYPE
         from .hydrostatics import region_points
 
@@ -134,9 +134,7 @@ class Uplift:
                 N, dN = shape_functions(face, xi)
                 Xe = X[e]
                 x = np.einsum("pa,pad->pd", N, Xe)
-                a1 = np.einsum("pa,pad->pd", dN[:, 0], Xe)
-                A = np.stack([a1[:, 1], -a1[:, 0]], axis=1) if dim == 2 else \
-                    np.cross(a1, np.einsum("pa,pad->pd", dN[:, 1], Xe))
+                A = facet_area_normal(dN, Xe)
                 J = np.linalg.norm(A, axis=1)
                 n = A / J[:, None]
                 n *= np.sign(np.einsum("pd,pd->p", n, g.frame[e, 0, dim - 1, :]))[:, None]  # bottom to top

@@ -341,3 +341,16 @@ def integration_rule(name: str, n: int | None = None) -> tuple[np.ndarray, np.nd
     if et.family == "tet":
         return tetrahedron_rule(n)
     return tensor_rule("gauss", n, et.dim)
+
+
+def facet_area_normal(dN: np.ndarray, X: np.ndarray) -> np.ndarray:
+    """Unnormalised normal (..., dim) of facets (edges in 2D, faces in 3D) at points of their reference
+    element, from the shape function derivatives ``dN`` (..., r, nfn) and the facet node coordinates
+    ``X`` (..., nfn, dim) (broadcast as in ``dN @ X``). 2D: the tangent dX/dxi turned by -90 degrees
+    (outward on a counter-clockwise boundary); 3D: dX/dxi x dX/deta (right-hand rule). Its length is
+    the Jacobian of the facet (length or area per unit of reference measure): the one convention of
+    the facet loads, the hydrostatic loads and the uplift."""
+    t = dN @ X  # (..., r, dim) tangents
+    if t.shape[-1] == 2:
+        return np.stack([t[..., 0, 1], -t[..., 0, 0]], axis=-1)
+    return np.cross(t[..., 0, :], t[..., 1, :])

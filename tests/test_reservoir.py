@@ -358,3 +358,21 @@ def test_static_water_stays_applied_in_a_dynamic_stage():
         dyn.sizes["step"], axis=0), rtol=0, atol=0)
     assert (dyn.reservoir_level.values == 28.0).all()
     np.testing.assert_allclose(dyn.sliding_safety_factor.values[-1], static.sliding_safety_factor.values, rtol=1e-6)
+
+
+def test_each_monolith_base_is_a_section_of_its_own():
+    """Two monoliths side by side on one rock block: their base joints share rock nodes but not dam
+    nodes, so each is a line of its own (counted along the dam axis), each carrying half the prism's
+    W - U (no uplift here: N = W b per monolith, b = 10 m)."""
+    H, cw, m = 30.0, 5.0, 0.8
+    scene = dam_scene(H=H, cw=cw, m=m, h_size=3.0)
+    del scene["reservoir"]["uplift"]
+    scene["model"] = {"name": "dam3d", "dimension": 3}
+    scene["mesh"]["generator"] = "gravity_dam_3d"
+    scene["mesh"]["parameters"].update(valley_bottom_width=20.0, valley_top_width=20.0, n_monoliths=2)
+    scene["joints"]["contraction_joints"] = dict(scene["joints"]["base_joint"])
+    ds = masonrydam.run(scene)
+    W, _, _ = section(H, cw, m)
+    assert list(ds.section.values) == ["base_joint/1", "base_joint/2"]
+    np.testing.assert_allclose(ds.section_x.values, [5.0, 15.0])
+    np.testing.assert_allclose(ds.normal_force.isel(step=-1).values, W * 10.0, rtol=1e-3)

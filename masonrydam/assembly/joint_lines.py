@@ -7,8 +7,8 @@ each point its distance ``s`` from the upstream end of its line along the downst
 elevation and, in 3D, its strip (the points of one line at the same position across the line's
 width, which the crack of a cracked-base check grows along).
 
-Lines are the connected pieces of a joint set (interface elements sharing nodes of their bottom
-face), merged where two pieces lie at the same elevation and overlap across the width (a gallery or
+Lines are the connected pieces of a joint set (interface elements sharing nodes on both faces: the
+base joints of two monoliths on one rock block share rock nodes but not dam nodes), merged where two pieces lie at the same elevation and overlap across the width (a gallery or
 an opening cuts a lift into pieces that are still one sliding plane); pieces side by side across the
 width (monoliths separated by contraction joints) stay separate lines. Names: the joint set's name
 for a set with one line, else ``set/k`` with k = 1, 2, ... from the lowest line up (3D: then along
@@ -48,7 +48,7 @@ class JointLines:
         self.vertical_axis = vertical_axis
         up = np.zeros(dim)
         up[vertical_axis] = 1.0
-        across = np.cross(up, d) if dim == 3 else None
+        across = np.cross(d, up) if dim == 3 else None
         scale = float(np.ptp(model.coords, axis=0).max()) or 1.0
         tol = 1e-6 * scale
         sizes = [g.n_elem * g.nip for g in self.groups]
@@ -73,10 +73,13 @@ class JointLines:
             for gi in by_set[set_name]:
                 g = self.groups[gi]
                 ns = g.conn.shape[1] // 2
-                bottom = g.conn[:, :ns]
-                inc = sp.csr_matrix((np.ones(bottom.size), (np.repeat(np.arange(g.n_elem), ns), bottom.ravel())),
-                                    shape=(g.n_elem, model.n_nodes))
-                k, lab = connected_components(inc @ inc.T, directed=False)
+                rows = np.repeat(np.arange(g.n_elem), ns)
+                adjacent = None
+                for face in (g.conn[:, :ns], g.conn[:, ns:]):
+                    inc = sp.csr_matrix((np.ones(face.size), (rows, face.ravel())), shape=(g.n_elem, model.n_nodes))
+                    a = inc @ inc.T
+                    adjacent = a if adjacent is None else adjacent.multiply(a)
+                k, lab = connected_components(adjacent, directed=False)
                 pieces += [(gi, np.nonzero(lab == c)[0]) for c in range(k)]
             # merge pieces at the same elevation whose extents across the width overlap
             info = []

@@ -108,7 +108,7 @@ class Uplift:
         d = L.downstream
         up = np.zeros(dim)
         up[L.vertical_axis] = 1.0
-        across = np.cross(up, d) if dim == 3 else None
+        across = np.cross(d, up) if dim == 3 else None
         drains = self.spec["drains"]
         rows, cols, vals = [], [], []
         parts = {k: [] for k in ("s", "elevation", "line", "strip", "weight")}

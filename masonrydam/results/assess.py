@@ -67,7 +67,14 @@ class SectionAssessment:
         np.maximum.at(smax, L.line, L.s)
         self.heel = L.s <= smin[L.line] + tol
         self.toe = L.s >= smax[L.line] - tol
-        self.frames = [g.frame for g in L.groups]
+        # what does not change from step to step: the points' shear axes (n_points, dim-1, dim), the line
+        # areas, their friction coefficient and the number of heel and toe points
+        self.shear_axes = np.concatenate([g.frame[:, :, : dim - 1, :].reshape(-1, dim - 1, dim) for g in L.groups]) \
+            if L.groups else np.zeros((0, dim - 1, dim))
+        self.area = self._sum(L.weight)
+        self.tan_phi_line = self._sum(self.tan_phi * L.weight) / np.maximum(self.area, 1e-300)
+        self.n_heel = self._sum(self.heel.astype(float))
+        self.n_toe = self._sum(self.toe.astype(float))
         #: the lines assessed: those closer to horizontal than vertical (JointLines.horizontal)
         self.keep = np.nonzero(L.horizontal)[0]
         self.names = [L.names[k] for k in self.keep]
@@ -76,8 +83,9 @@ class SectionAssessment:
         return np.bincount(self.lines.line, weights=values, minlength=self.lines.n_lines)
 
     def measures(self, uplift_force: np.ndarray | None = None) -> dict:
-        """The section variables (each (n_lines,)) at the joints' committed state (the last converged
-        step). uplift_force: (n_lines,) N, the resultant pore pressure on each line, or None."""
+        """The section variables of the assessed lines (each (len(keep),)) at the joints' committed state
+        (the last converged step). uplift_force: (n_lines,) N, the resultant pore pressure on every
+        line, or None."""
         from ..materials import mohr_coulomb as mc
 
         L, dim = self.lines, self.dim
@@ -89,19 +97,17 @@ class SectionAssessment:
         tn = t[:, -1]
         N = -self._sum(tn * w)
         # shear resultant in global components: sum over the points of the shear tractions along their axes
-        axes = np.concatenate([f[:, :, : dim - 1, :].reshape(-1, dim - 1, dim) for f in self.frames])
-        shear = np.einsum("pj,pjk->pk", t[:, :-1], axes) * w[:, None]
+        shear = np.einsum("pj,pjk->pk", t[:, :-1], self.shear_axes) * w[:, None]
         T = np.sqrt(sum(self._sum(shear[:, k]) ** 2 for k in range(dim)))
         compressed = (tn < 0) & ~broken & (state != mc.OPEN)
         cA = self._sum(np.where(compressed, self.cohesion * w, 0.0))
-        tanphi = self._sum(self.tan_phi * w) / np.maximum(self._sum(w), 1e-300)
         with np.errstate(divide="ignore", invalid="ignore"):
-            resisting = cA + np.maximum(N, 0.0) * tanphi
+            resisting = cA + np.maximum(N, 0.0) * self.tan_phi_line
             sf = np.where(T > 0, resisting / T, np.inf)
             pos = np.where(N > 0, self._sum(-tn * w * L.s) / N, np.nan)
-            heel = self._sum(np.where(self.heel, tn, 0.0)) / self._sum(self.heel.astype(float))
-            toe = self._sum(np.where(self.toe, tn, 0.0)) / self._sum(self.toe.astype(float))
-        cracked = self._sum(np.where(state == mc.OPEN, w, 0.0)) / np.maximum(self._sum(w), 1e-300)
+            heel = self._sum(np.where(self.heel, tn, 0.0)) / self.n_heel
+            toe = self._sum(np.where(self.toe, tn, 0.0)) / self.n_toe
+        cracked = self._sum(np.where(state == mc.OPEN, w, 0.0)) / np.maximum(self.area, 1e-300)
         uplift = np.zeros(L.n_lines) if uplift_force is None else uplift_force
         out = {"normal_force": N, "shear_force": T, "sliding_safety_factor": sf, "resultant_position": pos,
                "cracked_length_ratio": cracked, "heel_normal_stress": heel, "toe_normal_stress": toe,
@@ -109,28 +115,19 @@ class SectionAssessment:
         return {k: v[self.keep] for k, v in out.items()}
 
 
-def assessed_lines(model, reservoir=None):
-    """The joint lines to assess: those of the uplift joint sets where the scene has uplift, else those
-    of every joint set whose joints are closer to horizontal than to vertical (base and lift joints,
-    not contraction joints). None if there are none."""
+def assessed_lines(model, reservoir):
+    """The joint lines of ``model`` under ``reservoir`` (:class:`~masonrydam.effects.reservoir.Reservoir`)
+    to assess: those of the uplift joint sets where the scene has uplift, else those of every joint
+    set; of them, :class:`SectionAssessment` keeps the lines closer to horizontal than to vertical
+    (``JointLines.horizontal``: base and lift joints, not contraction joints or bench risers). None for a
+    model without joints."""
     from ..assembly.joint_lines import JointLines
 
-    if reservoir is not None and reservoir.uplift is not None:
+    if reservoir.uplift is not None:
         return reservoir.uplift.lines
-    dim = model.dim
-    if reservoir is not None:
-        vertical, downstream = reservoir.vertical, reservoir.downstream
-    else:
-        vertical = dim - 1
-        downstream = np.eye(dim)[0 if dim == 2 else 1]
-    groups = []
-    for g in model.igroups:
-        n = g.frame[:, :, dim - 1, :].reshape(-1, dim)
-        if len(n) and np.mean(np.abs(n[:, vertical])) > np.sqrt(0.5):
-            groups.append(g)
-    if not groups:
+    if not model.igroups:
         return None
-    return JointLines(model, groups, downstream, vertical)
+    return JointLines(model, model.igroups, reservoir.downstream, reservoir.vertical)
 
 
 def criteria_flags(ds_step, condition: str = "usual") -> dict:

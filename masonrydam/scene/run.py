@@ -231,7 +231,7 @@ def run(scene, output: str | os.PathLike | None = None, progress: bool = False, 
         solver = StaticSolver(model, settings, on_step=on_step, progress=bar)
         u = solver.run(static_stages) if static_stages else np.zeros(model.n_dof)
         if modal_stage is not None and solver.limit is None:
-            modal = _run_modal(model, modal_stage, u, writer, nodes, dim)
+            _run_modal(model, modal_stage, u, writer, nodes, dim)
             bar(stages.index(modal_stage), 1.0)
         if dyn_stages and solver.limit is None:
             _run_dynamic(model, static_stages, dyn_stages, stages, u, writer, nodes, jgroups, dim, bar, dyn_solvers,
@@ -393,7 +393,6 @@ def _run_modal(model, stage, u, writer, nodes, dim):
     res = modal_analysis(model, stage.modes, lumped=stage.lumped, u=u)
     writer.write_modes(res.frequencies, res.periods, res.modes.T.reshape(len(res.frequencies), -1, dim)[:, nodes],
                        res.effective_mass, res.effective_mass_ratio)
-    return res
 
 
 def _element_info(model) -> dict:
@@ -417,7 +416,8 @@ class _Water:
         self.last = None  # (stage, load factor) of the last static step with water
         self.assessment = None
         self.last_measures = None  # the section measures of the last recorded step
-        self._record_groups = [model.igroups.index(g) for g in jgroups]
+        #: per recorded joint group, its index in the model and its number of points
+        self._record_groups = [(model.igroups.index(g), g.n_elem * g.nip) for g in jgroups]
         if self.reservoir is not None:
             lines = assessed_lines(model, self.reservoir)
             if lines is not None and lines.horizontal.any():
@@ -436,27 +436,23 @@ class _Water:
         step, which keeps the water of the last static step)."""
         if self.reservoir is None:
             return {}
-        if st is not None:
-            if st.water is None:
-                return self._values((self.reservoir.face.bottom, None, None))
+        if st is not None and st.water is not None:
             self.last = (st, lam)
-        if self.last is None:
+        if self.last is None:  # a static stage before the water (the water persists once applied)
             return self._values((self.reservoir.face.bottom, None, None))
         stage, lam = self.last
         return self._values(stage.water.levels(lam))
 
     def _values(self, levels) -> dict:
         out = {"reservoir_level": levels[0], "tailwater_level": np.nan if levels[1] is None else levels[1]}
-        p = None
-        if self.uplift is not None:
-            p = self.uplift.pressure
+        up = self.uplift
+        if up is not None:
+            pressures = [up.group_pressure(i) for i, _ in self._record_groups]
             out["joint_pore_pressure"] = np.concatenate(
-                [np.zeros(0)] + [self.uplift.group_pressure(i) if self.uplift.group_pressure(i) is not None
-                                 else np.zeros(self.uplift.model.igroups[i].n_elem * self.uplift.model.igroups[i].nip)
-                                 for i in self._record_groups])
+                [np.zeros(0)] + [np.zeros(n) if p is None else p for p, (_, n) in zip(pressures, self._record_groups)])
         if self.assessment is not None:
-            lines_up = p is not None and self.assessment.lines is self.uplift.lines
-            self.last_measures = self.assessment.measures(self.uplift.line_forces() if lines_up else None)
+            lines_up = up is not None and self.assessment.lines is up.lines
+            self.last_measures = self.assessment.measures(up.line_forces() if lines_up else None)
             out.update(self.last_measures)
         return out
 

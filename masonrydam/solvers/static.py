@@ -476,8 +476,7 @@ class StaticSolver:
 
     def _with_state_load(self, f_ext):
         """``f_ext`` plus the forces that follow the joints' trial states (see :meth:`_newton`)."""
-        load = getattr(self, "_state_load", None)
-        return f_ext if load is None else f_ext + load()
+        return f_ext if self._state_load is None else f_ext + self._state_load()
 
     # -- stages -----------------------------------------------------------------------------------
     def run(self, stages: list[StaticStage], u0: np.ndarray | None = None):
@@ -553,7 +552,7 @@ class StaticSolver:
                 # otherwise the joints that gave way in that attempt name the mechanism and the part
                 hint = "" if parts or not final else "".join(f"; in the last attempt {t}"
                                                              for t in joint_mechanisms(m))
-                if final and st.water is not None and hasattr(st.water, "failure_hint"):
+                if final and st.water is not None:
                     hint += st.water.failure_hint()
                 m.revert()
                 if final and st.until_failure:

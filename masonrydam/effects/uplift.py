@@ -81,8 +81,7 @@ class Uplift:
         for j in spec["joints"]:
             if j not in names:
                 raise SceneError(f"{key}.joints", f"'{j}' is not a joint set of the mesh (joint sets: {names})")
-        self.spec, self.key = spec, key
-        self.model = model
+        self.spec = spec
         self.gamma = float(unit_weight)
         self.group_index = [i for i, g in enumerate(model.igroups) if g.name in spec["joints"]]
         self.lines = JointLines(model, [model.igroups[i] for i in self.group_index], downstream, vertical_axis)

@@ -24,7 +24,7 @@ def test_every_effect_names_its_module_reference_and_tests():
 
 
 def test_scene_sections_and_load_types_come_from_the_effects():
-    assert set(sections()) == {"reservoir"}
+    assert set(sections()) == {"reservoir", "foundation"}
     assert {"self_weight", "nodal", "traction", "pressure", "displacement", "reservoir"} <= set(load_types())
 
 

@@ -112,10 +112,24 @@ class Model:
         )
         self.K_continuum.sum_duplicates()
         self.dofmap: DofMap | None = None
+        #: node sets whose DOFs are coupled all to all beyond the elements (e.g. the wetted face under a
+        #: reservoir condensed on it): (1, n_nodes * dim) DOF arrays, part of the sparsity pattern
+        self.couplings: list[np.ndarray] = []
 
     @property
     def nonlinear(self) -> bool:
         return any(g.nonlinear for g in self.igroups)
+
+    def add_coupling(self, nodes: np.ndarray) -> None:
+        """Couple every DOF of ``nodes`` with every other in the sparsity pattern (a dense block, e.g.
+        the reservoir condensed on the wetted face); the pattern is rebuilt at the next
+        :meth:`set_constraints`."""
+        nodes = np.unique(np.asarray(nodes, dtype=np.int64))
+        dofs = (nodes[:, None] * self.dim + np.arange(self.dim)).reshape(1, -1)
+        if any(np.array_equal(c, dofs) for c in self.couplings):
+            return
+        self.couplings.append(dofs)
+        self.dofmap = None
 
     def set_constraints(self, constrained: np.ndarray) -> None:
         """Build the DOF map, sparsity pattern and scatter maps for a set of constrained DOFs."""
@@ -123,7 +137,8 @@ class Model:
             return
         self.dofmap = dm = DofMap(self.n_nodes, self.dim, constrained)
         groups = list(self.cgroups) + list(self.igroups)
-        self.indptr, self.indices, scatters = build_pattern([g.dofs for g in groups], dm.eq_of_dof, dm.n_eq, dim=self.dim)
+        self.indptr, self.indices, scatters = build_pattern([g.dofs for g in groups] + self.couplings, dm.eq_of_dof,
+                                                            dm.n_eq, dim=self.dim)
         for g, s in zip(groups, scatters):
             g.scatter = s
         self.K_linear_data = np.zeros(len(self.indices))

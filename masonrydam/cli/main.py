@@ -7,6 +7,7 @@
     masonrydam records list                  the bundled ground-motion records
     masonrydam records show NAME [-o PNG]    a record's measures (PGA, PGV, PGD, Arias, D5-95, CAV) and plot
     masonrydam plot OUT.nc [--nodes N ..] [--joints J ..] -o PNG   histories from a result file
+    masonrydam plot OUT.nc --mode N [--scale S] -o PNG   mode shape N of a result with a modal stage
     masonrydam assess OUT.nc [--step N] [--condition C] [--csv F]  stability of the joint lines (dams)
 """
 from __future__ import annotations
@@ -116,13 +117,26 @@ def _cmd_records(args):
 
 def _cmd_plot(args):
     """Time histories (dynamic results) or step histories (static results) of a result file, as PNG
-    (:func:`history_figure`)."""
+    (:func:`history_figure`); with ``--mode N`` the mode shape N of a result with a modal stage
+    (:func:`masonrydam.results.mode_plot.mode_figure`)."""
     from ..results.files import check_output_path, open_result
 
     path = Path(args.result)
-    out = check_output_path(args.output or f"{path.stem}.png", "-o")
+    if args.mode is None and args.scale is not None:
+        raise MasonrydamError("--scale applies to a mode shape; give --mode N as well")
+    if args.mode is not None:
+        for opt in ("nodes", "joints", "component"):
+            if getattr(args, opt) is not None:
+                raise MasonrydamError(f"--{opt} applies to histories, not to a mode shape (--mode)")
+    default = f"{path.stem}.png" if args.mode is None else f"{path.stem}_mode{args.mode}.png"
+    out = check_output_path(args.output or default, "-o")
     ds = open_result(path)  # an incomplete result warns (one line on the command line)
-    fig = history_figure(ds, path.name, args.component, args.nodes, args.joints)
+    if args.mode is not None:
+        from ..results.mode_plot import mode_figure
+
+        fig = mode_figure(ds, args.mode, scale=args.scale, title=path.name)
+    else:
+        fig = history_figure(ds, path.name, args.component or "x", args.nodes, args.joints)
     fig.savefig(out, dpi=110)
     print(f"wrote {out}")
     return 0
@@ -265,12 +279,21 @@ def main(argv=None) -> int:
     rs.add_argument("--column", type=int, help="which value column of a text file with several, counted from 0 "
                                                "without the time column (or which trace of a SAC/MiniSEED file)")
     rc.set_defaults(func=_cmd_records)
-    pl = sub.add_parser("plot", help="plot histories from a result file (netCDF) to PNG")
+    pl = sub.add_parser("plot", help="plot histories (or, with --mode, a mode shape) from a result file (netCDF) "
+                                     "to PNG")
     pl.add_argument("result", help="result file written by `masonrydam run`")
     pl.add_argument("--nodes", type=int, nargs="+", help="node numbers, as in the file's node coordinate (default: the recorded node that moves most)")
     pl.add_argument("--joints", type=int, nargs="+", help="joint point indices along joint_point (default: the one that slips most)")
-    pl.add_argument("--component", default="x", help="displacement component (default x)")
-    pl.add_argument("-o", "--output", help="PNG file (default: RESULT.png in the current folder)")
+    pl.add_argument("--component", help="displacement component (default x)")
+    pl.add_argument("--mode", type=int, metavar="N",
+                    help="draw mode shape N (1-based, as the file's mode coordinate) of a result with a modal "
+                         "stage instead of the histories: undeformed nodes and joints grey, deformed nodes "
+                         "coloured; 3D results in a 3D view")
+    pl.add_argument("--scale", type=float, metavar="S",
+                    help="with --mode: drawn displacement = S x mass-normalised shape (default: the largest "
+                         "displacement is 10 %% of the model's largest extent)")
+    pl.add_argument("-o", "--output", help="PNG file (default: RESULT.png, with --mode N RESULT_modeN.png, "
+                                           "in the current folder)")
     pl.set_defaults(func=_cmd_plot)
     a = sub.add_parser("assess", help="stability of a dam's joint lines (sliding, resultant, cracking) at one step",
                        description="Table of the stability sections (base and lift joints) of a result whose "

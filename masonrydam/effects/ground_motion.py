@@ -61,7 +61,12 @@ def _ground_motion(scene, model):
         for c, g in st["ground_motion"].items():
             src = g.get("record") or g.get("file") or (f"{g['pulse']['shape']} pulse" if "pulse" in g else "values")
             comps.append(f"{c}: {src}")
-        out.append(f"dynamic stage '{st['name']}': uniform base excitation, relative formulation ({'; '.join(comps)})")
+        f = scene.get("foundation")
+        if f and f.get("mass") and f.get("motion") == "outcrop":
+            how = "outcrop motion entered as free-field forces at the compliant base (total displacements)"
+        else:
+            how = "uniform base excitation, relative formulation"
+        out.append(f"dynamic stage '{st['name']}': {how} ({'; '.join(comps)})")
     return out
 
 

@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..checks import check_keys, number, positive
+from ..checks import check_keys, choice, number, positive
 from ..errors import SceneError
 from ..units import quantity
 from . import uplift as _uplift
@@ -47,7 +47,7 @@ def _level(value, key):
 def normalize_section(d, model: dict) -> dict:
     """The ``[reservoir]`` section; ``model``: the normalised ``[model]`` section (gravity)."""
     key = "reservoir"
-    check_keys(d, {"level", "density", "face", "tailwater", "silt", "uplift"}, key)
+    check_keys(d, {"level", "density", "face", "tailwater", "silt", "uplift", "dynamic", "acoustic"}, key)
     if "level" not in d:
         raise SceneError(f"{key}.level", "is required (the water surface, m on the vertical axis)")
     g = np.asarray(model["gravity"], dtype=float)
@@ -85,7 +85,46 @@ def normalize_section(d, model: dict) -> dict:
                        "face": _face_name(s.get("face", out["face"]), f"{sk}.face")}
     if "uplift" in d:
         out["uplift"] = _uplift.normalize(d["uplift"], f"{key}.uplift")
+    out["dynamic"] = choice(d.get("dynamic", "none"), DYNAMIC, f"{key}.dynamic")
+    out["acoustic"] = None
+    if out["dynamic"] == "acoustic":
+        out["acoustic"] = _acoustic(d.get("acoustic", {}), f"{key}.acoustic")
+    elif "acoustic" in d:
+        raise SceneError(f"{key}.acoustic", f"is only read with dynamic = \"acoustic\" (dynamic is "
+                                            f"\"{out['dynamic']}\")")
     return out
+
+
+#: how the water moves with the dam in the dynamic stages: not at all (its static pressure stays),
+#: Westergaard's added mass (:mod:`.added_mass`) or acoustic elements (:mod:`.acoustic`)
+DYNAMIC = ("none", "westergaard", "acoustic")
+#: speed of sound in water (m/s) by default (fresh water at about 10 degrees C; USACE EM 1110-2-6051 sec. 3-7
+#: uses 4 720 ft/s = 1 439 m/s)
+SOUND_SPEED = 1440.0
+#: highest frequency (Hz) the acoustic elements resolve with 10 elements per wavelength, by default
+MAX_FREQUENCY = 25.0
+
+
+def _acoustic(d, key) -> dict:
+    """The ``acoustic`` table of ``[reservoir]`` (dynamic = "acoustic")."""
+    if not isinstance(d, dict):
+        raise SceneError(key, f"expected a table, e.g. {{ sound_speed = 1440.0 }}, got {d!r}")
+    check_keys(d, {"length", "sound_speed", "bottom_reflection", "element_size", "max_frequency"}, key)
+    c = d.get("sound_speed", SOUND_SPEED)
+    if c != "incompressible":
+        if isinstance(c, str):
+            raise SceneError(f"{key}.sound_speed", f"expected a speed in m/s or \"incompressible\", got {c!r}")
+        c = number(c, f"{key}.sound_speed", 0.0, open_min=True)
+    alpha = number(d.get("bottom_reflection", 1.0), f"{key}.bottom_reflection")
+    if not -1.0 < alpha <= 1.0:
+        raise SceneError(f"{key}.bottom_reflection", f"the wave reflection coefficient alpha must lie in (-1, 1] (1: a "
+                                                     f"rigid bottom, 0: full absorption, -1 would be a free surface), "
+                                                     f"got {alpha!r}")
+    return {"length": None if "length" not in d else positive(d["length"], "length", f"{key}.length"),
+            "sound_speed": c, "bottom_reflection": alpha,
+            "element_size": None if "element_size" not in d else positive(d["element_size"], "length",
+                                                                           f"{key}.element_size"),
+            "max_frequency": number(d.get("max_frequency", MAX_FREQUENCY), f"{key}.max_frequency", 0.0, open_min=True)}
 
 
 def _face_name(value, key):

@@ -42,11 +42,16 @@ from ..checks import check_keys, choice, number, positive
 from ..errors import SceneError
 
 CRACKED = ("full_head", "unchanged", "none")
+#: uplift during the dynamic stages (the options of CADAM3D, Leclerc, Leger & Tinawi 2003, Adv. Eng. Softw.
+#: 34:583-601, and its user's manual sec. 3.6; FERC Engineering Guidelines ch. 3 sec. 3-8.2): "static" keeps the
+#: pore pressures of the end of the static stages; "full_head" lets the full reservoir pressure into the
+#: parts of a joint that open (from the heel); "none" takes it out of them (the water has no time to enter)
+EARTHQUAKE = ("static", "full_head", "none")
 
 
 def normalize(d, key: str) -> dict:
     """The ``uplift`` table of ``[reservoir]``."""
-    check_keys(d, {"joints", "drains", "cracked"}, key)
+    check_keys(d, {"joints", "drains", "cracked", "earthquake"}, key)
     joints = d.get("joints")
     if isinstance(joints, str):
         joints = [joints]
@@ -54,7 +59,7 @@ def normalize(d, key: str) -> dict:
         raise SceneError(f"{key}.joints", f"expected a list of joint set names, e.g. [\"base_joint\", \"lift_joints\"], "
                                           f"got {d.get('joints')!r}")
     out = {"joints": list(joints), "cracked": choice(d.get("cracked", "full_head"), CRACKED, f"{key}.cracked"),
-           "drains": None}
+           "earthquake": choice(d.get("earthquake", "static"), EARTHQUAKE, f"{key}.earthquake"), "drains": None}
     if "drains" in d:
         dk = f"{key}.drains"
         dr = d["drains"]
@@ -186,13 +191,14 @@ class Uplift:
         h_drained = np.where(s <= d, h_up + (h_drain - h_up) * up, h_drain + (h_tail - h_drain) * down)
         return np.where(active, h_drained, h)
 
-    def _pressure_at(self, s, elevation, line, strip, h_up, h_tail, tip, cracked):
+    def _pressure_at(self, s, elevation, line, strip, h_up, h_tail, tip, cracked, rule):
         """Pore pressure (Pa) at points of distance ``s``, ``elevation``, ``line`` and ``strip``; ``tip``
-        (n_strips,) the crack tips (-1: none), ``cracked`` (bool per point) the points in a crack."""
+        (n_strips,) the crack tips (-1: none), ``cracked`` (bool per point) the points in a crack;
+        ``rule``: "full_head" or "none" (see the module docstring)."""
         L = self.lines
         h = self._profile(s, L.length[line], h_up[line], h_tail[line], 0.0)
         if tip is not None:
-            if self.spec["cracked"] == "full_head":
+            if rule == "full_head":
                 t = tip[strip]
                 behind = (t >= 0) & ~cracked
                 h = np.where(behind, self._profile(s, L.length[line], h_up[line], h_tail[line], np.maximum(t, 0.0)), h)
@@ -201,7 +207,8 @@ class Uplift:
                 h = np.where(cracked, -np.inf, h)
         return np.where(L.horizontal[line], self.gamma * np.maximum(h - elevation, 0.0), 0.0)
 
-    def pore_pressure(self, level: float, tail: float | None, trial: bool = True, step=None) -> np.ndarray:
+    def pore_pressure(self, level: float, tail: float | None, trial: bool = True, step=None,
+                      rule: str | None = None) -> np.ndarray:
         """Pore pressures for the reservoir ``level`` and tailwater ``tail`` (m; None: no tailwater), with
         the cracks of the joints' trial (or committed) states: at the samples (returned; see
         :meth:`force`) and at the joint points (kept in ``self.pressure``, for the results).
@@ -210,13 +217,17 @@ class Uplift:
         that water has entered stays filled (its tip never moves back), so that the fixed-point
         iteration on the pore pressure, which jumps where a point opens, is monotone in the crack's
         extent and cannot cycle between two tips. The next attempt starts from the crack of the
-        converged state."""
+        converged state.
+
+        ``rule``: the crack rule, default the scene's ``cracked``; the dynamic stages pass the
+        ``earthquake`` option (:meth:`earthquake_force`)."""
         from ..materials.mohr_coulomb import OPEN
 
         L, S = self.lines, self.samples
+        rule = self.spec["cracked"] if rule is None else rule
         h_up, h_tail = self._heads(level, tail)
         tip = cracked = None
-        if self.spec["cracked"] != "unchanged":
+        if rule != "unchanged":
             codes = L.gather([g.state_codes(trial=trial) for g in L.groups])
             cracked, tip = L.leading_open(codes == OPEN)
             if trial and step is not None:
@@ -226,11 +237,24 @@ class Uplift:
                 self._latch_step, self._latched_tip = step, tip
             if not cracked.any():
                 tip = cracked = None
-        self.pressure = self._pressure_at(L.s, L.elevation, L.line, L.strip, h_up, h_tail, tip, cracked)
+        self.pressure = self._pressure_at(L.s, L.elevation, L.line, L.strip, h_up, h_tail, tip, cracked, rule)
         in_crack = None if tip is None else (tip[S["strip"]] >= 0) & (S["s"] <= tip[S["strip"]])
         self.sample_pressure = self._pressure_at(S["s"], S["elevation"], S["line"], S["strip"], h_up, h_tail, tip,
-                                                 in_crack)
+                                                 in_crack, rule)
         return self.sample_pressure
+
+    def earthquake_force(self, level: float, tail: float | None):
+        """For the dynamic stages: a function ``() -> (n_dof,)`` N of the pore forces of the committed
+        joint states under the scene's ``earthquake`` option ("full_head": full reservoir pressure in
+        the parts of a joint open from the heel; "none": none there), or None for "static" (the pore
+        forces of the end of the static stages stay, as part of the static load). The dynamic solver
+        evaluates it at the start of every step and holds it over the step: the water follows the crack
+        one step late (an explicit update: the pore pressure jumps where a point opens, which Newton
+        could not differentiate)."""
+        rule = self.spec["earthquake"]
+        if rule == "static":
+            return None
+        return lambda: self.force(self.pore_pressure(level, tail, trial=False, rule=rule))
 
     def force(self, pressure: np.ndarray) -> np.ndarray:
         """Nodal forces (n_dof,) N of the pore pressures ``pressure`` at the samples."""
@@ -259,8 +283,18 @@ def describe(scene, model) -> list[str]:
     crack = {"full_head": "full reservoir head in cracks from the heel, updated as they grow",
              "unchanged": "cracks keep the intact profile", "none": "no pressure in cracks (drained)"}[u["cracked"]]
     return [f"uplift: pore pressure in joint sets {', '.join(u['joints'])} (effective normal traction in the joint "
-            f"law), linear from reservoir to tailwater head, {drains}; {crack} (USBR 1987, USACE EM 1110-2-2200); "
-            "kept at its static value in dynamic stages"]
+            f"law), linear from reservoir to tailwater head, {drains}; {crack} (USBR 1987, USACE EM 1110-2-2200)"]
+
+
+def _describe_earthquake(scene, model) -> list[str]:
+    r = scene.get("reservoir")
+    if not r or not r.get("uplift") or not any(st["type"] == "dynamic" for st in scene["stages"]):
+        return []
+    rule = r["uplift"]["earthquake"]
+    words = {"static": "held at its value at the end of the static stages",
+             "full_head": "full reservoir pressure entering the joints as they open (updated every step)",
+             "none": "no pressure in the parts of the joints that open (updated every step)"}
+    return [f"uplift in the dynamic stages: {words[rule]} (CADAM3D options; Leclerc, Leger & Tinawi 2003)"]
 
 
 def _effects():
@@ -268,7 +302,10 @@ def _effects():
 
     return [Effect("uplift", "[reservoir] uplift = { joints = [...] }", __name__,
                    "USBR Design of Small Dams (1987) sec. 5.7; USACE EM 1110-2-2200 (1995) sec. 3-3, 4-4; FERC "
-                   "Engineering Guidelines ch. 3 (2016)", "tests/test_reservoir.py", describe)]
+                   "Engineering Guidelines ch. 3 (2016)", "tests/test_reservoir.py", describe),
+            Effect("earthquake_uplift", "[reservoir] uplift.earthquake with a dynamic stage", __name__,
+                   "CADAM3D user's manual (Leclerc, Leger & Tinawi 2003) sec. 3.6; FERC Engineering Guidelines ch. 3 "
+                   "sec. 3-8.2", "tests/test_earthquake_water.py", _describe_earthquake)]
 
 
 EFFECTS = _effects()

@@ -42,6 +42,7 @@ STATE_FLAGS = {"flag_values": np.array([0, 1, 2], dtype=np.int8), "flag_meanings
 ENERGY_VARIABLES = {
     "input": "work of the ground motion (effective earthquake forces -M iota a_g) on the relative displacements",
     "external": "work of the constant loads of the static stages (gravity) during the dynamic stages",
+    "hydrodynamic": "work of the hydrodynamic pressure of an acoustic (compressible) reservoir on the dam",
     "kinetic": "change of kinetic energy (relative velocities)",
     "strain": "change of elastic strain energy of the continuum",
     "damping": "energy dissipated by viscous (Rayleigh) damping",
@@ -54,7 +55,7 @@ ENERGY_VARIABLES = {
                      "opened within a step (trapezoidal rule over a contact event)",
     "numerical": "numerical dissipation of the time integrator (HHT, generalized-alpha: high-frequency "
                  "damping; zero for the trapezoidal rule)",
-    "error": "energy balance error: input + external - (kinetic + strain + damping + joint_stored + "
+    "error": "energy balance error: input + external + hydrodynamic - (kinetic + strain + damping + joint_stored + "
              "joint_friction + joint_bond_break + joint_contact + numerical): Newton tolerance and round-off",
 }
 
@@ -97,12 +98,14 @@ class ResultWriter:
     """
 
     #: step variables of time-history files that static steps leave NaN
-    _DYNAMIC_ONLY = frozenset(["time", "velocity", "acceleration", "acceleration_absolute", "ground_acceleration"]
+    _DYNAMIC_ONLY = frozenset(["time", "velocity", "acceleration", "acceleration_absolute", "ground_acceleration",
+                               "hydrodynamic_force", "face_pressure"]
                               + [f"energy_{name}" for name in ENERGY_VARIABLES])
 
     def __init__(self, path, coords, nodes, joint_points, dim, attrs: dict, dynamic: bool = False,
                  options: OutputOptions | None = None, sections: dict | None = None, water: bool = False,
-                 pore_pressure: bool = False, elements: dict | None = None, modes: int | None = None):
+                 pore_pressure: bool = False, elements: dict | None = None, modes: int | None = None,
+                 hydrodynamic: dict | None = None):
         self.path = str(path)
         self.dim = dim
         self.dynamic = bool(dynamic)
@@ -177,6 +180,8 @@ class ResultWriter:
             self._mode_variables(modes)
         if self.dynamic:
             self._dynamic_variables()
+            if hydrodynamic:
+                self._hydrodynamic_variables(hydrodynamic)
         nc.Conventions = "CF-1.8"
         nc.title = attrs.get("title", "masonrydam analysis")
         nc.source = f"masonrydam {__version__}"
@@ -219,6 +224,21 @@ class ResultWriter:
                 sec["centre"][:, k]
         for name, (units, long_name) in SECTION_VARIABLES.items():
             self._var(name, "f8", ("step", "section"), units, long_name)
+
+    def _hydrodynamic_variables(self, hd):
+        """The moving reservoir (``[reservoir] dynamic``): dimension ``face_node`` (the wetted face nodes,
+        ``hd["nodes"]`` model node indices, ``hd["coords"]`` (n, dim) m) and, per dynamic step, the
+        resultant of the hydrodynamic pressure on the dam and the pressure at the face nodes."""
+        self.nc.createDimension("face_node", len(hd["nodes"]))
+        self._var("face_node", "i8", ("face_node",), "1", "model node index of the wetted face node")[:] = hd["nodes"]
+        for k, c in enumerate(["x", "y", "z"][: self.dim]):
+            self._var(f"face_{c}", "f8", ("face_node",), "m", f"{c} coordinate of the wetted face node")[:] = \
+                hd["coords"][:, k]
+        self._var("hydrodynamic_force", "f8", ("step", "component"), "N",
+                  "resultant of the hydrodynamic water pressure on the dam (static pressure excluded; per unit "
+                  "thickness in 2D)")
+        self._var("face_pressure", "f8", ("step", "face_node"), "Pa",
+                  "hydrodynamic water pressure on the wetted face (compression positive; static pressure excluded)")
 
     def _element_variables(self, el):
         """Continuum stress per element (``[output] stress = "element"``): dimension ``element`` (every

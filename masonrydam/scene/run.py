@@ -189,12 +189,25 @@ def run(scene, output: str | os.PathLike | None = None, progress: bool = False, 
     water = _Water(model, static_stages, jgroups)
     if water.reservoir is not None:
         attrs["reservoir_downstream_direction"] = [float(v) for v in water.reservoir.downstream]
+    moving = _dynamic_water(s, mesh, model, water) if (dyn_stages or modal_stage is not None) else None
+    if moving is not None:
+        attrs["reservoir_dynamic"] = moving.describe()
+    rock = _foundation(s, mesh) if dyn_stages else None
+    if rock is not None:
+        attrs["foundation"] = "; ".join(rock.describe())
+        if not rock.base_excitation:
+            attrs["time_history_conventions_foundation"] = (
+                "with [foundation] mass = true and an outcrop motion the ground motion enters as free-field forces "
+                "at the compliant base: displacement, velocity and acceleration of the dynamic steps are total, not "
+                "relative to the ground (acceleration_absolute = acceleration)")
     try:
         writer = ResultWriter(work, mesh.points, nodes, _joint_points(jgroups, set_names, dim), dim, attrs,
                               dynamic=bool(dyn_stages), options=options, sections=water.section_info(),
                               water=water.reservoir is not None, pore_pressure=water.uplift is not None,
                               elements=_element_info(model) if s["output"]["stress"] == "element" else None,
-                              modes=None if modal_stage is None else modal_stage.modes)
+                              modes=None if modal_stage is None else modal_stage.modes,
+                              hydrodynamic=None if moving is None or not dyn_stages else
+                              {"nodes": moving.nodes, "coords": model.coords[moving.nodes]})
     except OSError as exc:  # e.g. another run holds the working file (HDF5 file lock), disk full
         if target is None:
             os.unlink(work)
@@ -230,12 +243,14 @@ def run(scene, output: str | os.PathLike | None = None, progress: bool = False, 
         bar = _Progress(len(stages), progress)
         solver = StaticSolver(model, settings, on_step=on_step, progress=bar)
         u = solver.run(static_stages) if static_stages else np.zeros(model.n_dof)
+        if moving is not None and moving.coupled_nodes is not None:
+            model.add_coupling(moving.coupled_nodes)  # the water condensed on the wetted face
         if modal_stage is not None and solver.limit is None:
-            _run_modal(model, modal_stage, u, writer, nodes, dim)
+            _run_modal(model, modal_stage, u, writer, nodes, dim, moving, _massless(s))
             bar(stages.index(modal_stage), 1.0)
         if dyn_stages and solver.limit is None:
             _run_dynamic(model, static_stages, dyn_stages, stages, u, writer, nodes, jgroups, dim, bar, dyn_solvers,
-                         stopper, water, stress)
+                         stopper, water, stress, moving, rock, _massless(s))
         with stopper.closing():  # solved: a request from here on changes nothing
             bar.close()
             stats = _stats_attrs(solver, t_start, dyn_solvers)
@@ -340,13 +355,70 @@ def _dynamic_attrs(stages) -> dict:
     return out
 
 
+def _dynamic_water(s, mesh, model, water):
+    """The reservoir moving with the dam (:mod:`masonrydam.effects.dynamic_water`), or None."""
+    spec = s.get("reservoir")
+    if not spec or spec["dynamic"] == "none":
+        return None
+    from ..effects.dynamic_water import DynamicWater
+
+    level = water.stages[-1].water.levels(1.0)[0]
+    return DynamicWater(spec, water.reservoir, model, level, s["model"]["thickness"], mesh)
+
+
+def _foundation(s, mesh):
+    """The foundation rock with mass and absorbing boundaries (:mod:`masonrydam.effects.foundation`), or None."""
+    spec = s.get("foundation")
+    if not spec or not spec["mass"]:
+        return None
+    from ..effects.foundation import build
+
+    return build(spec, mesh, s["materials"], s["model"])
+
+
+def _massless(s) -> tuple:
+    """Element groups without mass: the rock of ``[foundation] mass = false``."""
+    spec = s.get("foundation")
+    return (spec["group"],) if spec and not spec["mass"] else ()
+
+
+def _mass(model, lumped, moving, massless=()):
+    from ..solvers.modal import MassMatrix
+
+    if moving is None:
+        return MassMatrix(model, lumped, massless=massless)
+    return MassMatrix(model, lumped, added=moving.added_mass(lumped), extra_influence=moving.extra_influence,
+                      massless=massless)
+
+
+def _dynamic_terms(model, water, moving, rock, stage):
+    """What the effects add to the dynamic ``stage`` (:class:`~masonrydam.solvers.dynamic.DynamicTerms`);
+    with a foundation of mass, the stage's supports lose the DOFs of the absorbing boundaries."""
+    from ..solvers.dynamic import DynamicTerms
+
+    terms = DynamicTerms()
+    if moving is not None:
+        terms.fluid = moving.fluid_step()
+    if water.uplift is not None:
+        level, tail, _ = water.stages[-1].water.levels(1.0)
+        terms.state_force = water.uplift.earthquake_force(level, tail)
+    if rock is not None:
+        rock.set_motion({g.component: (g.values, g.dt) for g in stage.ground_motion})
+        terms.dashpots = rock.dashpots
+        terms.force = rock.effective_force
+        terms.support_excitation = rock.base_excitation
+        stage.supports = stage.supports & ~rock.released_dofs
+    return terms
+
+
 def _run_dynamic(model, static_stages, dyn_stages, stages, u, writer, nodes, jgroups, dim, bar, dyn_solvers, stopper,
-                 water, stress):
+                 water, stress, moving=None, rock=None, massless=()):
     """Run the dynamic stages from the static state ``u`` (and the joint state committed in the model);
     ``stopper`` (:class:`StopRequests`) is asked after every step; ``water``: the run's :class:`_Water`
-    (the static water and pore forces stay applied)."""
+    (the static water and pore forces stay applied); ``moving``: the reservoir moving with the dam
+    (:class:`~masonrydam.effects.dynamic_water.DynamicWater`) or None; ``rock``: the foundation with mass
+    (:class:`~masonrydam.effects.foundation.Foundation`) or None; ``massless``: groups without mass."""
     from ..solvers.dynamic import DynamicSolver
-    from ..solvers.modal import MassMatrix
 
     f_static = np.zeros(model.n_dof)
     for st in static_stages:
@@ -359,7 +431,9 @@ def _run_dynamic(model, static_stages, dyn_stages, stages, u, writer, nodes, jgr
         si = stages.index(st)
         lumped = st.settings.mass == "lumped"
         if lumped not in masses:
-            masses[lumped] = MassMatrix(model, lumped)
+            masses[lumped] = _mass(model, lumped, moving, massless)
+        if st.terms is None:
+            st.terms = _dynamic_terms(model, water, moving, rock, st)
 
         def prog(fraction, si=si):
             bar(si, fraction)
@@ -370,7 +444,10 @@ def _run_dynamic(model, static_stages, dyn_stages, stages, u, writer, nodes, jgr
         ds = DynamicSolver(model, st.settings, mass=masses[lumped], progress=prog, stop_requested=stopper.requested)
         dyn_solvers.append(ds)
 
-        def on_step(rec, si=si):
+        def on_step(rec, si=si, mass=masses[lumped]):
+            extra = dict(water.extra(None, None), **stress(rec["u"]))
+            if moving is not None:
+                extra.update(moving.outputs(rec["a_abs"], rec["ag"], rec["fluid"], mass))
             with stopper.writing():
                 writer.write_step(si, rec["stage_fraction"], rec["iterations"], rec["u"].reshape(-1, dim)[nodes],
                                   rec["reaction"].reshape(-1, dim)[nodes], _joint_results(jgroups, dim),
@@ -378,19 +455,26 @@ def _run_dynamic(model, static_stages, dyn_stages, stages, u, writer, nodes, jgr
                                            "acceleration": rec["a"].reshape(-1, dim)[nodes],
                                            "acceleration_absolute": rec["a_abs"].reshape(-1, dim)[nodes],
                                            "ground_acceleration": rec["ag"], "energy": rec["energy"]},
-                                  extra=dict(water.extra(None, None), **stress(rec["u"])))
+                                  extra=extra)
 
         state = ds.run(st, u0=u, v0=v, a0=None, f_static=f_static, equilibrate=(k == 0), t0=t, energy0=energy,
                        on_step=on_step, record_initial=(k == 0))
         u, v, t, energy = state.u, state.v, state.t, state.energy
 
 
-def _run_modal(model, stage, u, writer, nodes, dim):
-    """The modes of the static state ``u`` (joint states as committed), written to the result file."""
-    from ..solvers.modal import modal_analysis
+def _run_modal(model, stage, u, writer, nodes, dim, moving=None, massless=()):
+    """The modes of the static state ``u`` (joint states as committed), written to the result file;
+    with the reservoir moving with the dam (``moving``) its added mass, or the coupled dam-water modes
+    of a compressible reservoir."""
+    from ..solvers.modal import coupled_modal_analysis, modal_analysis
 
     model.set_constraints(stage.supports)
-    res = modal_analysis(model, stage.modes, lumped=stage.lumped, u=u)
+    if moving is not None and moving.fluid_step() is not None:
+        res = coupled_modal_analysis(model, stage.modes, moving.fluid_step(), lumped=stage.lumped, u=u,
+                                     mass=_mass(model, stage.lumped, None, massless))
+    else:
+        res = modal_analysis(model, stage.modes, lumped=stage.lumped, u=u, mass=_mass(model, stage.lumped, moving,
+                                                                                     massless))
     writer.write_modes(res.frequencies, res.periods, res.modes.T.reshape(len(res.frequencies), -1, dim)[:, nodes],
                        res.effective_mass, res.effective_mass_ratio)
 

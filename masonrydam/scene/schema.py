@@ -492,6 +492,10 @@ def _check_reservoir_loads(stages, parts):
     if "reservoir" in parts and not used:
         raise SceneError("reservoir", "no static stage applies the water: add { type = \"reservoir\" } to the loads "
                                       "of a stage")
+    dyn = parts.get("reservoir", {}).get("dynamic", "none") if isinstance(parts.get("reservoir"), dict) else "none"
+    if dyn != "none" and not any(st["type"] in ("dynamic", "modal") for st in stages):
+        raise SceneError("reservoir.dynamic", f"\"{dyn}\" moves the water with the dam in dynamic and modal stages; "
+                                              "the scene has neither (remove the key, or add a stage)")
 
 
 def _output_options(d: dict) -> dict:

@@ -197,7 +197,7 @@ from .dynamic_kernels import (joint_step_energy, joint_stored_energy, newmark_ki
 from .joint_space import (MAX_INITIAL_STIFFNESS_ITERATIONS, SPLIT_INITIAL_STIFFNESS_ITERATIONS, JointSpace,
                           joint_space_size)
 from .linear import DIRECT_SOLVERS, Factorization, SingularMatrix, SymmetricFactorization, resolve_backend
-from .modal import MassMatrix, RayleighDamping, elastic_joint_full, elastic_tangent_data
+from .modal import MassMatrix, RayleighDamping, add_to_pattern, elastic_joint_full, elastic_tangent_data
 
 JOINT_SPACE_MODES = ("auto", "on", "off")
 INTEGRATORS = ("newmark_average", "newmark_linear", "hht", "generalized_alpha", "central_difference")
@@ -421,6 +421,31 @@ class GroundMotion:
 
 
 @dataclass
+class DynamicTerms:
+    """Linear terms that effects other than the blocks and joints add to a dynamic stage (all optional).
+
+    dashpots: (n_dof, n_dof) sparse, N s/m: viscous boundaries added to the damping matrix (e.g. the
+    foundation's absorbing boundaries, :mod:`masonrydam.effects.foundation`); their entries must lie in
+    the model's pattern (node blocks).
+    force: ``force(tau) -> (n_dof,)`` N, a load given in time (stage time tau, s): e.g. free-field
+    effective forces; its work is counted as ``input``.
+    state_force: ``state_force() -> (n_dof,)`` N from the committed joint states, evaluated at the start
+    of every step and held over it (e.g. pore pressure entering the cracks as they open); counted as
+    ``input``.
+    fluid: :class:`~masonrydam.solvers.fluid.AcousticStep` (a compressible reservoir condensed on the
+    wetted DOFs, which must be coupled in the pattern); its work on the dam is ``hydrodynamic``.
+    support_excitation: apply the ground motion as ``-M iota a_g`` (the relative formulation); False
+    when the ground motion enters through ``force`` (a compliant base): displacements are then total.
+    """
+
+    dashpots: sp.spmatrix | None = None
+    force: object = None
+    state_force: object = None
+    fluid: object = None
+    support_excitation: bool = True
+
+
+@dataclass
 class DynamicStage:
     """A dynamic stage: ``duration`` s under ``ground_motion`` (list of :class:`GroundMotion`), with
     ``supports`` (n_dof,) bool (DOFs moving with the ground), ``settings`` and ``output_stride``
@@ -432,6 +457,7 @@ class DynamicStage:
     ground_motion: list
     settings: DynamicSettings
     output_stride: int = 1
+    terms: DynamicTerms | None = None
 
     def __post_init__(self):
         if not (math.isfinite(self.duration) and self.duration > 0):
@@ -467,8 +493,8 @@ class DynamicState:
     energy: dict = field(default_factory=dict)
 
 
-ENERGY_KEYS = ("input", "external", "kinetic", "strain", "damping", "joint", "joint_stored", "joint_dissipated",
-               "joint_friction", "joint_bond_break", "joint_contact", "numerical", "error")
+ENERGY_KEYS = ("input", "external", "hydrodynamic", "kinetic", "strain", "damping", "joint", "joint_stored",
+               "joint_dissipated", "joint_friction", "joint_bond_break", "joint_contact", "numerical", "error")
 #: the terms whose largest magnitude so far scales the balance ("% of the largest energy term")
 ENERGY_SCALE_KEYS = ("input", "external", "kinetic", "strain", "joint", "damping")
 
@@ -852,7 +878,27 @@ class DynamicSolver:
             self.Cdata = np.zeros_like(self.Mdata)
             self.C_full = None
             self.C_free = None
-        if self.mass.lumped:
+        terms = self.terms = stage.terms if stage.terms is not None else DynamicTerms()
+        if terms.dashpots is not None and terms.dashpots.nnz:
+            D = sp.csr_matrix(terms.dashpots)
+            Cd = np.zeros_like(self.Mdata)
+            add_to_pattern(D[free][:, free], m.indptr, m.indices, Cd, "dashpot matrix")
+            self.Cdata = self.Cdata + Cd
+            self.C_full = D if self.C_full is None else (self.C_full + D).tocsr()
+            self.C_free = sp.csr_matrix((self.Cdata, m.indices, m.indptr), shape=(self.n, self.n))
+            self.damped = True
+        self.fluid = terms.fluid
+        if self.fluid is not None:
+            if s.integrator == "central_difference":
+                raise SceneError(f"{s.key}integrator", "the acoustic reservoir needs an implicit integrator (its "
+                                                       "pressures are condensed into the implicit step); use hht")
+            self.fluid.attach(m.dofmap.eq_of_dof, s.coefficients())
+            n_w = len(self.fluid.wet_eq)
+            rows = np.repeat(self.fluid.wet_eq, n_w)
+            cols = np.tile(self.fluid.wet_eq, n_w)
+            self._fluid_pattern = (rows, cols)
+        self._sf = np.zeros(self.n)  # the state force of the current step (free DOFs)
+        if self.mass.diagonal:
             self.mdiag = self.mass.free_diag
             self.M_free = None
         else:
@@ -899,14 +945,34 @@ class DynamicSolver:
             ag[c] = g.at(tau)
         return ag
 
-    def _pg_f(self, ag):
-        """Earthquake load on the free DOFs, -sum_c (M iota_c) a_g,c (the last two remembered). Shared
-        array: do not modify."""
-        v = self._recent_pg.get(ag)
+    def _pg_f(self, ag, tau):
+        """Earthquake load on the free DOFs at stage time ``tau``: -sum_c (M iota_c) a_g,c with support
+        excitation, plus the stage's load given in time (:class:`DynamicTerms`; the last two remembered).
+        Shared array: do not modify."""
+        key = np.append(ag, tau)
+        v = self._recent_pg.get(key)
         if v is None:
-            v = -(ag @ self.Miota_f)
-            self._recent_pg.put(ag, v)
+            v = -(ag @ self.Miota_f) if self.terms.support_excitation else np.zeros(self.n)
+            if self.terms.force is not None:
+                v = v + self.terms.force(tau)[self.free]
+            self._recent_pg.put(key, v)
         return v
+
+    def _state_force(self):
+        """The state force of the step about to start (free DOFs; zero without one)."""
+        if self.terms.state_force is not None:
+            self._sf = self.terms.state_force()[self.free] - self._sf0
+        return self._sf
+
+    def _fluid_data(self, h):
+        """``c_m M_w(h)`` in the pattern's values (the water condensed on the wetted DOFs)."""
+        beta, gamma, am, af = self.s.coefficients()
+        cm = (1.0 - am) / ((1.0 - af) * beta * h * h)
+        data = np.zeros_like(self.Mdata)
+        Mw = self.fluid.mass_block(h)
+        add_to_pattern(sp.coo_matrix((cm * Mw.ravel(), self._fluid_pattern), shape=(self.n, self.n)),
+                       self.model.indptr, self.model.indices, data, "reservoir block")
+        return data
 
     def _elastic_eff(self, h):
         """Effective-matrix values with every joint point sticking, for step h (cached)."""
@@ -933,6 +999,8 @@ class DynamicSolver:
             cm = (1.0 - am) / ((1.0 - af) * beta * h * h)
             cc = gamma / (beta * h)
             v = cm * self.Mdata + cc * self.Cdata
+            if self.fluid is not None:
+                v = v + self._fluid_data(h)
             if len(self._add_cache) > 8:
                 self._add_cache.clear()
             self._add_cache[h] = v
@@ -950,7 +1018,11 @@ class DynamicSolver:
         else:
             return None
         K = sp.csr_matrix((self.Kel, self.model.indices, self.model.indptr), shape=(self.n, self.n))
-        if self.mass.lumped:
+        if s.integrator == "central_difference" and not self.mass.diagonal:
+            raise SceneError(f"{s.key}integrator", "central_difference needs a diagonal mass matrix; the added mass "
+                                                   "of the reservoir on an inclined face couples the directions "
+                                                   "(m_a n n^T): use an implicit integrator (e.g. hht)")
+        if self.mass.diagonal:
             md = self.mass.free_diag
             if not (md > 0).all():
                 bad = int(self.free[np.nonzero(~(md > 0))[0][0]])
@@ -1028,20 +1100,33 @@ class DynamicSolver:
                 self.stats.static_residual = float(np.linalg.norm(diff) / scale)
                 fs = f_int[free].copy()
             self.fs_f = fs
+            self._sf0 = self.terms.state_force()[free] if self.terms.state_force is not None else 0.0
             ag0 = self.ground_at(0.0)
             if a0 is None:
-                rhs = fs + self._pg_f(ag0) - f_int[free] - self._Cf(v[free])
+                # (with a reservoir of acoustic elements the water starts at rest: p = 0; its pressure
+                # enters from the first step on)
+                rhs = fs + self._pg_f(ag0, 0.0) - f_int[free] - self._Cf(v[free])
                 a = np.zeros(m.n_dof)
                 if self.mdiag is not None:
                     with np.errstate(divide="ignore", invalid="ignore"):
                         a[free] = np.where(self.mdiag > 0, rhs / np.where(self.mdiag > 0, self.mdiag, 1.0), 0.0)
                 else:
-                    a[free] = Factorization(self.M_free, self.backend).solve(rhs)
+                    # DOFs without mass (massless rock) start with zero acceleration: their rows of the
+                    # positive semi-definite M are zero, the rest is solved on its own
+                    has = self.M_free.diagonal() > 0
+                    if has.all():
+                        a[free] = Factorization(self.M_free, self.backend).solve(rhs)
+                    elif has.any():
+                        Mh = self.M_free[has][:, has].tocsr()
+                        a[free[has]] = Factorization(Mh, self.backend).solve(rhs[has])
             else:
                 a = np.array(a0, dtype=np.float64)
             st = _StepState(t0, 0.0, u, v, a, f_int, None if np.array_equal(K.data, self.Kel) else K.data.copy(), ag0)
             st.Kc_u = m.K_continuum @ u
             st.joints = self._joint_snapshot()
+            if self.fluid is not None:
+                st.fluid = self.fluid.initial_state()
+                st.fw = np.zeros(len(self.fluid.wet_eq))
             en = dict.fromkeys(ENERGY_KEYS, 0.0) if energy0 is None else dict(energy0)
             self._en_ref = {"kinetic0": 0.5 * float(v[free] @ self._Mf(v[free])) - en.get("kinetic", 0.0),
                             "strain0": 0.5 * float(u @ st.Kc_u) - en.get("strain", 0.0),
@@ -1167,10 +1252,18 @@ class DynamicSolver:
         else:
             mv1, ma0, ma1 = self._Mf(v1f), self._Mf(prev.a[free]), self._Mf(st.a[free])
         w = np.empty(10)
-        pg0, pg1 = self._pg_f(prev.ag), self._pg_f(st.ag)
+        pg0, pg1 = self._pg_f(prev.ag, prev.tau) + self._sf, self._pg_f(st.ag, st.tau) + self._sf
+        hydro = 0.0
+        if self.fluid is not None:
+            wet = self.fluid.wet_eq
+            pg0, pg1 = pg0.copy(), pg1.copy()
+            pg0[wet] += prev.fw
+            pg1[wet] += st.fw
+            hydro = 0.5 * float((prev.fw + st.fw) @ (st.u[free][wet] - prev.u[free][wet]))
         step_works(free, prev.u, st.u, pg0, pg1, self.fs_f, cv0, cv1, prev.f_int, st.f_int, prev.Kc_u, st.Kc_u, v1f,
                    self._mass_diag, mv1, prev.a, st.a, ma0, ma1, w)
-        e["input"] += float(w[0])
+        e["input"] += float(w[0]) - hydro
+        e["hydrodynamic"] = e.get("hydrodynamic", 0.0) + hydro
         e["external"] += float(w[1])
         e["damping"] += float(w[2])
         e["joint"] += float(w[3])
@@ -1191,7 +1284,7 @@ class DynamicSolver:
             for key, x in zip(("joint_friction", "joint_bond_break", "joint_contact"), split[:3]):
                 e[key] = e.get(key, 0.0) + float(x)
         e["joint_dissipated"] = e["joint"] - e["joint_stored"]
-        e["error"] = e["input"] + e["external"] - (e["kinetic"] + e["strain"] + e["damping"] + e["joint_stored"]
+        e["error"] = e["input"] + e["external"] + e["hydrodynamic"] - (e["kinetic"] + e["strain"] + e["damping"] + e["joint_stored"]
                                                    + e["joint_friction"] + e["joint_bond_break"]
                                                    + e["joint_contact"] + e["numerical"])
         st.energy = e
@@ -1204,7 +1297,8 @@ class DynamicSolver:
     def _energy_growth(self, e) -> float:
         """Mechanical energy gained beyond what the loads supplied (J): kinetic + strain + joint stored
         + damping - external - input. Physically <= 0."""
-        return e["kinetic"] + e["strain"] + e["joint_stored"] + e["damping"] - e["external"] - e["input"]
+        return (e["kinetic"] + e["strain"] + e["joint_stored"] + e["damping"] - e["external"] - e["input"]
+                - e.get("hydrodynamic", 0.0))
 
     def _accept_energy(self, st):
         e = st.energy
@@ -1224,12 +1318,14 @@ class DynamicSolver:
     def _emit(self, stage, k, st, final):
         m = self.model
         a_abs = st.a.copy()
-        for c in range(m.dim):
-            a_abs[c::m.dim] += st.ag[c]
+        if self.terms.support_excitation:  # else the motion is total already
+            for c in range(m.dim):
+                a_abs[c::m.dim] += st.ag[c]
         rec = {"step": k, "t": st.t, "u": st.u, "v": st.v, "a": st.a, "a_abs": a_abs, "ag": st.ag.copy(),
                "energy": dict(st.energy), "iterations": self._iters_since_record, "final": final,
                "stage_fraction": min(1.0, st.tau / stage.duration),
-               "reaction": self.reaction(st.u, st.v, a_abs, st.f_int, self.f_static)}
+               "reaction": self.reaction(st.u, st.v, a_abs, st.f_int, self.f_static),
+               "fluid": getattr(st, "fluid", None)}
         self._iters_since_record = 0
         self._last_emitted_t = st.t
         t0 = time.perf_counter()
@@ -1417,9 +1513,20 @@ class DynamicSolver:
         beta, gamma, am, af = s.coefficients()
         w_m = (1.0 - am) / (1.0 - af)
         ag1 = self.ground_at(t_end)
-        p1 = self.fs_f + self._pg_f(ag1)
-        pn = self.fs_f + self._pg_f(st.ag)
+        sf = self._state_force()
+        p1 = self.fs_f + self._pg_f(ag1, t_end) + sf
+        pn = self.fs_f + self._pg_f(st.ag, st.tau) + sf
         un, vn, an = st.u[free], st.v[free], st.a[free]
+        fluid = self.fluid
+        if fluid is not None:
+            # the water's force at the end of the step, less its M_w a1 part (added in residual below)
+            wet = fluid.wet_eq
+            g_w, fluid_ctx = fluid.start(st.fluid, h, an[wet], st.ag, ag1)
+            Mw = fluid.mass_block(h)
+            p1 = p1.copy()
+            p1[wet] += g_w
+            pn = pn.copy()
+            pn[wet] += st.fw
         const = -p1
         if am != 0.0:
             const = const + (am / (1.0 - af)) * self._Mf(an)
@@ -1439,6 +1546,8 @@ class DynamicSolver:
             newmark_kinematics(u, free, un, vn, an, h, beta, gamma, self._mass_diag, a1, v1, Ma)
             if self.mdiag is None:
                 Ma = self.M_free @ a1
+            if fluid is not None:
+                Ma[wet] += Mw @ a1[wet]
             if self.damped:  # a new velocity: the product without looking it up, then remembered
                 Cv = self.C_free @ v1
                 self._recent_Cv.put(v1, Cv)
@@ -1631,6 +1740,9 @@ class DynamicSolver:
         new.v[free] = v1
         new.a[free] = a1
         new.Kc_u = m.continuum_force(u)
+        if fluid is not None:
+            new.fluid = fluid.finish(fluid_ctx, a1[wet])
+            new.fw = fluid.force(new.fluid)
         self._record_energy(new, st)
         if can_split and nonlinear and s.energy_growth_tolerance > 0:
             # the trapezoidal work of a joint point that opens or closes within the step is not the
@@ -1673,7 +1785,7 @@ class DynamicSolver:
             u[free] += h * v_half
             f_int, _ = m.evaluate(u, want_tangent=False)
             ag1 = self.ground_at(t_end)
-            rhs = self.fs_f + self._pg_f(ag1) - f_int[free] - self._Cf(v_half)
+            rhs = self.fs_f + self._pg_f(ag1, t_end) + self._state_force() - f_int[free] - self._Cf(v_half)
             a1 = rhs / md
             if not np.isfinite(a1).all():
                 self._fail(stage, st, NumericalError(
@@ -1692,11 +1804,12 @@ class DynamicSolver:
 
 
 class _StepState:
-    __slots__ = ("t", "tau", "u", "v", "a", "f_int", "Kdata", "ag", "Kc_u", "energy", "joints")
+    __slots__ = ("t", "tau", "u", "v", "a", "f_int", "Kdata", "ag", "Kc_u", "energy", "joints", "fluid", "fw")
 
     def __init__(self, t, tau, u, v, a, f_int, Kdata, ag):
         self.t, self.tau, self.u, self.v, self.a = t, tau, u, v, a
         self.f_int, self.Kdata, self.ag = f_int, Kdata, ag
         self.Kc_u = None
+        self.fluid = self.fw = None
         self.energy = None
         self.joints = ()  # (delta, traction, state) copies per joint set (see DynamicSolver._joint_snapshot)

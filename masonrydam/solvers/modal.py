@@ -105,10 +105,13 @@ class RayleighDamping:
         return self.alpha != 0.0 or self.beta != 0.0
 
 
-def _element_masses(model, lumped: bool):
-    """(group, me) per continuum group: element mass matrices (ne, nd, nd) in kg."""
+def _element_masses(model, lumped: bool, massless=()):
+    """(group, me) per continuum group (except the groups named in ``massless``): element mass matrices
+    (ne, nd, nd) in kg."""
     out = []
     for g in model.cgroups:
+        if g.name in massless:
+            continue
         N, dN, w = ck.element_tables(g.type, MASS_RULE.get(g.type))
         me = np.zeros((g.n_elem, g.n_edof, g.n_edof))
         st = ck.continuum_mass(model.coords, g.conn, N, dN, w, np.ascontiguousarray(g.density, dtype=np.float64),
@@ -132,6 +135,25 @@ def _full_matrix(n_dof, parts):
     return M
 
 
+def add_to_pattern(A: sp.spmatrix, indptr: np.ndarray, indices: np.ndarray, data: np.ndarray, what: str) -> None:
+    """Add the free-DOF matrix ``A`` (n_eq, n_eq) into ``data`` (values of the CSR pattern ``indptr``,
+    ``indices``, column indices sorted in each row); a ValueError names ``what`` if an entry of ``A``
+    lies outside the pattern."""
+    A = sp.coo_matrix(A)
+    if A.nnz == 0:
+        return
+    n = len(indptr) - 1
+    rows = np.repeat(np.arange(n, dtype=np.int64), np.diff(indptr))
+    keys = rows * n + indices
+    want = A.row.astype(np.int64) * n + A.col
+    pos = np.searchsorted(keys, want)
+    pos = np.minimum(pos, len(keys) - 1)
+    if not np.array_equal(keys[pos], want):
+        raise ValueError(f"the {what} couples DOFs that the model's sparsity pattern does not (a coupling must "
+                         "be declared with Model.add_coupling before set_constraints)")
+    np.add.at(data, pos, A.data)
+
+
 def diagonal_positions(indptr: np.ndarray, indices: np.ndarray) -> np.ndarray:
     """Position of the diagonal entry of every row in a CSR ``data`` array (the model's pattern has
     every diagonal entry, see :func:`masonrydam.assembly.sparsity.build_pattern`)."""
@@ -144,26 +166,40 @@ def diagonal_positions(indptr: np.ndarray, indices: np.ndarray) -> np.ndarray:
 
 
 class MassMatrix:
-    """Mass of the continuum groups, assembled once.
+    """Mass of the continuum groups, assembled once, plus an optional added mass (e.g. the reservoir's,
+    :mod:`masonrydam.effects.added_mass`).
 
-    ``lumped``; ``full`` (n_dof, n_dof) CSR (diagonal when lumped); ``diag`` (n_dof,) kg when lumped;
-    after :meth:`for_pattern`: ``data`` (nnz,) free-DOF values in the model pattern and ``free_diag``
-    (n_eq,) when lumped.
+    ``lumped``; ``full`` (n_dof, n_dof) CSR; ``diagonal``: the whole matrix is diagonal (lumped element
+    masses and an added mass without off-diagonal terms), then ``diag`` (n_dof,) kg and, after
+    :meth:`for_pattern`, ``free_diag`` (n_eq,); ``data`` (nnz,) free-DOF values in the model pattern.
+    added: (n_dof, n_dof) sparse, kg, or None; its entries must lie in the model's pattern (nodes that
+    share an element or a coupling, :meth:`Model.add_coupling`). extra_influence: see :meth:`influence`.
+    massless: names of element groups without mass (e.g. the foundation rock of ``[foundation] mass =
+    false``).
     """
 
-    def __init__(self, model, lumped: bool):
+    def __init__(self, model, lumped: bool, added: sp.spmatrix | None = None,
+                 extra_influence: np.ndarray | None = None, massless=()):
         self.lumped = bool(lumped)
-        self._groups = _element_masses(model, self.lumped)
+        #: (dim, n_dof) kg or None: a part of the earthquake load per unit ground acceleration that is not
+        #: ``M iota`` (the reservoir bottom of incompressible acoustic water moving with the ground)
+        self.extra_influence = extra_influence
+        self._groups = _element_masses(model, self.lumped, tuple(massless))
         self.n_dof = model.n_dof
+        self.added = None if added is None or added.nnz == 0 else sp.csr_matrix(added)
         if self.lumped:
-            self.diag = np.zeros(model.n_dof)
+            diag = np.zeros(model.n_dof)
             for g, me in self._groups:
                 d = np.einsum("eii->ei", me)
-                np.add.at(self.diag, g.dofs.ravel(), d.ravel())
-            self.full = sp.diags(self.diag).tocsr()
+                np.add.at(diag, g.dofs.ravel(), d.ravel())
+            self.full = sp.diags(diag).tocsr()
         else:
-            self.diag = None
             self.full = _full_matrix(model.n_dof, [(g.dofs, me) for g, me in self._groups])
+        if self.added is not None:
+            self.full = (self.full + self.added).tocsr()
+        offdiag = self.full - sp.diags(self.full.diagonal())
+        self.diagonal = self.lumped and offdiag.count_nonzero() == 0
+        self.diag = self.full.diagonal().copy() if self.diagonal else None
         self.data = None
         self.free_diag = None
         self._pattern_key = None
@@ -184,6 +220,8 @@ class MassMatrix:
             iota = np.zeros(self.n_dof)
             iota[c::dim] = 1.0
             out[c] = self.full @ iota
+        if self.extra_influence is not None:
+            out += self.extra_influence
         return out
 
     def for_pattern(self, model) -> np.ndarray:
@@ -192,13 +230,21 @@ class MassMatrix:
         if self._pattern_key == key:
             return self.data
         data = np.zeros(len(model.indices))
-        if self.lumped:
-            free = model.dofmap.free
+        free = model.dofmap.free
+        if self.diagonal:
             self.free_diag = self.diag[free].copy()
             data[diagonal_positions(model.indptr, model.indices)] = self.free_diag
         else:
-            for g, me in self._groups:
-                scatter_matrix(me, g.scatter, data)
+            if self.lumped:
+                d = np.zeros(model.n_dof)
+                for g, me in self._groups:
+                    np.add.at(d, g.dofs.ravel(), np.einsum("eii->ei", me).ravel())
+                data[diagonal_positions(model.indptr, model.indices)] = d[free]
+            else:
+                for g, me in self._groups:
+                    scatter_matrix(me, g.scatter, data)
+            if self.added is not None:
+                add_to_pattern(self.added[free][:, free], model.indptr, model.indices, data, "added mass")
         self.data = data
         self._pattern_key = key
         return data
@@ -292,12 +338,14 @@ def modal_analysis(model, n_modes: int, lumped: bool = False, u: np.ndarray | No
         mass = MassMatrix(model, lumped)
     M = mass.free_matrix(model)
     mdiag = M.diagonal()
-    if not (mdiag > 0).all():
-        bad = int(np.nonzero(~(mdiag > 0))[0][0])
-        raise SceneError("materials", f"free DOF {int(model.dofmap.free[bad])} has no mass (density 0?); "
-                                      "modal analysis needs a positive mass at every free DOF")
+    if not (mdiag > 0).any() or (mdiag < 0).any():
+        raise SceneError("materials", "modal analysis needs mass (a positive density) in the model; massless parts "
+                                      "(e.g. rock of density 0) are allowed, they follow the others statically")
+    # massless DOFs (massless rock) are condensed by the shift-invert solve: M positive semi-definite is
+    # enough for ARPACK's mode 3 (the infinite eigenvalues are never near the shift)
     # small negative shift: K - sigma M is positive definite even for a mechanism
-    scale = float(np.max(K.diagonal() / mdiag))
+    has = mdiag > 0
+    scale = float(np.max(K.diagonal()[has] / mdiag[has]))
     sigma = -1e-9 * scale
     A = (K - sigma * M).tocsr()
     try:
@@ -338,3 +386,65 @@ class ModalStage:
     modes: int
     lumped: bool
     supports: np.ndarray
+
+
+def coupled_modal_analysis(model, n_modes: int, fluid, lumped: bool = False, u: np.ndarray | None = None,
+                           mass: MassMatrix | None = None) -> ModalResult:
+    """The ``n_modes`` lowest modes of the dam coupled with a compressible reservoir of acoustic elements
+    (``fluid``: :class:`~masonrydam.solvers.fluid.AcousticStep`, radiation damping ``L`` left out):
+
+        [K  -Q] [u]          [M       0] [u]
+        [0   H] [p] = w^2    [rho Q^T G] [p]
+
+    (Zienkiewicz & Bettess 1978, IJNME 13:1-16; the pencil is not symmetric but its eigenvalues are
+    real and positive). Solved by ARPACK in shift-invert mode on the operator ``(A - sigma B)^-1 B``
+    with a sparse LU (SuperLU) of the coupled matrix. The mode shapes are the dam's part, normalised
+    with the dam's mass (``phi^T M phi = 1``); the effective masses are the dam's (``(phi^T M iota)^2``),
+    so their sum over all modes is the dam's mass, not dam plus water. Returns a :class:`ModalResult`."""
+    if model.dofmap is None:
+        raise SceneError("supports", "modal analysis needs the constraints: call model.set_constraints first")
+    n = model.dofmap.n_eq
+    n_modes = int(n_modes)
+    saved = [(g.state_trial.copy(), g.delta.copy(), g.traction.copy()) for g in model.igroups]
+    try:
+        _, K = model.evaluate(np.zeros(model.n_dof) if u is None else np.asarray(u, dtype=np.float64), True)
+    finally:
+        for g, (s, d, t) in zip(model.igroups, saved):
+            g.state_trial[:], g.delta[:], g.traction[:] = s, d, t
+    K = ((K + K.T) * 0.5).tocsr()
+    if mass is None:
+        mass = MassMatrix(model, lumped)
+    M = mass.free_matrix(model)
+    free = model.dofmap.free
+    Qf = sp.csr_matrix(fluid.Q)[free]  # (n, n_p)
+    n_p = fluid.n_p
+    A = sp.bmat([[K, -Qf], [None, fluid.H]], format="csc")
+    B = sp.bmat([[M, None], [fluid.rho * Qf.T, fluid.G]], format="csc")
+    md = M.diagonal()
+    has = md > 0
+    scale = float(np.max(K.diagonal()[has] / md[has]))
+    sigma = -1e-6 * scale
+    lu = spla.splu((A - sigma * B).tocsc())
+    op = spla.LinearOperator((n + n_p, n + n_p), matvec=lambda x: lu.solve(B @ x), dtype=np.float64)
+    k = min(n_modes, n + n_p - 2)
+    nu, vec = spla.eigs(op, k=k, which="LM", tol=1e-10)
+    lam = sigma + 1.0 / nu
+    order = np.argsort(lam.real)
+    lam, vec = lam[order].real, vec[:, order].real
+    phi = vec[:n]
+    mm = np.einsum("ik,ik->k", phi, M @ phi)
+    phi = phi / np.sqrt(np.where(mm > 0, mm, 1.0))
+    omegas = np.sqrt(np.clip(lam, 0.0, None))
+    dim = model.dim
+    Miota = mass.influence(dim)[:, free]
+    L = phi.T @ Miota.T
+    free_mass = np.zeros(dim)
+    for c in range(dim):
+        iota = np.zeros(model.n_dof)
+        iota[c::dim] = 1.0
+        iota_f = iota[free]
+        free_mass[c] = iota_f @ (M @ iota_f)
+    modes = np.zeros((model.n_dof, k))
+    modes[free] = phi
+    periods = np.where(omegas > 0, 2.0 * np.pi / np.where(omegas > 0, omegas, 1.0), np.inf)
+    return ModalResult(omegas / (2.0 * np.pi), omegas, periods, modes, L, L**2, free_mass)

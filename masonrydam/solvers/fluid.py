@@ -1,0 +1,180 @@
+"""The acoustic reservoir in the implicit step, condensed on the wetted face (the dam's fast path kept).
+
+Coupled equations (pressure formulation; Zienkiewicz & Bettess 1978, IJNME 13:1-16; Chopra &
+Chakrabarti 1981, EESD 9:363-383), on the free DOFs of the dam and the free pressure unknowns of the
+water (:mod:`masonrydam.effects.acoustic` builds the matrices):
+
+    M u'' + C u' + f_int(u) = f + Q p - M iota a_g
+    G p'' + L p' + H p      = -rho (Q^T u'' + B a_g)
+
+``Q`` (n_dof, n_p) couples the face (the water pushes on the dam with ``Q p``, the dam's normal
+acceleration drives the water), ``B`` (n_p, dim) is the rigid translation of face and reservoir
+bottom with the ground. The generalized-alpha family (the dam's integrator, :mod:`.dynamic`) applied
+to the coupled first-order-in-time system: inertia terms (``M u''``, ``G p''`` and ``rho Q^T u''``)
+weighted with ``am``, the others with ``af``, Newmark's updates for ``p`` with the dam's beta and
+gamma. The water is linear, so one step's pressures are an affine function of the dam's new
+acceleration ``a1``:
+
+    A p''_{n+1} = r_n - (1 - am) rho Q^T a1,   A = (1 - am) G + (1 - af) (gamma h L + beta h^2 H)
+    r_n = -am (G p''_n + rho Q^T a_n) - (1 - af) (L pd~ + H p~) - af (L p'_n + H p_n)
+          - rho B ((1 - af) a_g,n+1 + af a_g,n)
+
+(``p~``, ``pd~``: Newmark predictors). Eliminating ``p`` (static condensation of the linear water on
+the wetted DOFs) leaves the dam's step with
+
+- the water force at the end of the step ``Q p_{n+1} = g - (1 - am)/(1 - af) M_w a1``, where
+  ``g = Q (p~ + beta h^2 A^-1 r_n)`` (one sparse substitution with ``A`` per step) and
+- the symmetric, positive semi-definite matrix ``M_w(h) = (1 - af) beta h^2 rho Q A^-1 Q^T`` (dense on the
+  ``n_w`` wetted DOFs, ``n_w`` substitutions once per step size), which enters the step's inertia
+  term like a mass and the effective matrix as ``c_m M_w``.
+
+So the all-stick effective matrix stays symmetric positive definite and is factorized once (its
+pattern holds the wetted block: :meth:`masonrydam.assembly.model.Model.add_coupling`), the joint-space
+condensation of :mod:`.joint_space` applies unchanged, and a step costs one more substitution with
+the water's ``A`` plus two dense products of size ``n_p x n_w``. After the dam's step has converged the
+water is advanced with the same ``a1`` (:meth:`AcousticStep.finish`). For incompressible water
+(``G = L = 0``) ``M_w = rho Q H^-1 Q^T`` does not depend on ``h``: that case is a constant added mass and
+the run puts it in the mass matrix instead (:func:`incompressible_added_mass`).
+
+Why written here: the condensation needs the integrator's coefficients and the dam's DOF numbering.
+``A`` (symmetric positive definite, a 2D or 3D Laplacian-like matrix) gets the L D L^T with numba
+substitutions of :class:`~masonrydam.solvers.linear.SymmetricFactorization` (SuperLU's own solve as
+the fallback): on the Koyna reservoir (4 212 unknowns) the water's part of a step fell from 0.86 to
+about 0.5 ms with it and the right-hand side from three precomputed matrices
+(benchmarks/bench_koyna_reservoir.py).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from .linear import SingularMatrix, SymmetricFactorization
+
+
+def incompressible_added_mass(H, Q, B, density):
+    """(M_a (n_dof, n_dof) CSR kg, extra (dim, n_dof) kg): the added mass ``rho Q H^-1 Q^T`` of
+    incompressible water and the part of its ground-motion load that is not ``M_a iota``: the reservoir
+    bottom moving with the ground, ``-rho Q H^-1 (B - Q^T iota)`` per unit ground acceleration, returned
+    as the extra influence ``rho Q H^-1 (B - Q^T iota)`` (the effective earthquake force is ``-(M iota +
+    extra) a_g``)."""
+    lu = spla.splu(sp.csc_matrix(H))
+    Qc = sp.csr_matrix(Q)
+    wet = np.unique(Qc.nonzero()[0])
+    Qw = Qc[wet].toarray()  # (n_w, n_p)
+    Z = lu.solve(np.ascontiguousarray(Qw.T))  # (n_p, n_w)
+    Mw = density * (Qw @ Z)
+    Mw = 0.5 * (Mw + Mw.T)
+    n_dof = Qc.shape[0]
+    rows = np.repeat(wet, len(wet))
+    cols = np.tile(wet, len(wet))
+    Ma = sp.csr_matrix((Mw.ravel(), (rows, cols)), shape=(n_dof, n_dof))
+    dim = B.shape[1]
+    extra = np.zeros((dim, n_dof))
+    for c in range(dim):
+        iota = np.zeros(n_dof)
+        iota[c::dim] = 1.0
+        rest = B[:, c] - Qc.T @ iota
+        if np.abs(rest).max(initial=0.0) > 0.0:
+            extra[c] = density * (Qc @ lu.solve(rest))
+    return Ma, extra
+
+
+@dataclass
+class FluidState:
+    """Pressures (Pa) and their first two time derivatives on the free pressure unknowns (n_p,)."""
+
+    p: np.ndarray
+    pd: np.ndarray
+    pdd: np.ndarray
+
+
+class AcousticStep:
+    """The compressible reservoir of one dynamic stage (see the module docstring).
+
+    G, H, L: (n_p, n_p) sparse (s2/m2, 1, s/m; times thickness in 2D); Q: (n_dof, n_p) sparse (m2);
+    B: (n_p, dim) (m2); density: kg/m3. :meth:`attach` binds it to the stage's free DOFs and integrator."""
+
+    def __init__(self, G, H, L, Q, B, density):
+        self.G, self.H, self.L = (sp.csr_matrix(x) for x in (G, H, L))
+        self.Q = sp.csr_matrix(Q)
+        self.B = np.asarray(B, dtype=np.float64)
+        self.rho = float(density)
+        self.n_p = self.G.shape[0]
+        #: wetted DOFs (full-DOF indices, sorted)
+        self.wet = np.unique(self.Q.nonzero()[0])
+        self._systems = {}
+
+    def attach(self, eq_of_dof: np.ndarray, coefficients) -> None:
+        """Bind to the free DOFs (``eq_of_dof`` (n_dof,), -1 where constrained) and the integrator's
+        (beta, gamma, am, af); wetted DOFs that are constrained carry no acceleration."""
+        eq = eq_of_dof[self.wet]
+        keep = eq >= 0
+        self.wet_eq = eq[keep]
+        self.Qw = self.Q[self.wet[keep]]  # (n_w, n_p) CSR
+        self.QwT = sp.csr_matrix(self.Qw.T)
+        self.coef = tuple(float(c) for c in coefficients)
+        self._systems = {}
+
+    def initial_state(self) -> FluidState:
+        z = np.zeros(self.n_p)
+        return FluidState(z, z.copy(), z.copy())
+
+    def system(self, h: float):
+        """(factor of A, Z = A^-1 Q_w^T (n_p, n_w), M_w (n_w, n_w), (C_p, C_pd, C_pdd)) for step h
+        (cached): the matrices that give the known part of the step's right-hand side from the last
+        state, ``r_n = -(C_p p + C_pd p' + C_pdd p'') - am rho Q^T a_n - rho B a_g``."""
+        out = self._systems.get(h)
+        if out is None:
+            beta, gamma, am, af = self.coef
+            A = ((1.0 - am) * self.G + (1.0 - af) * (gamma * h * self.L + beta * h * h * self.H)).tocsr()
+            A = 0.5 * (A + A.T)
+            try:  # L D L^T with numba substitutions: about 2x faster per solve than SuperLU's (linear.py)
+                fact = SymmetricFactorization(A.tocsr())
+            except (SingularMatrix, ValueError):
+                fact = spla.splu(sp.csc_matrix(A))
+            Z = fact.solve(np.ascontiguousarray(self.Qw.T.toarray()))
+            Mw = (1.0 - af) * beta * h * h * self.rho * (self.Qw @ Z)
+            Mw = 0.5 * (Mw + Mw.T)
+            # r_n expanded in the last state: -(1 - af)(L pd~ + H p~) - af (L pd + H p) - am G pdd
+            C_p = self.H
+            C_pd = (self.L + (1.0 - af) * h * self.H).tocsr()
+            C_pdd = ((1.0 - af) * h * (1.0 - gamma) * self.L + (1.0 - af) * h * h * (0.5 - beta) * self.H
+                     + am * self.G).tocsr()
+            if len(self._systems) > 16:
+                self._systems.clear()
+            out = self._systems[h] = (fact, Z, Mw, (C_p, C_pd, C_pdd))
+        return out
+
+    def mass_block(self, h: float) -> np.ndarray:
+        """``M_w(h)`` (n_w, n_w), kg, on the free wetted DOFs ``wet_eq``."""
+        return self.system(h)[2]
+
+    def force(self, state: FluidState) -> np.ndarray:
+        """The water force ``Q p`` on the free wetted DOFs (n_w,), N."""
+        return self.Qw @ state.p
+
+    def start(self, state: FluidState, h: float, a_n_w: np.ndarray, ag_n: np.ndarray, ag_1: np.ndarray):
+        """What the dam's step needs: ``g`` (n_w,) N (the water force at the end of the step less its
+        ``M_w a1`` part) and a context for :meth:`finish`."""
+        beta, gamma, am, af = self.coef
+        fact, Z, _, (C_p, C_pd, C_pdd) = self.system(h)
+        p_pred = state.p + h * state.pd + h * h * (0.5 - beta) * state.pdd
+        pd_pred = state.pd + h * (1.0 - gamma) * state.pdd
+        r = -(C_p @ state.p + C_pd @ state.pd + C_pdd @ state.pdd)
+        if am != 0.0:
+            r -= am * self.rho * (self.QwT @ a_n_w)
+        r -= self.rho * (self.B @ ((1.0 - af) * ag_1 + af * ag_n))
+        y = fact.solve(r)
+        g = self.Qw @ (p_pred + beta * h * h * y)
+        return g, (h, p_pred, pd_pred, y)
+
+    def finish(self, ctx, a1_w: np.ndarray) -> FluidState:
+        """The water at the end of the step, from the dam's converged acceleration ``a1_w`` (n_w,)."""
+        beta, gamma, am, af = self.coef
+        h, p_pred, pd_pred, y = ctx
+        Z = self.system(h)[1]
+        pdd = y - (1.0 - am) * self.rho * (Z @ a1_w)
+        return FluidState(p_pred + beta * h * h * pdd, pd_pred + gamma * h * pdd, pdd)

@@ -218,3 +218,11 @@ def test_acoustic_needs_a_level_and_a_boundary_face():
     assert err.value.key == "reservoir.face" and "not on the boundary" in str(err.value)
     left = mesh.facet_sets["left_edge"].facets
     _check_on_boundary(mesh, SimpleNamespace(facets=np.asarray(left), name="left_edge"))  # the real face passes
+
+
+def test_acoustic_water_above_the_crest_is_a_named_error():
+    s = block_scene(dynamic="acoustic")
+    s["reservoir"]["level"] = 1.2  # the block's face ends at 1.0 m: the water would overtop it
+    with pytest.raises(SceneError) as err:
+        masonrydam.run(s)
+    assert err.value.key == "reservoir.level" and "cannot be built" in str(err.value)

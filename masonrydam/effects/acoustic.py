@@ -103,7 +103,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ..elements.quadrature import tensor_rule
-from ..elements.shapes import ELEMENT_TYPES, facet_area_normal, reference_nodes, shape_functions
+from ..elements.shapes import ELEMENT_TYPES, facet_area_normal, facet_outward_sign, reference_nodes, shape_functions
 
 __all__ = ["FluidMesh", "AcousticMatrices", "build_fluid_mesh", "acoustic_matrices", "reflection_damping"]
 
@@ -217,18 +217,6 @@ def _face_input(coords, facet_type, facets, inward_points, vertical_axis):
     if not 0 <= axis < dim:
         raise ValueError(f"vertical_axis must be in [0, {dim}), got {vertical_axis}")
     return coords, facets, inward, dim, axis
-
-
-def _outward_sign(facet_type, X, inward):
-    """+1 where the parametric normal of the facet (facet_area_normal) points out of the dam (away from
-    its inward point), -1 otherwise; decided at the centre of the reference facet (as the hydrostatics)."""
-    centre = reference_nodes(facet_type).mean(axis=0, keepdims=True)
-    if facet_type in ("tri3", "tri6"):
-        centre = np.array([[1.0 / 3.0, 1.0 / 3.0]])
-    Nc, dNc = shape_functions(facet_type, centre)
-    xc = np.einsum("a,nad->nd", Nc[0], X)
-    Ac = facet_area_normal(dNc[0], X)
-    return np.where(np.einsum("nd,nd->n", inward - xc, Ac) > 0.0, -1.0, 1.0), Ac
 
 
 def reflection_damping(bottom_reflection, sound_speed) -> float:
@@ -475,7 +463,7 @@ def build_fluid_mesh(coords, facet_type, facets, inward_points, *, level, vertic
 
     # the face must look upstream: dam outward normal . upstream > 0 on every wetted facet
     wet = np.unique(piece_facet)
-    sign, Ac = _outward_sign(facet_type, coords[facets[wet]], inward[wet])
+    sign, Ac = facet_outward_sign(facet_type, coords[facets[wet]], inward[wet])
     cosine = sign * (Ac @ u) / np.linalg.norm(Ac, axis=1)
     if (cosine <= 1e-6).any():
         bad = wet[cosine <= 1e-6]
@@ -727,7 +715,7 @@ class AcousticMatrices:
         npc, nq, r = xi.shape
         F = facets[mesh.piece_facet]
         X = coords[F]
-        sign, _ = _outward_sign(facet_type, X, inward[mesh.piece_facet])
+        sign, _ = facet_outward_sign(facet_type, X, inward[mesh.piece_facet])
         Nu, dNu = shape_functions(facet_type, xi.reshape(-1, r))
         Nu = Nu.reshape(npc, nq, -1)
         dNu = dNu.reshape(npc, nq, r, -1)

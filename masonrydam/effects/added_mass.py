@@ -22,7 +22,8 @@ The added mass enters the mass matrix of the dynamic stages and of the modal sta
 inertia and the ground acceleration in the effective earthquake forces ``-M iota a_g``, which is
 Westergaard's ``-m_a n n^T (u'' + a_g)`` on the face. The hydrodynamic force on the dam
 (``hydrodynamic_force`` in the results) is ``-M_a a_abs`` summed over the face nodes, and the face
-pressure at a node ``-m_a(z) n . a_abs``.
+pressure at a node ``m_a(z) n . a_abs`` with ``n`` the dam's outward normal (compression when the face
+accelerates into the water).
 
 Quadrature: ``m_a`` has a square root at the surface, which no polynomial rule integrates exactly;
 fully wet facets use 8 Gauss points per direction and partly wet ones the rule of their wetted part
@@ -36,7 +37,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..elements.quadrature import gauss_legendre_1d, tensor_rule
-from ..elements.shapes import ELEMENT_TYPES, facet_area_normal, reference_nodes, shape_functions
+from ..elements.shapes import ELEMENT_TYPES, facet_area_normal, facet_outward_sign, shape_functions
 from .hydrostatics import collapsed_triangle_rule, region_points
 
 #: Gauss points per direction on a fully wet facet (the integrand has sqrt(depth))
@@ -144,14 +145,7 @@ def nodal_normals(coords, facet_type, facets, inward_points, nodes):
     normals of the facets around each node (for the face pressure from a nodal acceleration)."""
     coords = np.asarray(coords, dtype=np.float64)
     facets = np.asarray(facets, dtype=np.int64)
-    X = coords[facets]
-    centre = reference_nodes(facet_type).mean(axis=0, keepdims=True)
-    if facet_type.startswith("tri"):
-        centre = np.array([[1.0 / 3.0, 1.0 / 3.0]])
-    Nc, dNc = shape_functions(facet_type, centre)
-    A = facet_area_normal(dNc[0], X)
-    xc = np.einsum("a,nad->nd", Nc[0], X)
-    sign = np.where(np.einsum("nd,nd->n", np.asarray(inward_points) - xc, A) > 0.0, -1.0, 1.0)
+    sign, A = facet_outward_sign(facet_type, coords[facets], inward_points)
     A = A * sign[:, None]
     acc = np.zeros_like(coords)
     np.add.at(acc, facets.ravel(), np.repeat(A, facets.shape[1], axis=0))

@@ -92,13 +92,17 @@ class DynamicWater:
         h_max = 0.25 * self.depth if self.incompressible else c / (10.0 * a["max_frequency"])
         if h_face is not None and h_max is not None:
             h_max = max(h_max, h_face)
-        self.mesh = ac.build_fluid_mesh(m.coords, f.type, f.facets, f.inward, level=self.level,
-                                        vertical_axis=self.axis, upstream=-np.asarray(reservoir.downstream),
-                                        length=length, element_size=h_face, max_element_size=h_max)
-        self.acoustic = ac.acoustic_matrices(self.mesh, m.coords, f.type, f.facets, f.inward, density=self.density,
-                                             sound_speed=None if self.incompressible else c,
-                                             bottom_reflection=a["bottom_reflection"],
-                                             thickness=self.thickness, vertical_axis=self.axis)
+        try:
+            self.mesh = ac.build_fluid_mesh(m.coords, f.type, f.facets, f.inward, level=self.level,
+                                            vertical_axis=self.axis, upstream=-np.asarray(reservoir.downstream),
+                                            length=length, element_size=h_face, max_element_size=h_max)
+            self.acoustic = ac.acoustic_matrices(self.mesh, m.coords, f.type, f.facets, f.inward,
+                                                 density=self.density, sound_speed=None if self.incompressible else c,
+                                                 bottom_reflection=a["bottom_reflection"],
+                                                 thickness=self.thickness, vertical_axis=self.axis)
+        except ValueError as exc:  # the face or the water level does not admit the reservoir's mesh
+            key = "reservoir.level" if "level" in str(exc) else "reservoir.acoustic"
+            raise SceneError(key, f"the acoustic reservoir on '{f.name}' cannot be built: {exc}") from None
         self.length = length
         A = self.acoustic
         if self.incompressible:
@@ -141,26 +145,23 @@ class DynamicWater:
         return self._fluid_step
 
     # ------------------------------------------------------------------------------------------
-    def _pressure_incompressible(self, a_abs, ag):
+    def _pressure_incompressible(self, a_abs, a_bottom):
         import scipy.sparse.linalg as spla
 
         A = self.acoustic
         if self._H_lu is None:
             self._H_lu = spla.splu(sp.csc_matrix(A.H))
-        dim = self.model.dim
-        iota_part = np.zeros(A.B.shape[0])
-        Qt = sp.csr_matrix(A.Q).T
-        rhs = Qt @ a_abs
-        for c in range(dim):
-            iota = np.zeros(self.model.n_dof)
-            iota[c::dim] = 1.0
-            iota_part += (A.B[:, c] - Qt @ iota) * ag[c]
-        return -self.density * self._H_lu.solve(rhs + iota_part)
+            dim = self.model.dim
+            iota = np.zeros((self.model.n_dof, dim))
+            for c in range(dim):
+                iota[c::dim, c] = 1.0
+            self._B_bottom = A.B - np.asarray(A.Q.T @ iota)
+        return -self.density * self._H_lu.solve(A.Q.T @ a_abs + self._B_bottom @ a_bottom)
 
-    def outputs(self, a_abs: np.ndarray, ag: np.ndarray, fluid_state=None, mass=None) -> dict:
+    def outputs(self, a_abs: np.ndarray, a_bottom: np.ndarray, fluid_state=None, mass=None) -> dict:
         """Step values for the result: ``hydrodynamic_force`` (dim,) N and ``face_pressure`` (n_nodes,) Pa
-        from the absolute acceleration ``a_abs`` (n_dof,), the ground acceleration ``ag`` (dim,) and,
-        compressible, the water's state."""
+        from the absolute acceleration ``a_abs`` (n_dof,), the acceleration of the reservoir bottom
+        ``a_bottom`` (dim,) and, compressible, the water's state."""
         dim = self.model.dim
         if self.kind == "westergaard":
             M = self.added_mass(mass.lumped if mass is not None else False)
@@ -171,7 +172,7 @@ class DynamicWater:
             return {"hydrodynamic_force": f.reshape(-1, dim).sum(axis=0), "face_pressure": p}
         A = self.acoustic
         if self.incompressible:
-            p = self._pressure_incompressible(a_abs, ag)
+            p = self._pressure_incompressible(a_abs, a_bottom)
         else:
             p = fluid_state.p if fluid_state is not None else np.zeros(A.Q.shape[1])
         f = A.Q @ p

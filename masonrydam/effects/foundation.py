@@ -9,8 +9,10 @@ Scene::
     absorbing = { bottom = "foundation_bottom", sides = "foundation_sides" }   # facet sets (the defaults)
     motion = "outcrop"             # or "within"; required when mass = true
 
-``mass = false`` (the default) changes nothing: :func:`build` returns None and the rock is what it is
-today (a massless block on fixed supports under uniform base excitation). ``absorbing = false`` is
+``mass = false`` (the default) gives the massless rock of a classic dam analysis: :func:`build` returns
+None and the run leaves the group out of the mass matrix whatever its density (a massless block on
+fixed supports under uniform base excitation; without a ``[foundation]`` section the rock keeps the
+mass of its density). ``absorbing = false`` is
 allowed only then. With ``mass = true`` the rock truncated at its bottom and sides is made to behave
 as a part of a uniform half-space (horizontal layer of height ``H_f = z_top - z_b`` over rock of the
 same properties, or over a rigid base):
@@ -100,7 +102,7 @@ import scipy.sparse as sp
 
 from ..checks import boolean, check_keys, choice
 from ..elements.quadrature import gauss_legendre_1d, tensor_rule, triangle_rule
-from ..elements.shapes import ELEMENT_TYPES, facet_area_normal, reference_nodes, shape_functions
+from ..elements.shapes import ELEMENT_TYPES, facet_area_normal, facet_outward_sign, shape_functions
 from ..errors import SceneError
 
 __all__ = ["normalize_section", "build", "Foundation", "Boundary", "wave_speeds", "dashpot_matrix", "describe",
@@ -259,14 +261,7 @@ def _facet_points(coords, b: Boundary, thickness: float) -> _FacetPoints:
     X = coords[b.facets]  # (n, nfn, dim)
     x = np.einsum("qa,nad->nqd", N, X)
     A = facet_area_normal(dN[None], X[:, None])  # (n, q, dim)
-    # outward sign per facet from the normal at the reference centre and the inward point
-    centre = reference_nodes(b.type).mean(axis=0, keepdims=True)
-    if b.type in ("tri3", "tri6"):
-        centre = np.array([[1.0 / 3.0, 1.0 / 3.0]])
-    Nc, dNc = shape_functions(b.type, centre)
-    xc = np.einsum("a,nad->nd", Nc[0], X)
-    Ac = facet_area_normal(dNc[0], X)
-    sign = np.where(np.einsum("nd,nd->n", b.inward - xc, Ac) > 0.0, -1.0, 1.0)
+    sign, _ = facet_outward_sign(b.type, X, b.inward)
     J = np.linalg.norm(A, axis=-1)
     if len(J) and not (J > 0).all():
         bad = int(np.nonzero((J <= 0).any(axis=1))[0][0])
@@ -525,6 +520,18 @@ class Foundation:
         if up is None:
             return np.zeros_like(t), np.zeros_like(t)
         return up.rec.displacement(t), up.rec.velocity(t)
+
+    def surface_acceleration(self, t: float) -> np.ndarray:
+        """Total acceleration (dim,) m/s2 of the free field at the rock's free surface ``z_top`` at time t:
+        the motion of the bottom of a reservoir resting on the rock (a central difference of the
+        free-field velocity over 0.1 ms; the velocity is piecewise linear between record samples)."""
+        out = np.zeros(self.dim)
+        d = 1e-4
+        for ci in self._records:
+            _, vp, _ = self.free_field(self.z_top, t + d, ci, relative=False)
+            _, vm, _ = self.free_field(self.z_top, t - d, ci, relative=False)
+            out[ci] = (float(vp) - float(vm)) / (2.0 * d)
+        return out
 
     def free_field(self, z, t, component, relative=None):
         """The 1D free field of one component at elevations z (m) and time t (s): displacement (m),

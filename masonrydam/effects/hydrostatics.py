@@ -65,7 +65,7 @@ from math import comb
 import numpy as np
 
 from ..elements.quadrature import gauss_legendre_1d, tensor_rule
-from ..elements.shapes import ELEMENT_TYPES, facet_area_normal, reference_nodes, shape_functions
+from ..elements.shapes import ELEMENT_TYPES, facet_area_normal, facet_outward_sign, shape_functions
 
 __all__ = ["facet_pressure_forces", "collapsed_triangle_rule", "region_points"]
 
@@ -435,13 +435,7 @@ def facet_pressure_forces(coords, facet_type, facets, inward_points, *, surface_
     partial = ~fully_wet & (bern.min(axis=1) < s)
 
     # outward sign per facet, from the parametric normal at the reference centre
-    centre = reference_nodes(facet_type).mean(axis=0, keepdims=True)
-    if facet_type in ("tri3", "tri6"):
-        centre = np.array([[1.0 / 3.0, 1.0 / 3.0]])
-    Nc, dNc = shape_functions(facet_type, centre)
-    xc = np.einsum("a,nad->nd", Nc[0], X)
-    Ac = facet_area_normal(dNc[0], X)
-    sign = np.where(np.einsum("nd,nd->n", inward_points - xc, Ac) > 0.0, -1.0, 1.0)
+    sign, _ = facet_outward_sign(facet_type, X, inward_points)
 
     if fully_wet.any():
         pts, w = _full_rule(facet_type)

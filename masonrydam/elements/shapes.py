@@ -354,3 +354,22 @@ def facet_area_normal(dN: np.ndarray, X: np.ndarray) -> np.ndarray:
     if t.shape[-1] == 2:
         return np.stack([t[..., 0, 1], -t[..., 0, 0]], axis=-1)
     return np.cross(t[..., 0, :], t[..., 1, :])
+
+
+def facet_outward_sign(facet_type: str, X: np.ndarray, inward_points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Orientation of facets against the bodies that own them.
+
+    X (n, nfn, dim) facet node coordinates; inward_points (n, dim) a point inside the owning body of each
+    facet (e.g. its element's centroid). Returns ``(sign (n,), A (n, dim))``: ``A`` the
+    :func:`facet_area_normal` at the centre of the reference facet and ``sign`` = +1 where it points
+    away from the inward point (outward), -1 where it points in; ``sign * facet_area_normal`` is then
+    outward everywhere on the facet, whatever the node order. The one orientation rule of the water
+    loads, the added mass, the acoustic coupling and the absorbing boundaries."""
+    centre = reference_nodes(facet_type).mean(axis=0, keepdims=True)
+    if facet_type in ("tri3", "tri6"):
+        centre = np.array([[1.0 / 3.0, 1.0 / 3.0]])
+    Nc, dNc = shape_functions(facet_type, centre)
+    xc = np.einsum("a,nad->nd", Nc[0], X)
+    Ac = facet_area_normal(dNc[0], X)
+    sign = np.where(np.einsum("nd,nd->n", np.asarray(inward_points) - xc, Ac) > 0.0, -1.0, 1.0)
+    return sign, Ac

@@ -40,7 +40,8 @@ from .._version import __version__
 STATE_FLAGS = {"flag_values": np.array([0, 1, 2], dtype=np.int8), "flag_meanings": "stick slip open"}
 #: energies of a dynamic analysis (J, cumulative since the start of the first dynamic stage)
 ENERGY_VARIABLES = {
-    "input": "work of the ground motion (effective earthquake forces -M iota a_g) on the relative displacements",
+    "input": "work of the ground motion (effective earthquake forces -M iota a_g on the relative displacements, or "
+             "free-field forces at a compliant base) and of the pore pressure entering opening joints",
     "external": "work of the constant loads of the static stages (gravity) during the dynamic stages",
     "hydrodynamic": "work of the hydrodynamic pressure of an acoustic (compressible) reservoir on the dam",
     "kinetic": "change of kinetic energy (relative velocities)",

@@ -391,22 +391,36 @@ def _mass(model, lumped, moving, massless=()):
                       massless=massless)
 
 
-def _dynamic_terms(model, water, moving, rock, stage):
+def _earthquake_uplift(water):
+    """Uplift during the shaking (``uplift.earthquake``): a function () -> (n_dof,) N of the change of the
+    pore forces from the state the static stages left (the same reference for every dynamic stage), or
+    None (``"static"``: the static pore forces stay as they were)."""
+    if water.uplift is None:
+        return None
+    level, tail, _ = water.stages[-1].water.levels(1.0)
+    pore = water.uplift.earthquake_force(level, tail)
+    if pore is None:
+        return None
+    static_pore = pore()
+    return lambda: pore() - static_pore
+
+
+def _dynamic_terms(moving, rock, stage, state_force):
     """What the effects add to the dynamic ``stage`` (:class:`~masonrydam.solvers.dynamic.DynamicTerms`);
-    with a foundation of mass, the stage's supports lose the DOFs of the absorbing boundaries."""
+    with a foundation of mass, the stage's supports lose the DOFs of the absorbing boundaries (each
+    stage's free field starts with its own record at its start: waves of the stage before that are still
+    travelling outside the model are not carried over)."""
     from ..solvers.dynamic import DynamicTerms
 
-    terms = DynamicTerms()
+    terms = DynamicTerms(state_force=state_force)
     if moving is not None:
         terms.fluid = moving.fluid_step()
-    if water.uplift is not None:
-        level, tail, _ = water.stages[-1].water.levels(1.0)
-        terms.state_force = water.uplift.earthquake_force(level, tail)
     if rock is not None:
         rock.set_motion({g.component: (g.values, g.dt) for g in stage.ground_motion})
         terms.dashpots = rock.dashpots
         terms.force = rock.effective_force
         terms.support_excitation = rock.base_excitation
+        terms.bottom_acceleration = rock.surface_acceleration
         stage.supports = stage.supports & ~rock.released_dofs
     return terms
 
@@ -424,8 +438,15 @@ def _run_dynamic(model, static_stages, dyn_stages, stages, u, writer, nodes, jgr
     for st in static_stages:
         f_static += st.force
     f_static += water.static_force()
+    if rock is not None:
+        # the supports the absorbing boundaries replace keep their static reactions as constant loads
+        # (every dynamic stage, not only the first, which takes its constant load from f_int)
+        f_int, _ = model.evaluate(u, want_tangent=False)
+        rel = rock.released_dofs
+        f_static[rel] = f_int[rel]
+    state_force = _earthquake_uplift(water)
     masses = {}
-    v = a = energy = None
+    v = energy = fluid = None
     t = 0.0
     for k, st in enumerate(dyn_stages):
         si = stages.index(st)
@@ -433,7 +454,7 @@ def _run_dynamic(model, static_stages, dyn_stages, stages, u, writer, nodes, jgr
         if lumped not in masses:
             masses[lumped] = _mass(model, lumped, moving, massless)
         if st.terms is None:
-            st.terms = _dynamic_terms(model, water, moving, rock, st)
+            st.terms = _dynamic_terms(moving, rock, st, state_force)
 
         def prog(fraction, si=si):
             bar(si, fraction)
@@ -447,7 +468,7 @@ def _run_dynamic(model, static_stages, dyn_stages, stages, u, writer, nodes, jgr
         def on_step(rec, si=si, mass=masses[lumped]):
             extra = dict(water.extra(None, None), **stress(rec["u"]))
             if moving is not None:
-                extra.update(moving.outputs(rec["a_abs"], rec["ag"], rec["fluid"], mass))
+                extra.update(moving.outputs(rec["a_abs"], rec["bottom_acceleration"], rec["fluid"], mass))
             with stopper.writing():
                 writer.write_step(si, rec["stage_fraction"], rec["iterations"], rec["u"].reshape(-1, dim)[nodes],
                                   rec["reaction"].reshape(-1, dim)[nodes], _joint_results(jgroups, dim),
@@ -458,8 +479,8 @@ def _run_dynamic(model, static_stages, dyn_stages, stages, u, writer, nodes, jgr
                                   extra=extra)
 
         state = ds.run(st, u0=u, v0=v, a0=None, f_static=f_static, equilibrate=(k == 0), t0=t, energy0=energy,
-                       on_step=on_step, record_initial=(k == 0))
-        u, v, t, energy = state.u, state.v, state.t, state.energy
+                       on_step=on_step, record_initial=(k == 0), fluid0=fluid)
+        u, v, t, energy, fluid = state.u, state.v, state.t, state.energy, state.fluid
 
 
 def _run_modal(model, stage, u, writer, nodes, dim, moving=None, massless=()):

@@ -430,8 +430,11 @@ class DynamicTerms:
     force: ``force(tau) -> (n_dof,)`` N, a load given in time (stage time tau, s): e.g. free-field
     effective forces; its work is counted as ``input``.
     state_force: ``state_force() -> (n_dof,)`` N from the committed joint states, evaluated at the start
-    of every step and held over it (e.g. pore pressure entering the cracks as they open); counted as
-    ``input``.
+    of every step and held over it (e.g. the change of the pore pressure as cracks open, zero at the
+    static state); counted as ``input``.
+    bottom_acceleration: ``bottom_acceleration(tau) -> (dim,)`` m/s2, the total acceleration of the
+    ground under the reservoir (the free field at the rock's surface with a foundation of mass);
+    default the ground motion.
     fluid: :class:`~masonrydam.solvers.fluid.AcousticStep` (a compressible reservoir condensed on the
     wetted DOFs, which must be coupled in the pattern); its work on the dam is ``hydrodynamic``.
     support_excitation: apply the ground motion as ``-M iota a_g`` (the relative formulation); False
@@ -443,6 +446,7 @@ class DynamicTerms:
     state_force: object = None
     fluid: object = None
     support_excitation: bool = True
+    bottom_acceleration: object = None
 
 
 @dataclass
@@ -491,6 +495,10 @@ class DynamicState:
     v: np.ndarray
     a: np.ndarray
     energy: dict = field(default_factory=dict)
+    #: the compressible reservoir's state (:class:`~masonrydam.solvers.fluid.FluidState`) and its force on
+    #: the free wetted DOFs, carried into the next dynamic stage
+    fluid: object = None
+    fluid_force: np.ndarray | None = None
 
 
 ENERGY_KEYS = ("input", "external", "hydrodynamic", "kinetic", "strain", "damping", "joint", "joint_stored",
@@ -866,8 +874,9 @@ class DynamicSolver:
         self.damped = d is not None and d.active
         if self.damped:
             Kd = m.K_linear_data if d.exclude_joints else self.Kel
-            self.Cdata = d.alpha * self.Mdata + d.beta * Kd
-            Cf = d.alpha * self.mass.full + d.beta * m.K_continuum
+            # mass-proportional damping of the continuum's own mass, not of the water's added mass
+            self.Cdata = d.alpha * self.mass.structural_data + d.beta * Kd
+            Cf = d.alpha * self.mass.structural_full + d.beta * m.K_continuum
             if not d.exclude_joints:
                 if self._Kj_full is None:
                     self._Kj_full = elastic_joint_full(m)
@@ -906,6 +915,8 @@ class DynamicSolver:
             self.M_free = self.mass.free_matrix(m)
         self.Miota = self.mass.influence(m.dim)  # (dim, n_dof)
         self.Miota_f = np.ascontiguousarray(self.Miota[:, free])
+        extra = self.mass.extra_influence
+        self.extra_f = None if extra is None else np.ascontiguousarray(extra[:, free])
         self.ground = {g.component: g for g in stage.ground_motion}
         for c in self.ground:
             if c >= m.dim:
@@ -953,6 +964,8 @@ class DynamicSolver:
         v = self._recent_pg.get(key)
         if v is None:
             v = -(ag @ self.Miota_f) if self.terms.support_excitation else np.zeros(self.n)
+            if self.extra_f is not None:  # the reservoir bottom pushing incompressible water
+                v = v - self.bottom_at(tau, ag) @ self.extra_f
             if self.terms.force is not None:
                 v = v + self.terms.force(tau)[self.free]
             self._recent_pg.put(key, v)
@@ -961,7 +974,7 @@ class DynamicSolver:
     def _state_force(self):
         """The state force of the step about to start (free DOFs; zero without one)."""
         if self.terms.state_force is not None:
-            self._sf = self.terms.state_force()[self.free] - self._sf0
+            self._sf = self.terms.state_force()[self.free]
         return self._sf
 
     def _fluid_data(self, h):
@@ -1019,9 +1032,10 @@ class DynamicSolver:
             return None
         K = sp.csr_matrix((self.Kel, self.model.indices, self.model.indptr), shape=(self.n, self.n))
         if s.integrator == "central_difference" and not self.mass.diagonal:
-            raise SceneError(f"{s.key}integrator", "central_difference needs a diagonal mass matrix; the added mass "
-                                                   "of the reservoir on an inclined face couples the directions "
-                                                   "(m_a n n^T): use an implicit integrator (e.g. hht)")
+            raise SceneError(f"{s.key}integrator", "central_difference needs a diagonal mass matrix; the reservoir's "
+                                                   "added mass couples DOFs (Westergaard's m_a n n^T on an inclined "
+                                                   "face, or the acoustic water's rho Q H^-1 Q^T over the whole "
+                                                   "face): use an implicit integrator (e.g. hht)")
         if self.mass.diagonal:
             md = self.mass.free_diag
             if not (md > 0).all():
@@ -1042,13 +1056,30 @@ class DynamicSolver:
         return dtc
 
     # ------------------------------------------------------------------------------------------
-    def reaction(self, u, v, a_abs, f_int, f_static):
-        """Support reactions (full-DOF, N; zero at free DOFs): f_int + C v + M a_abs - f_static."""
+    def reaction(self, u, v, a_abs, f_int, f_static, st=None):
+        """Support reactions (full-DOF, N; zero at free DOFs): f_int + C v + M a_abs - f_static, less the
+        water's force on constrained wetted DOFs (compressible: ``Q p``; incompressible: the push of the
+        reservoir bottom) for the step state ``st``."""
         r = f_int - f_static + self.mass.full @ a_abs
         if self.damped:
             r = r + self.C_full @ v
+        if st is not None:
+            if self.mass.extra_influence is not None:
+                r += self.bottom_at(st.tau, st.ag) @ self.mass.extra_influence
+            if self.fluid is not None and st.fluid is not None and len(self.fluid.wet_fixed):
+                r[self.fluid.wet_fixed] -= self.fluid.Qc @ st.fluid.p
         r[self.free] = 0.0
         return r
+
+    def bottom_at(self, tau, ag):
+        """Total acceleration (dim,) of the ground under the reservoir at stage time tau."""
+        f = self.terms.bottom_acceleration
+        return ag if f is None else f(tau)
+
+    def frame_at(self, ag):
+        """Acceleration (dim,) of the frame the displacements are measured in: the ground's in the
+        relative formulation, zero when they are total."""
+        return ag if self.terms.support_excitation else np.zeros_like(ag)
 
     def _joint_stored(self):
         """Elastic energy stored in the joints (J): sum over contact points of (t_n^2/kn + |tau|^2/ks)/2
@@ -1068,7 +1099,7 @@ class DynamicSolver:
 
     # ------------------------------------------------------------------------------------------
     def run(self, stage: DynamicStage, u0=None, v0=None, a0=None, f_static=None, equilibrate=True, t0=0.0,
-            energy0=None, on_step=None, record_initial=True) -> DynamicState:
+            energy0=None, on_step=None, record_initial=True, fluid0=None) -> DynamicState:
         """Integrate ``stage`` from ``u0`` (m, full-DOF; default zero) and ``v0`` (m/s; default zero) at
         time ``t0``; the joints start from the state committed in the model.
 
@@ -1078,6 +1109,8 @@ class DynamicSolver:
         (the static solver's tolerance) is reported in ``stats.static_residual``). Pass False to start
         from a state that is not in equilibrium (e.g. a block released from a tilted position).
         a0: initial acceleration (default: from the equation of motion at t0).
+        fluid0: the compressible reservoir's state at t0 (default: at rest), e.g. ``state.fluid`` of the
+        stage before.
         """
         t_wall = time.perf_counter()
         m, s = self.model, self.s
@@ -1100,12 +1133,14 @@ class DynamicSolver:
                 self.stats.static_residual = float(np.linalg.norm(diff) / scale)
                 fs = f_int[free].copy()
             self.fs_f = fs
-            self._sf0 = self.terms.state_force()[free] if self.terms.state_force is not None else 0.0
             ag0 = self.ground_at(0.0)
             if a0 is None:
-                # (with a reservoir of acoustic elements the water starts at rest: p = 0; its pressure
-                # enters from the first step on)
-                rhs = fs + self._pg_f(ag0, 0.0) - f_int[free] - self._Cf(v[free])
+                # (the pressure of a compressible reservoir is a state: its force at t0 is that of the
+                # water carried over from the stage before, zero for water at rest)
+                rhs = fs + self._pg_f(ag0, 0.0) + self._state_force() - f_int[free] - self._Cf(v[free])
+                if self.fluid is not None and fluid0 is not None:
+                    rhs = rhs.copy()
+                    rhs[self.fluid.wet_eq] += self.fluid.force(fluid0)
                 a = np.zeros(m.n_dof)
                 if self.mdiag is not None:
                     with np.errstate(divide="ignore", invalid="ignore"):
@@ -1124,9 +1159,9 @@ class DynamicSolver:
             st = _StepState(t0, 0.0, u, v, a, f_int, None if np.array_equal(K.data, self.Kel) else K.data.copy(), ag0)
             st.Kc_u = m.K_continuum @ u
             st.joints = self._joint_snapshot()
-            if self.fluid is not None:
-                st.fluid = self.fluid.initial_state()
-                st.fw = np.zeros(len(self.fluid.wet_eq))
+            if self.fluid is not None:  # the water from the stage before, or at rest
+                st.fluid = fluid0 if fluid0 is not None else self.fluid.initial_state()
+                st.fw = self.fluid.force(st.fluid)
             en = dict.fromkeys(ENERGY_KEYS, 0.0) if energy0 is None else dict(energy0)
             self._en_ref = {"kinetic0": 0.5 * float(v[free] @ self._Mf(v[free])) - en.get("kinetic", 0.0),
                             "strain0": 0.5 * float(u @ st.Kc_u) - en.get("strain", 0.0),
@@ -1173,7 +1208,7 @@ class DynamicSolver:
                           "steps_rejected": self.stats.steps_rejected - rejected_before,
                           "dt_smallest": self._dt_range[0], "dt_largest": self._dt_range[1]})
         self.stats.per_stage.append(entry)
-        return DynamicState(st.t, st.u, st.v, st.a, st.energy)
+        return DynamicState(st.t, st.u, st.v, st.a, st.energy, st.fluid, st.fw)
 
     def _setup_joint_space(self, ref):
         """Condense the nominal step on the nonlinear joints (:mod:`.joint_space`) if the settings and
@@ -1324,7 +1359,8 @@ class DynamicSolver:
         rec = {"step": k, "t": st.t, "u": st.u, "v": st.v, "a": st.a, "a_abs": a_abs, "ag": st.ag.copy(),
                "energy": dict(st.energy), "iterations": self._iters_since_record, "final": final,
                "stage_fraction": min(1.0, st.tau / stage.duration),
-               "reaction": self.reaction(st.u, st.v, a_abs, st.f_int, self.f_static),
+               "reaction": self.reaction(st.u, st.v, a_abs, st.f_int, self.f_static, st),
+               "bottom_acceleration": self.bottom_at(st.tau, st.ag),
                "fluid": getattr(st, "fluid", None)}
         self._iters_since_record = 0
         self._last_emitted_t = st.t
@@ -1521,7 +1557,8 @@ class DynamicSolver:
         if fluid is not None:
             # the water's force at the end of the step, less its M_w a1 part (added in residual below)
             wet = fluid.wet_eq
-            g_w, fluid_ctx = fluid.start(st.fluid, h, an[wet], st.ag, ag1)
+            g_w, fluid_ctx = fluid.start(st.fluid, h, an[wet], self.frame_at(st.ag), self.frame_at(ag1),
+                                         self.bottom_at(st.tau, st.ag), self.bottom_at(t_end, ag1))
             Mw = fluid.mass_block(h)
             p1 = p1.copy()
             p1[wet] += g_w

@@ -105,6 +105,15 @@ class AcousticStep:
         self.n_p = self.G.shape[0]
         #: wetted DOFs (full-DOF indices, sorted)
         self.wet = np.unique(self.Q.nonzero()[0])
+        dim = self.B.shape[1]
+        n_dof = self.Q.shape[0]
+        iota = np.zeros((n_dof, dim))
+        for c in range(dim):
+            iota[c::dim, c] = 1.0
+        #: the ground's load split: the face translating with the frame (Q^T iota) and the reservoir
+        #: bottom and banks (the rest of B), which move with the ground surface
+        self.B_face = np.asarray(self.Q.T @ iota)
+        self.B_bottom = self.B - self.B_face
         self._systems = {}
 
     def attach(self, eq_of_dof: np.ndarray, coefficients) -> None:
@@ -114,6 +123,9 @@ class AcousticStep:
         keep = eq >= 0
         self.wet_eq = eq[keep]
         self.Qw = self.Q[self.wet[keep]]  # (n_w, n_p) CSR
+        #: constrained wetted DOFs (full-DOF) and their rows of Q: the water's force there is a reaction
+        self.wet_fixed = self.wet[~keep]
+        self.Qc = self.Q[self.wet_fixed]
         self.QwT = sp.csr_matrix(self.Qw.T)
         self.coef = tuple(float(c) for c in coefficients)
         self._systems = {}
@@ -156,9 +168,12 @@ class AcousticStep:
         """The water force ``Q p`` on the free wetted DOFs (n_w,), N."""
         return self.Qw @ state.p
 
-    def start(self, state: FluidState, h: float, a_n_w: np.ndarray, ag_n: np.ndarray, ag_1: np.ndarray):
+    def start(self, state: FluidState, h: float, a_n_w: np.ndarray, frame_n, frame_1, bottom_n, bottom_1):
         """What the dam's step needs: ``g`` (n_w,) N (the water force at the end of the step less its
-        ``M_w a1`` part) and a context for :meth:`finish`."""
+        ``M_w a1`` part) and a context for :meth:`finish`. ``frame_*`` (dim,) m/s2: the acceleration of
+        the frame the dam's accelerations are measured in at the ends of the step (the ground's in the
+        relative formulation, zero when they are total); ``bottom_*``: the total acceleration of the
+        reservoir bottom (the ground's, or the free field at the rock's surface)."""
         beta, gamma, am, af = self.coef
         fact, Z, _, (C_p, C_pd, C_pdd) = self.system(h)
         p_pred = state.p + h * state.pd + h * h * (0.5 - beta) * state.pdd
@@ -166,7 +181,8 @@ class AcousticStep:
         r = -(C_p @ state.p + C_pd @ state.pd + C_pdd @ state.pdd)
         if am != 0.0:
             r -= am * self.rho * (self.QwT @ a_n_w)
-        r -= self.rho * (self.B @ ((1.0 - af) * ag_1 + af * ag_n))
+        r -= self.rho * (self.B_face @ ((1.0 - af) * np.asarray(frame_1) + af * np.asarray(frame_n))
+                         + self.B_bottom @ ((1.0 - af) * np.asarray(bottom_1) + af * np.asarray(bottom_n)))
         y = fact.solve(r)
         g = self.Qw @ (p_pred + beta * h * h * y)
         return g, (h, p_pred, pd_pred, y)

@@ -173,7 +173,7 @@ class MassMatrix:
     masses and an added mass without off-diagonal terms), then ``diag`` (n_dof,) kg and, after
     :meth:`for_pattern`, ``free_diag`` (n_eq,); ``data`` (nnz,) free-DOF values in the model pattern.
     added: (n_dof, n_dof) sparse, kg, or None; its entries must lie in the model's pattern (nodes that
-    share an element or a coupling, :meth:`Model.add_coupling`). extra_influence: see :meth:`influence`.
+    share an element or a coupling, :meth:`Model.add_coupling`). extra_influence: see the attribute.
     massless: names of element groups without mass (e.g. the foundation rock of ``[foundation] mass =
     false``).
     """
@@ -181,8 +181,9 @@ class MassMatrix:
     def __init__(self, model, lumped: bool, added: sp.spmatrix | None = None,
                  extra_influence: np.ndarray | None = None, massless=()):
         self.lumped = bool(lumped)
-        #: (dim, n_dof) kg or None: a part of the earthquake load per unit ground acceleration that is not
-        #: ``M iota`` (the reservoir bottom of incompressible acoustic water moving with the ground)
+        #: (dim, n_dof) kg or None: the earthquake load per unit acceleration of the reservoir bottom that is
+        #: not ``M iota`` (incompressible acoustic water pushed by the bottom and banks; the dynamic solver
+        #: applies ``-extra_influence . a_bottom``)
         self.extra_influence = extra_influence
         self._groups = _element_masses(model, self.lumped, tuple(massless))
         self.n_dof = model.n_dof
@@ -195,6 +196,10 @@ class MassMatrix:
             self.full = sp.diags(diag).tocsr()
         else:
             self.full = _full_matrix(model.n_dof, [(g.dofs, me) for g, me in self._groups])
+        #: the continuum's own mass (what Rayleigh damping is proportional to: the water's added mass is
+        #: not a material that dissipates); ``structural_data`` its pattern values after for_pattern
+        self.structural_full = self.full
+        self.structural_data = None
         if self.added is not None:
             self.full = (self.full + self.added).tocsr()
         offdiag = self.full - sp.diags(self.full.diagonal())
@@ -220,8 +225,6 @@ class MassMatrix:
             iota = np.zeros(self.n_dof)
             iota[c::dim] = 1.0
             out[c] = self.full @ iota
-        if self.extra_influence is not None:
-            out += self.extra_influence
         return out
 
     def for_pattern(self, model) -> np.ndarray:
@@ -244,7 +247,14 @@ class MassMatrix:
                 for g, me in self._groups:
                     scatter_matrix(me, g.scatter, data)
             if self.added is not None:
+                self.structural_data = data.copy()
                 add_to_pattern(self.added[free][:, free], model.indptr, model.indices, data, "added mass")
+        if self.added is None:
+            self.structural_data = data
+        elif self.diagonal:
+            self.structural_data = np.zeros(len(model.indices))
+            self.structural_data[diagonal_positions(model.indptr, model.indices)] = \
+                self.structural_full.diagonal()[free]
         self.data = data
         self._pattern_key = key
         return data

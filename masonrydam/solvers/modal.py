@@ -323,20 +323,11 @@ class ModalResult:
         return self.effective_mass / np.where(self.free_mass > 0, self.free_mass, 1.0)
 
 
-def modal_analysis(model, n_modes: int, lumped: bool = False, u: np.ndarray | None = None,
-                   mass: MassMatrix | None = None, linear_solver: str = "auto") -> ModalResult:
-    """The ``n_modes`` lowest modes of ``model`` on its free DOFs (``model.set_constraints`` first).
-
-    u: displacement at which the joint tangent is taken (default zero: joints sticking; a slipping
-    or open joint from a previous analysis enters with its current state). The joints' trial
-    arrays are restored afterwards. Returns a :class:`ModalResult`.
-    """
+def _stiffness_and_mass(model, u, lumped, mass):
+    """(K, M, mass, shift): the symmetric free-DOF tangent at ``u`` (joint trial arrays restored), the
+    free-DOF mass, the :class:`MassMatrix` and the scale ``max K_ii / M_ii`` over DOFs with mass."""
     if model.dofmap is None:
         raise SceneError("supports", "modal analysis needs the constraints: call model.set_constraints first")
-    n = model.dofmap.n_eq
-    n_modes = int(n_modes)
-    if not 1 <= n_modes < n:
-        raise SceneError("n_modes", f"must be between 1 and {n - 1} (free DOFs), got {n_modes}")
     saved = [(g.state_trial.copy(), g.delta.copy(), g.traction.copy()) for g in model.igroups]
     try:
         _, K = model.evaluate(np.zeros(model.n_dof) if u is None else np.asarray(u, dtype=np.float64), True)
@@ -351,11 +342,50 @@ def modal_analysis(model, n_modes: int, lumped: bool = False, u: np.ndarray | No
     if not (mdiag > 0).any() or (mdiag < 0).any():
         raise SceneError("materials", "modal analysis needs mass (a positive density) in the model; massless parts "
                                       "(e.g. rock of density 0) are allowed, they follow the others statically")
+    has = mdiag > 0
+    return K, M, mass, float(np.max(K.diagonal()[has] / mdiag[has]))
+
+
+def _modal_result(model, mass, M, lam, phi) -> ModalResult:
+    """Sorted, mass-normalised (``phi^T M phi = 1``) modes with their participation and effective masses
+    from eigenvalues ``lam`` (k,) rad2/s2 and free-DOF shapes ``phi`` (n_eq, k)."""
+    order = np.argsort(lam)
+    lam, phi = lam[order], phi[:, order]
+    mm = np.einsum("ik,ik->k", phi, M @ phi)
+    phi = phi / np.sqrt(np.where(mm > 0, mm, 1.0))
+    omegas = np.sqrt(np.clip(lam, 0.0, None))
+    dim = model.dim
+    free = model.dofmap.free
+    L = phi.T @ mass.influence(dim)[:, free].T  # (k, dim), phi mass-normalised
+    free_mass = np.zeros(dim)
+    for c in range(dim):
+        iota = np.zeros(model.n_dof)
+        iota[c::dim] = 1.0
+        iota_f = iota[free]
+        free_mass[c] = iota_f @ (M @ iota_f)
+    modes = np.zeros((model.n_dof, len(lam)))
+    modes[free] = phi
+    with np.errstate(divide="ignore"):
+        periods = np.where(omegas > 0, 2.0 * np.pi / np.where(omegas > 0, omegas, 1.0), np.inf)
+    return ModalResult(omegas / (2.0 * np.pi), omegas, periods, modes, L, L**2, free_mass)
+
+
+def modal_analysis(model, n_modes: int, lumped: bool = False, u: np.ndarray | None = None,
+                   mass: MassMatrix | None = None, linear_solver: str = "auto") -> ModalResult:
+    """The ``n_modes`` lowest modes of ``model`` on its free DOFs (``model.set_constraints`` first).
+
+    u: displacement at which the joint tangent is taken (default zero: joints sticking; a slipping
+    or open joint from a previous analysis enters with its current state). The joints' trial
+    arrays are restored afterwards. Returns a :class:`ModalResult`.
+    """
+    n = model.dofmap.n_eq if model.dofmap is not None else 0
+    n_modes = int(n_modes)
+    if model.dofmap is not None and not 1 <= n_modes < n:
+        raise SceneError("n_modes", f"must be between 1 and {n - 1} (free DOFs), got {n_modes}")
+    K, M, mass, scale = _stiffness_and_mass(model, u, lumped, mass)
     # massless DOFs (massless rock) are condensed by the shift-invert solve: M positive semi-definite is
     # enough for ARPACK's mode 3 (the infinite eigenvalues are never near the shift)
     # small negative shift: K - sigma M is positive definite even for a mechanism
-    has = mdiag > 0
-    scale = float(np.max(K.diagonal()[has] / mdiag[has]))
     sigma = -1e-9 * scale
     A = (K - sigma * M).tocsr()
     try:
@@ -365,25 +395,7 @@ def modal_analysis(model, n_modes: int, lumped: bool = False, u: np.ndarray | No
     OPinv = spla.LinearOperator((n, n), matvec=fact.solve, dtype=np.float64)
     k = min(n_modes, n - 1)
     lam, phi = spla.eigsh(K, k=k, M=M, sigma=sigma, which="LM", OPinv=OPinv, tol=1e-10)
-    order = np.argsort(lam)
-    lam, phi = lam[order], phi[:, order]
-    mm = np.einsum("ik,ik->k", phi, M @ phi)
-    phi = phi / np.sqrt(mm)
-    omegas = np.sqrt(np.clip(lam, 0.0, None))
-    dim = model.dim
-    Miota = mass.influence(dim)[:, model.dofmap.free]  # (dim, n_eq)
-    L = phi.T @ Miota.T  # (k, dim), phi mass-normalised
-    free_mass = np.zeros(dim)
-    for c in range(dim):
-        iota = np.zeros(model.n_dof)
-        iota[c::dim] = 1.0
-        iota_f = iota[model.dofmap.free]
-        free_mass[c] = iota_f @ (M @ iota_f)
-    modes = np.zeros((model.n_dof, k))
-    modes[model.dofmap.free] = phi
-    with np.errstate(divide="ignore"):
-        periods = np.where(omegas > 0, 2.0 * np.pi / np.where(omegas > 0, omegas, 1.0), np.inf)
-    return ModalResult(omegas / (2.0 * np.pi), omegas, periods, modes, L, L**2, free_mass)
+    return _modal_result(model, mass, M, lam, phi)
 
 
 @dataclass
@@ -411,50 +423,17 @@ def coupled_modal_analysis(model, n_modes: int, fluid, lumped: bool = False, u: 
     with a sparse LU (SuperLU) of the coupled matrix. The mode shapes are the dam's part, normalised
     with the dam's mass (``phi^T M phi = 1``); the effective masses are the dam's (``(phi^T M iota)^2``),
     so their sum over all modes is the dam's mass, not dam plus water. Returns a :class:`ModalResult`."""
-    if model.dofmap is None:
-        raise SceneError("supports", "modal analysis needs the constraints: call model.set_constraints first")
+    K, M, mass, scale = _stiffness_and_mass(model, u, lumped, mass)
     n = model.dofmap.n_eq
     n_modes = int(n_modes)
-    saved = [(g.state_trial.copy(), g.delta.copy(), g.traction.copy()) for g in model.igroups]
-    try:
-        _, K = model.evaluate(np.zeros(model.n_dof) if u is None else np.asarray(u, dtype=np.float64), True)
-    finally:
-        for g, (s, d, t) in zip(model.igroups, saved):
-            g.state_trial[:], g.delta[:], g.traction[:] = s, d, t
-    K = ((K + K.T) * 0.5).tocsr()
-    if mass is None:
-        mass = MassMatrix(model, lumped)
-    M = mass.free_matrix(model)
     free = model.dofmap.free
     Qf = sp.csr_matrix(fluid.Q)[free]  # (n, n_p)
     n_p = fluid.n_p
     A = sp.bmat([[K, -Qf], [None, fluid.H]], format="csc")
     B = sp.bmat([[M, None], [fluid.rho * Qf.T, fluid.G]], format="csc")
-    md = M.diagonal()
-    has = md > 0
-    scale = float(np.max(K.diagonal()[has] / md[has]))
     sigma = -1e-6 * scale
     lu = spla.splu((A - sigma * B).tocsc())
     op = spla.LinearOperator((n + n_p, n + n_p), matvec=lambda x: lu.solve(B @ x), dtype=np.float64)
     k = min(n_modes, n + n_p - 2)
     nu, vec = spla.eigs(op, k=k, which="LM", tol=1e-10)
-    lam = sigma + 1.0 / nu
-    order = np.argsort(lam.real)
-    lam, vec = lam[order].real, vec[:, order].real
-    phi = vec[:n]
-    mm = np.einsum("ik,ik->k", phi, M @ phi)
-    phi = phi / np.sqrt(np.where(mm > 0, mm, 1.0))
-    omegas = np.sqrt(np.clip(lam, 0.0, None))
-    dim = model.dim
-    Miota = mass.influence(dim)[:, free]
-    L = phi.T @ Miota.T
-    free_mass = np.zeros(dim)
-    for c in range(dim):
-        iota = np.zeros(model.n_dof)
-        iota[c::dim] = 1.0
-        iota_f = iota[free]
-        free_mass[c] = iota_f @ (M @ iota_f)
-    modes = np.zeros((model.n_dof, k))
-    modes[free] = phi
-    periods = np.where(omegas > 0, 2.0 * np.pi / np.where(omegas > 0, omegas, 1.0), np.inf)
-    return ModalResult(omegas / (2.0 * np.pi), omegas, periods, modes, L, L**2, free_mass)
+    return _modal_result(model, mass, M, (sigma + 1.0 / nu).real, vec[:n].real)

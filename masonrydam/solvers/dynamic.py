@@ -11,6 +11,12 @@ constant load of the static stages before (gravity), ``a_g,c`` the ground accele
 (horizontal and vertical together). Velocities and accelerations in the results are relative to the
 ground unless named ``absolute``.
 
+Effects add linear terms through :class:`DynamicTerms` (per stage): viscous boundaries (damping),
+loads given in time (free-field forces, which replace ``-M iota a_g`` at a compliant base: the
+displacements are then total), state forces held over a step (pore pressure entering opening
+joints), and a compressible reservoir condensed into each step as a mass-like block on the wetted DOFs
+(:mod:`.fluid`); constant added masses are in the mass matrix (:class:`~.modal.MassMatrix`).
+
 Integrators
 -----------
 One implicit engine for the generalized-alpha family (Chung & Hulbert 1993, J. Appl. Mech. 60:371-375)

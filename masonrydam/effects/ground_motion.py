@@ -34,6 +34,10 @@ def _inertia(scene, model):
         steps = (f"dt auto (tolerance {st['tolerance']:g}, dt_max {st['dt']:g} s)" if st.get("adaptive")
                  else f"dt {st['dt']:g} s")
         out.append(f"dynamic stage '{st['name']}': {st['mass']} mass inertia, {what}, {steps}")
+        for it in st.get("initial_velocity") or []:
+            how = (f"velocity {it['velocity']} m/s" if "velocity" in it else
+                   f"rigid rotation {it['angular_velocity']} rad/s about {it['rotation_center']}")
+            out.append(f"dynamic stage '{st['name']}': initial {how} of {', '.join(it['groups'])}")
     return out
 
 
@@ -61,6 +65,9 @@ def _ground_motion(scene, model):
         for c, g in st["ground_motion"].items():
             src = g.get("record") or g.get("file") or (f"{g['pulse']['shape']} pulse" if "pulse" in g else "values")
             comps.append(f"{c}: {src}")
+        if not comps:
+            out.append(f"dynamic stage '{st['name']}': no ground motion (free motion from the initial velocity)")
+            continue
         f = scene.get("foundation")
         if f and f.get("mass") and f.get("motion") == "outcrop":
             how = "outcrop motion entered as free-field forces at the compliant base (total displacements)"

@@ -283,7 +283,10 @@ def build_stages(scene: dict, mesh: Mesh, model: Model, base_dir: Path | None = 
                 duration = st["duration"]
             else:
                 duration = max(g.duration for g in gms)
-            stages.append(DynamicStage(st["name"], duration, supports | held, gms, settings, st["output"]["stride"]))
+            v0 = None if st.get("initial_velocity") is None else \
+                initial_velocity_field(model, st["initial_velocity"], f"stages[{i}].initial_velocity")
+            stages.append(DynamicStage(st["name"], duration, supports | held, gms, settings, st["output"]["stride"],
+                                       initial_velocity=v0))
             continue
         force = np.zeros(model.n_dof)
         presc = np.zeros(model.n_dof, dtype=bool)
@@ -334,6 +337,33 @@ def build_stages(scene: dict, mesh: Mesh, model: Model, base_dir: Path | None = 
                                   until_failure=st.get("until_failure", False)))
         held = presc.copy()
     return stages
+
+
+def initial_velocity_field(model: Model, items: list, key: str) -> np.ndarray:
+    """(n_dof,) m/s: the initial velocities of a dynamic stage (normalised ``initial_velocity`` items) at
+    the nodes of their element groups, NaN elsewhere; a rotation is ``v = w x (x - c)`` (small-rotation
+    rigid motion)."""
+    dim = model.dim
+    v = np.full(model.n_dof, np.nan)
+    names = sorted({g.name for g in model.cgroups})
+    for j, it in enumerate(items):
+        nodes = []
+        for name in it["groups"]:
+            found = [g for g in model.cgroups if g.name == name]
+            if not found:
+                raise SceneError(f"{key}.groups" if len(items) == 1 else f"{key}[{j}].groups",
+                                 f"no element group '{name}' (groups: {names})")
+            nodes += [np.unique(g.conn) for g in found]
+        nodes = np.unique(np.concatenate(nodes))
+        if "velocity" in it:
+            vel = np.tile(np.asarray(it["velocity"], dtype=float), (len(nodes), 1))
+        else:
+            r = model.coords[nodes] - np.asarray(it["rotation_center"], dtype=float)
+            w = it["angular_velocity"]
+            vel = (np.stack([-w * r[:, 1], w * r[:, 0]], axis=1) if dim == 2 else
+                   np.cross(np.asarray(w, dtype=float), r))
+        v[(nodes[:, None] * dim + np.arange(dim)).ravel()] = vel.ravel()
+    return v
 
 
 def effects(scene: dict, model: Model) -> list[str]:

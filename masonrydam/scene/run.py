@@ -478,6 +478,10 @@ def _run_dynamic(model, static_stages, dyn_stages, stages, u, writer, nodes, jgr
                                            "ground_acceleration": rec["ag"], "energy": rec["energy"]},
                                   extra=extra)
 
+        if st.initial_velocity is not None:  # the stage starts with these velocities where they are given
+            given = ~np.isnan(st.initial_velocity) & ~st.supports
+            v = np.zeros(model.n_dof) if v is None else v.copy()
+            v[given] = st.initial_velocity[given]
         state = ds.run(st, u0=u, v0=v, a0=None, f_static=f_static, equilibrate=(k == 0), t0=t, energy0=energy,
                        on_step=on_step, record_initial=(k == 0), fluid0=fluid)
         u, v, t, energy, fluid = state.u, state.v, state.t, state.energy, state.fluid

@@ -225,7 +225,7 @@ PULSE_SHAPES = ("rectangular", "half_sine")
 AUTO_STEP_KEYS = ("tolerance", "dt_min", "dt_max")
 _DYNAMIC_KEYS = {"name", "type", "steps", "duration", "dt", "integrator", "alpha", "rho_inf", "mass", "damping",
                  "ground_motion", "output", "max_iterations", "max_substeps", "force_tolerance", "energy_tolerance",
-                 "low_rank_max", "joint_space", *AUTO_STEP_KEYS}
+                 "low_rank_max", "joint_space", "initial_velocity", *AUTO_STEP_KEYS}
 #: dt = "auto" without dt_max (and without output.dt): the largest step (s)
 AUTO_DT_MAX_DEFAULT = 0.01
 #: dt = "auto": default relative local error per step (see solvers.dynamic.DynamicSolver._step_error)
@@ -363,6 +363,47 @@ def set_time_steps(stage: dict, dt, *, steps=None, duration=None) -> dict:
     return stage
 
 
+def _numbers(value, n, key) -> list:
+    if not isinstance(value, (list, tuple)) or len(value) != n:
+        raise SceneError(key, f"expected a list of {n} numbers, got {value!r}")
+    return [_number(v, f"{key}[{i}]") for i, v in enumerate(value)]
+
+
+def _initial_velocity(d, key, dim) -> list:
+    """``initial_velocity`` of a dynamic stage: a table or a list of tables ``{ groups = [...], velocity =
+    [vx, vy(, vz)] }`` (m/s) or ``{ groups, angular_velocity = w (2D, rad/s; 3D: [wx, wy, wz]),
+    rotation_center = [x, y(, z)] }`` (a rigid rotation about the centre, v = w x (x - c))."""
+    items = d if isinstance(d, list) else [d]
+    out = []
+    for i, t in enumerate(items):
+        k = key if not isinstance(d, list) else f"{key}[{i}]"
+        if not isinstance(t, dict):
+            raise SceneError(k, f"expected a table {{ groups = [...], velocity = [...] }}, got {t!r}")
+        _check_keys(t, {"groups", "velocity", "angular_velocity", "rotation_center"}, k)
+        groups = t.get("groups")
+        groups = [groups] if isinstance(groups, str) else groups
+        if not isinstance(groups, list) or not groups or not all(isinstance(g, str) for g in groups):
+            raise SceneError(f"{k}.groups", f"expected a list of element group names, got {t.get('groups')!r}")
+        if ("velocity" in t) == ("angular_velocity" in t):
+            raise SceneError(k, "give 'velocity' = [vx, vy(, vz)] (a translation) or 'angular_velocity' with "
+                                "'rotation_center' (a rigid rotation), one of them")
+        item = {"groups": list(groups)}
+        if "velocity" in t:
+            if "rotation_center" in t:
+                raise SceneError(f"{k}.rotation_center", "goes with 'angular_velocity'")
+            item["velocity"] = _numbers(t["velocity"], dim, f"{k}.velocity")
+        else:
+            w = t["angular_velocity"]
+            item["angular_velocity"] = (_number(w, f"{k}.angular_velocity") if dim == 2 else
+                                        _numbers(w, 3, f"{k}.angular_velocity"))
+            if "rotation_center" not in t:
+                raise SceneError(f"{k}.rotation_center", "is required with 'angular_velocity' (the point the "
+                                                         "rotation is about, m)")
+            item["rotation_center"] = _vector(t["rotation_center"], "length", f"{k}.rotation_center", dim)
+        out.append(item)
+    return out
+
+
 def _dynamic_stage(s, key, dim, index):
     _check_keys(s, _DYNAMIC_KEYS, key)
     if "loads" in s:
@@ -451,10 +492,18 @@ def _dynamic_stage(s, key, dim, index):
             d["alpha"] = _number(damp.get("alpha", 0.0), f"{dk}.alpha", 0.0)
             d["beta"] = _number(damp.get("beta", 0.0), f"{dk}.beta", 0.0)
         out["damping"] = d
+    out["initial_velocity"] = (None if "initial_velocity" not in s else
+                               _initial_velocity(s["initial_velocity"], f"{key}.initial_velocity", dim))
     gm = s.get("ground_motion")
-    if not isinstance(gm, dict) or not gm:
+    if gm is None and out["initial_velocity"] is not None:  # free motion from the initial velocity
+        if out["steps"] is None and out["duration"] is None:
+            raise SceneError(f"{key}.duration", "is required for a dynamic stage without ground motion (or give "
+                                                "'steps')")
+        gm = {}
+    elif not isinstance(gm, dict) or not gm:
         raise SceneError(f"{key}.ground_motion", "is required: give at least one component, e.g. "
-                                                 "[stages.ground_motion.x] record = \"elcentro_1940_ns_peknold\"")
+                                                 "[stages.ground_motion.x] record = \"elcentro_1940_ns_peknold\" "
+                                                 "(or an initial_velocity for a free motion)")
     _check_keys(gm, set(COMPONENT_NAMES[:dim]), f"{key}.ground_motion")
     out["ground_motion"] = {c: _ground_component(v, f"{key}.ground_motion.{c}") for c, v in gm.items()}
     _check_keys(o, {"stride", "dt", "nodes", "joints"}, f"{key}.output")

@@ -457,9 +457,11 @@ class DynamicTerms:
 
 @dataclass
 class DynamicStage:
-    """A dynamic stage: ``duration`` s under ``ground_motion`` (list of :class:`GroundMotion`), with
-    ``supports`` (n_dof,) bool (DOFs moving with the ground), ``settings`` and ``output_stride``
-    (record every k-th step; the first and last are always recorded)."""
+    """A dynamic stage: ``duration`` s under ``ground_motion`` (list of :class:`GroundMotion`, may be
+    empty), with ``supports`` (n_dof,) bool (DOFs moving with the ground), ``settings`` and
+    ``output_stride`` (record every k-th step; the first and last are always recorded);
+    ``initial_velocity`` (n_dof,) m/s, NaN where not given: the velocity the stage starts with at those
+    DOFs (relative to the ground)."""
 
     name: str
     duration: float
@@ -468,6 +470,7 @@ class DynamicStage:
     settings: DynamicSettings
     output_stride: int = 1
     terms: DynamicTerms | None = None
+    initial_velocity: np.ndarray | None = None
 
     def __post_init__(self):
         if not (math.isfinite(self.duration) and self.duration > 0):

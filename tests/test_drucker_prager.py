@@ -499,3 +499,11 @@ def test_nan_and_table_errors():
     bad[1, P_DILATANCY_COEF] = 2 * bad[1, P_FRICTION_COEF]
     with pytest.raises(ValueError, match=r"eta_bar.*row 1"):
         drucker_prager_evaluate(np.zeros((2, 6)), bad, committed)
+
+
+@pytest.mark.parametrize("phi", [20.0, 25.0, 30.0, 35.0, 40.0, 45.0])
+def test_associated_plane_strain_match_builds_for_every_angle(phi):
+    """Associated flow (psi = phi) with the plane-strain match: eta_bar equals eta exactly (30 and 40 deg
+    failed the eta_bar <= eta check by one rounding bit)."""
+    row = drucker_prager_params(3e10, 0.2, 1e6, phi)
+    assert row[P_DILATANCY_COEF] == row[P_FRICTION_COEF]

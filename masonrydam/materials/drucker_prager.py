@@ -111,49 +111,13 @@ import math
 import numpy as np
 from numba import njit
 
-from ..errors import STATUS_NAN, STATUS_OK
+from ..errors import STATUS_OK
 from .plasticity import (
-    CODE_APEX,
-    CODE_ELASTIC,
-    CODE_PLASTIC,
-    N_COMMON_PARAMS,
-    N_COMMON_STATE,
-    P_E,
-    P_NU,
-    P_VISCOSITY,
-    S_CODE,
-    S_EQ_PLASTIC_STRAIN,
-    S_PLASTIC_STRAIN,
-    S_STRESS,
-    SQRT2,
-    SQRT3,
-    STATUS_BAD_MATERIAL,
-    W_D,
-    W_N,
-    W_SCRATCH,
-    W_SIG,
-    WORK_SIZE,
-    as_float_table,
-    check_batch,
-    check_dt,
-    check_elastic,
-    copy_state_row,
-    elastic_moduli,
-    embed_strain,
-    extract_stress,
-    extract_tangent,
-    fail_point,
-    isotropic_tangent,
-    kink_distance,
-    outputs_finite,
-    piecewise_root,
-    raise_for_status,
-    real_parameter,
-    row_finite,
-    tensor_norm,
-    trial_split,
-    vec_finite,
-    viscous_term,
+    CODE_APEX, CODE_ELASTIC, CODE_PLASTIC, N_COMMON_PARAMS, N_COMMON_STATE, P_E, P_NU, P_VISCOSITY, S_CODE,
+    S_EQ_PLASTIC_STRAIN, S_PLASTIC_STRAIN, S_STRESS, SQRT2, SQRT3, W_D, W_N, W_SIG, PlasticLaw, bad_common_column,
+    batch_update, check_param_table, copy_state_row, elastic_moduli, evaluate, finish_point, initial_state,
+    isotropic_tangent, kink_distance, param_row, piecewise_root, point_inputs_status, point_moduli, point_trial,
+    real_parameter, real_parameters, tensor_norm, viscous_term,
 )
 
 __all__ = [
@@ -191,16 +155,11 @@ PARAM_NAMES = {
 
 
 @njit(cache=True)
-def _bad_column(params, p, dt):
-    """First inadmissible parameter column of row ``p`` (-1 for ``dt < 0``), or -2 if all are fine."""
-    E = params[p, P_E]
-    nu = params[p, P_NU]
-    if not E > 0.0:
-        return P_E
-    if not (-1.0 < nu < 0.5):
-        return P_NU
-    if not params[p, P_VISCOSITY] >= 0.0:
-        return P_VISCOSITY
+def _bad_column(params, p):
+    """First inadmissible parameter column of row ``p``, or -2 if all are fine."""
+    bad = bad_common_column(params, p)
+    if bad != -2:
+        return bad
     c0 = params[p, P_COHESION]
     eta = params[p, P_FRICTION_COEF]
     xi = params[p, P_COHESION_COEF]
@@ -216,16 +175,13 @@ def _bad_column(params, p, dt):
         return P_COHESION
     if not (0.0 <= params[p, P_RESIDUAL_COHESION] <= c0):
         return P_RESIDUAL_COHESION
-    G = E / (2.0 * (1.0 + nu))
-    K = E / (3.0 * (1.0 - 2.0 * nu))
+    K, G = point_moduli(params, p)
     if not (G + K * eta * etab + xi * xi * h > 0.0):
         return P_COHESION_HARDENING
     if eta > 0.0:
         ea = etab if etab > 0.0 else eta
         if not (K * eta * ea + xi * xi * h > 0.0):
             return P_COHESION_HARDENING
-    if not dt >= 0.0:
-        return -1
     return -2
 
 
@@ -237,30 +193,19 @@ def drucker_prager_point(eps, params, p, state_committed, state_trial, k, dt, wa
     ``params`` (m, N_DP_PARAMS) and states (n, N_DP_STATE); the tangent ``D`` is non-symmetric on the
     cone for non-associated flow.
     """
-    if not (vec_finite(eps) and row_finite(params, p, N_DP_PARAMS) and row_finite(state_committed, k, N_DP_STATE)
-            and math.isfinite(dt)):
-        fail_point(state_committed, state_trial, k, sig, D, want_tangent, N_DP_STATE)
-        return STATUS_NAN
-    bad = _bad_column(params, p, dt)
-    if bad != -2:
-        fail_point(state_committed, state_trial, k, sig, D, want_tangent, N_DP_STATE)
-        work[W_SCRATCH] = bad
-        return STATUS_BAD_MATERIAL
+    status = point_inputs_status(eps, params, p, N_DP_PARAMS, state_committed, state_trial, k, N_DP_STATE, dt,
+                                 _bad_column(params, p), want_tangent, sig, D, work)
+    if status != STATUS_OK:
+        return status
 
-    E = params[p, P_E]
-    nu = params[p, P_NU]
     c0 = params[p, P_COHESION]
     h = params[p, P_COHESION_HARDENING]
     c_res = params[p, P_RESIDUAL_COHESION]
     eta = params[p, P_FRICTION_COEF]
     xi = params[p, P_COHESION_COEF]
     etab = params[p, P_DILATANCY_COEF]
-    G = E / (2.0 * (1.0 + nu))
-    K = E / (3.0 * (1.0 - 2.0 * nu))
+    K, G, p_tr = point_trial(eps, params, p, state_committed, k, work)
     G2 = 2.0 * G
-
-    embed_strain(eps, work)
-    p_tr, _ = trial_split(work, state_committed, k, K, G2)
     s_norm = tensor_norm(work, W_SIG)
     sj = s_norm / SQRT2  # sqrt(J2) of the trial
     eb_n = state_committed[k, S_EQ_PLASTIC_STRAIN]
@@ -351,15 +296,7 @@ def drucker_prager_point(eps, params, p, state_committed, state_trial, k, dt, wa
         state_trial[k, S_CODE] = CODE_ELASTIC
         if want_tangent:
             isotropic_tangent(work, K, G2)
-    for i in range(6):
-        state_trial[k, S_STRESS + i] = work[W_SIG + i]
-    extract_stress(work, sig)
-    if want_tangent:
-        extract_tangent(work, D)
-    if not (outputs_finite(sig, D, want_tangent) and row_finite(state_trial, k, N_DP_STATE)):
-        fail_point(state_committed, state_trial, k, sig, D, want_tangent, N_DP_STATE)
-        return STATUS_NAN
-    return STATUS_OK
+    return finish_point(work, state_committed, state_trial, k, N_DP_STATE, want_tangent, sig, D)
 
 
 @njit(cache=True)
@@ -367,31 +304,12 @@ def drucker_prager_update(strain, params, state_committed, state_trial, stress_o
                           info):
     """Batch Drucker-Prager update: :func:`drucker_prager_point` for every row.
 
-    Arguments and return value as :func:`masonrydam.materials.von_mises.von_mises_update`, with
-    ``params`` (n, N_DP_PARAMS) and states (n, N_DP_STATE).
+    Arguments (those of :func:`masonrydam.materials.plasticity.batch_update` less ``point``) and
+    return value as :func:`masonrydam.materials.von_mises.von_mises_update`, with ``params``
+    (n, N_DP_PARAMS) and states (n, N_DP_STATE).
     """
-    n = strain.shape[0]
-    ns = strain.shape[1]
-    work = np.empty(WORK_SIZE)
-    eps = np.empty(ns)
-    sig = np.empty(ns)
-    D = np.empty((ns, ns))
-    for k in range(n):
-        for i in range(ns):
-            eps[i] = strain[k, i]
-        status = drucker_prager_point(eps, params, k, state_committed, state_trial, k, dt, want_tangent, sig, D, work)
-        for i in range(ns):
-            stress_out[k, i] = sig[i]
-        if want_tangent:
-            for i in range(ns):
-                for j in range(ns):
-                    tangent_out[k, i, j] = D[i, j]
-        if status != STATUS_OK:
-            info[0] = k
-            if status == STATUS_BAD_MATERIAL and info.shape[0] > 1:
-                info[1] = int(work[W_SCRATCH])
-            return status
-    return STATUS_OK
+    return batch_update(drucker_prager_point, strain, params, state_committed, state_trial, stress_out, tangent_out,
+                        dt, want_tangent, info)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -399,6 +317,7 @@ def drucker_prager_update(strain, params, state_committed, state_trial, stress_o
 # ----------------------------------------------------------------------------------------------
 
 _LAW = "Drucker-Prager"
+_TABLES = PlasticLaw(_LAW, N_DP_PARAMS, N_DP_STATE, PARAM_NAMES)
 
 
 def drucker_prager_coefficients(friction_angle_deg: float, dilation_angle_deg: float | None = None,
@@ -432,7 +351,9 @@ def drucker_prager_coefficients(friction_angle_deg: float, dilation_angle_deg: f
         return 6.0 * sp / (SQRT3 * (3.0 + sp)), 6.0 * cp / (SQRT3 * (3.0 + sp)), 6.0 * ss / (SQRT3 * (3.0 + ss))
     r = math.sqrt(3.0 + ss * ss)
     d = 3.0 + sp * ss
-    return SQRT3 * sp * r / d, SQRT3 * cp * r / d, SQRT3 * ss / r
+    eta = SQRT3 * sp * r / d
+    # associated flow: eta_bar = eta exactly (the two formulas agree on paper, not always in the last bit)
+    return eta, SQRT3 * cp * r / d, eta if psi == phi else SQRT3 * ss / r
 
 
 def _check_plastic(E, nu, c0, h, c_res, eta_v, eta, xi, etab, where=""):
@@ -475,18 +396,13 @@ def _check_plastic(E, nu, c0, h, c_res, eta_v, eta, xi, etab, where=""):
 def check_drucker_prager_params(params) -> np.ndarray:
     """Validate a parameter table (n, N_DP_PARAMS) or row; returns it as a float64 2D array.
     Raises ValueError naming the parameter (and the row of a table)."""
-    t = as_float_table("params", params, ncol=N_DP_PARAMS)
-    for r in range(t.shape[0]):
-        row = t[r]
-        where = f" (row {r})" if t.shape[0] > 1 else ""
-        for col, name in PARAM_NAMES.items():
-            if not math.isfinite(row[col]):
-                raise ValueError(f"{_LAW} parameter {name} must be finite{where}, got {row[col]!r}")
-        check_elastic(_LAW, row[P_E], row[P_NU], where)
-        _check_plastic(*(float(row[c]) for c in (P_E, P_NU, P_COHESION, P_COHESION_HARDENING, P_RESIDUAL_COHESION,
-                                                  P_VISCOSITY, P_FRICTION_COEF, P_COHESION_COEF, P_DILATANCY_COEF)),
-                       where)
-    return t
+    return check_param_table(_TABLES, params, _check_row)
+
+
+def _check_row(row, where):
+    _check_plastic(*(float(row[c]) for c in (P_E, P_NU, P_COHESION, P_COHESION_HARDENING, P_RESIDUAL_COHESION,
+                                              P_VISCOSITY, P_FRICTION_COEF, P_COHESION_COEF, P_DILATANCY_COEF)),
+                   where)
 
 
 def drucker_prager_params(
@@ -519,35 +435,25 @@ def drucker_prager_params(
     ------
     ValueError naming the parameter and its value.
     """
-    vals = {
+    v = real_parameters(_TABLES, {
         "youngs_modulus": youngs_modulus,
         "poisson_ratio": poisson_ratio,
         "cohesion": cohesion,
         "cohesion_hardening": cohesion_hardening,
         "residual_cohesion": residual_cohesion,
         "viscosity": viscosity,
-    }
-    v = {name: real_parameter(_LAW, name, x) for name, x in vals.items()}
-    check_elastic(_LAW, v["youngs_modulus"], v["poisson_ratio"])
+    })
     eta, xi, etab = drucker_prager_coefficients(friction_angle_deg, dilation_angle_deg, match)
     _check_plastic(v["youngs_modulus"], v["poisson_ratio"], v["cohesion"], v["cohesion_hardening"],
                    v["residual_cohesion"], v["viscosity"], eta, xi, etab)
-    row = np.zeros(N_DP_PARAMS)
-    row[P_E] = v["youngs_modulus"]
-    row[P_NU] = v["poisson_ratio"]
-    row[P_VISCOSITY] = v["viscosity"]
-    row[P_COHESION] = v["cohesion"]
-    row[P_COHESION_HARDENING] = v["cohesion_hardening"]
-    row[P_RESIDUAL_COHESION] = v["residual_cohesion"]
-    row[P_FRICTION_COEF] = eta
-    row[P_COHESION_COEF] = xi
-    row[P_DILATANCY_COEF] = etab
-    return row
+    cols = {col: v[name] for col, name in PARAM_NAMES.items() if name in v}  # all but the cone coefficients
+    cols.update({P_FRICTION_COEF: eta, P_COHESION_COEF: xi, P_DILATANCY_COEF: etab})
+    return param_row(_TABLES, cols)
 
 
 def drucker_prager_initial_state(n: int) -> np.ndarray:
     """Virgin state (n, N_DP_STATE)."""
-    return np.zeros((int(n), N_DP_STATE))
+    return initial_state(_TABLES, n)
 
 
 def drucker_prager_evaluate(strain, params, state_committed, dt: float = 0.0, want_tangent: bool = True):
@@ -557,15 +463,5 @@ def drucker_prager_evaluate(strain, params, state_committed, dt: float = 0.0, wa
 
     Raises ValueError for a bad shape, parameter or dt, masonrydam.errors.NumericalError for a
     non-finite strain, state or result."""
-    strain, params, state_committed = check_batch(strain, params, state_committed, N_DP_PARAMS, N_DP_STATE)
-    params = check_drucker_prager_params(params)
-    dt = check_dt(dt)
-    n, ns = strain.shape
-    stress = np.empty((n, ns))
-    tangent = np.empty((n if want_tangent else 0, ns, ns))
-    state_trial = np.empty((n, N_DP_STATE))
-    info = np.zeros(2, dtype=np.int64)
-    status = drucker_prager_update(strain, params, state_committed, state_trial, stress, tangent, dt,
-                                   bool(want_tangent), info)
-    raise_for_status(status, info, _LAW, PARAM_NAMES)
-    return stress, (tangent if want_tangent else None), state_trial
+    return evaluate(_TABLES, drucker_prager_update, check_drucker_prager_params, strain, params, state_committed, dt,
+                    want_tangent)

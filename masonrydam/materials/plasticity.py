@@ -36,10 +36,21 @@ Trial / commit / revert (docs/architecture.md): a kernel reads ``state_committed
 it) and writes ``state_trial``; the solver copies trial to committed when a step converges. The
 update is in total form, ``sigma = C : (eps - eps_p_committed)`` for the trial, so repeated
 evaluations within a step never drift.
+
+What a law module keeps is its own: the parameter and state columns past the shared ones, the
+admissibility of its parameters and the return mapping of its point kernel. The parts around them
+are here: the input checks and the final stores of a point kernel (:func:`point_inputs_status`,
+:func:`point_trial`, :func:`finish_point`), the batch loop (:func:`batch_update`, inlined into each
+law's ``*_update``), and on the Python side the parameter-table check (:func:`check_param_table`),
+the parameter row (:func:`real_parameters`, :func:`param_row`), the virgin state
+(:func:`initial_state`) and the evaluate wrapper (:func:`evaluate`), each told the law's tables by
+a :class:`PlasticLaw`.
 """
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 from numba import njit
@@ -265,6 +276,136 @@ def outputs_finite(sig, D, want_tangent):
     return True
 
 
+@njit(cache=True)
+def point_moduli(params, p):
+    """Bulk and shear moduli ``(K, G)`` (Pa) of parameter row ``p`` (columns ``P_E``, ``P_NU``)."""
+    E = params[p, P_E]
+    nu = params[p, P_NU]
+    return E / (3.0 * (1.0 - 2.0 * nu)), E / (2.0 * (1.0 + nu))
+
+
+@njit(cache=True)
+def bad_common_column(params, p):
+    """First inadmissible shared parameter column of row ``p`` (``P_E``: E > 0, ``P_NU``:
+    -1 < nu < 0.5, ``P_VISCOSITY``: eta >= 0), or -2 if these are fine. A law's own check of its
+    columns follows (then ``dt >= 0``, column -1, in :func:`point_inputs_status`)."""
+    if not params[p, P_E] > 0.0:
+        return P_E
+    if not (-1.0 < params[p, P_NU] < 0.5):
+        return P_NU
+    if not params[p, P_VISCOSITY] >= 0.0:
+        return P_VISCOSITY
+    return -2
+
+
+@njit(cache=True)
+def point_inputs_status(eps, params, p, n_params, state_committed, state_trial, k, n_state, dt, bad, want_tangent,
+                        sig, D, work):
+    """Input check at the start of a point kernel: ``STATUS_NAN`` for a non-finite strain, parameter
+    row ``p`` (``n_params`` columns), committed state row ``k`` (``n_state`` columns) or ``dt``;
+    else ``STATUS_BAD_MATERIAL`` when ``bad`` (the law's first inadmissible parameter column, -2 for
+    none) is not -2 or, after the parameters, ``dt < 0`` (column -1), with ``work[W_SCRATCH]`` = the
+    column; else ``STATUS_OK``. On failure the outputs are those of :func:`fail_point`."""
+    if not (vec_finite(eps) and row_finite(params, p, n_params) and row_finite(state_committed, k, n_state)
+            and math.isfinite(dt)):
+        fail_point(state_committed, state_trial, k, sig, D, want_tangent, n_state)
+        return STATUS_NAN
+    if bad == -2 and not dt >= 0.0:
+        bad = -1
+    if bad != -2:
+        fail_point(state_committed, state_trial, k, sig, D, want_tangent, n_state)
+        work[W_SCRATCH] = bad
+        return STATUS_BAD_MATERIAL
+    return STATUS_OK
+
+
+@njit(cache=True)
+def point_trial(eps, params, p, state_committed, k, work):
+    """Elastic trial of a point: returns ``(K, G, p_trial)`` (moduli of row ``p``, trial mean stress,
+    Pa), with the 3D strain in ``work[W_EPS:]`` (:func:`embed_strain`) and the trial deviatoric stress
+    in ``work[W_SIG:]`` (:func:`trial_split`)."""
+    K, G = point_moduli(params, p)
+    embed_strain(eps, work)
+    p_tr, _ = trial_split(work, state_committed, k, K, 2.0 * G)
+    return K, G, p_tr
+
+
+@njit(cache=True)
+def finish_point(work, state_committed, state_trial, k, n_state, want_tangent, sig, D):
+    """End of a point kernel: stores the 3D stress ``work[W_SIG:]`` in ``state_trial[k, S_STRESS:]``,
+    writes ``sig`` and (``want_tangent``) ``D`` from ``work`` and returns ``STATUS_OK``, or
+    ``STATUS_NAN`` with the outputs of :func:`fail_point` when a result is not finite."""
+    for i in range(6):
+        state_trial[k, S_STRESS + i] = work[W_SIG + i]
+    extract_stress(work, sig)
+    if want_tangent:
+        extract_tangent(work, D)
+    if not (outputs_finite(sig, D, want_tangent) and row_finite(state_trial, k, n_state)):
+        fail_point(state_committed, state_trial, k, sig, D, want_tangent, n_state)
+        return STATUS_NAN
+    return STATUS_OK
+
+
+@njit(cache=True, inline="always")
+def batch_update(point, strain, params, state_committed, state_trial, stress_out, tangent_out, dt, want_tangent, info):
+    """Batch update of a law: its point kernel ``point`` (e.g.
+    :func:`masonrydam.materials.von_mises.von_mises_point`) for every row, point ``k`` with
+    parameter row ``k`` and state row ``k``.
+
+    Inlined (numba IR inlining) into each law's ``*_update``, which passes its point kernel: there
+    ``point`` is a compile-time constant, so the law's batch function stays cachable (a jitted
+    function passed across a compiled call, or captured by a closure, would not be).
+
+    Parameters
+    ----------
+    point : jitted point kernel with the signature of
+        :func:`masonrydam.materials.von_mises.von_mises_point`.
+    strain : float64 (n, ns)
+        Total strains, ns = 3 (plane strain) or 6 (3D), engineering shear.
+    params : float64 (n, n_params)
+        One parameter row per point.
+    state_committed : float64 (n, n_state)
+        Read only.
+    state_trial : float64 (n, n_state), out
+    stress_out : float64 (n, ns), out
+        Stress (Pa).
+    tangent_out : float64 (n, ns, ns), out
+        Consistent tangent (Pa); not touched when ``want_tangent`` is False (any first dimension).
+    dt : float
+        Time step (s), >= 0 (Perzyna only).
+    want_tangent : bool
+    info : int64 (>= 1,), out
+        ``info[0]`` = the failing point; ``info[1]`` (if present) = the bad parameter column (-1 dt).
+
+    Returns
+    -------
+    int
+        Status of the first failing point (the later points are not evaluated), else STATUS_OK.
+    """
+    n = strain.shape[0]
+    ns = strain.shape[1]
+    work = np.empty(WORK_SIZE)
+    eps = np.empty(ns)
+    sig = np.empty(ns)
+    D = np.empty((ns, ns))
+    for k in range(n):
+        for i in range(ns):
+            eps[i] = strain[k, i]
+        status = point(eps, params, k, state_committed, state_trial, k, dt, want_tangent, sig, D, work)
+        for i in range(ns):
+            stress_out[k, i] = sig[i]
+        if want_tangent:
+            for i in range(ns):
+                for j in range(ns):
+                    tangent_out[k, i, j] = D[i, j]
+        if status != STATUS_OK:
+            info[0] = k
+            if status == STATUS_BAD_MATERIAL and info.shape[0] > 1:
+                info[1] = int(work[W_SCRATCH])
+            return status
+    return STATUS_OK
+
+
 # ----------------------------------------------------------------------------------------------
 # Python side: shape checks and status -> exception
 # ----------------------------------------------------------------------------------------------
@@ -346,3 +487,75 @@ def check_elastic(law: str, E: float, nu: float, where: str = "") -> None:
         raise ValueError(f"{law} parameter youngs_modulus must be > 0 (Pa){where}, got {E!r}")
     if not -1.0 < nu < 0.5:
         raise ValueError(f"{law} parameter poisson_ratio must satisfy -1 < nu < 0.5{where}, got {nu!r}")
+
+
+@dataclass(frozen=True)
+class PlasticLaw:
+    """What the shared Python helpers need to know of a law's tables."""
+
+    name: str  #: the law in messages, e.g. "von Mises"
+    n_params: int  #: columns of a parameter row
+    n_state: int  #: columns of a state row
+    param_names: dict  #: parameter column -> name in messages (every column)
+
+
+def check_param_table(law: PlasticLaw, params, check_row: Callable[[np.ndarray, str], None]) -> np.ndarray:
+    """Validate a parameter table (n, law.n_params) or row; returns it as a float64 2D array.
+
+    Row by row: every column finite, then :func:`check_elastic`, then ``check_row(row, where)``, the
+    law's own checks (``where`` names the row of a table with more than one, else ""). Raises
+    ValueError naming the parameter, the row and the value."""
+    t = as_float_table("params", params, ncol=law.n_params)
+    for r in range(t.shape[0]):
+        row = t[r]
+        where = f" (row {r})" if t.shape[0] > 1 else ""
+        for col, name in law.param_names.items():
+            if not math.isfinite(row[col]):
+                raise ValueError(f"{law.name} parameter {name} must be finite{where}, got {row[col]!r}")
+        check_elastic(law.name, row[P_E], row[P_NU], where)
+        check_row(row, where)
+    return t
+
+
+def real_parameters(law: PlasticLaw, values: dict) -> dict:
+    """``{name: float}`` of the named parameter values (:func:`real_parameter`), checked with
+    :func:`check_elastic` (``values`` holds "youngs_modulus" and "poisson_ratio")."""
+    v = {name: real_parameter(law.name, name, x) for name, x in values.items()}
+    check_elastic(law.name, v["youngs_modulus"], v["poisson_ratio"])
+    return v
+
+
+def param_row(law: PlasticLaw, columns: dict) -> np.ndarray:
+    """Parameter row (law.n_params,) with ``row[col] = value`` for each ``col: value`` of ``columns``
+    (the other columns 0)."""
+    row = np.zeros(law.n_params)
+    for col, value in columns.items():
+        row[col] = value
+    return row
+
+
+def initial_state(law: PlasticLaw, n: int) -> np.ndarray:
+    """Virgin state (n, law.n_state): all columns zero (no stress, no plastic strain, CODE_ELASTIC)."""
+    return np.zeros((int(n), law.n_state))
+
+
+def evaluate(law: PlasticLaw, update, check_params, strain, params, state_committed, dt, want_tangent):
+    """The Python wrapper of a law's batch kernel ``update`` (signature of :func:`batch_update` less
+    ``point``): checks shapes (:func:`check_batch`), parameters (``check_params``, the law's table
+    check) and ``dt`` once, runs the kernel and turns its status into an exception
+    (:func:`raise_for_status`).
+
+    Returns ``(stress (n, ns), tangent (n, ns, ns) or None, state_trial (n, law.n_state))``; the
+    shapes and exceptions are those documented by
+    :func:`masonrydam.materials.von_mises.von_mises_evaluate`."""
+    strain, params, state_committed = check_batch(strain, params, state_committed, law.n_params, law.n_state)
+    params = check_params(params)
+    dt = check_dt(dt)
+    n, ns = strain.shape
+    stress = np.empty((n, ns))
+    tangent = np.empty((n if want_tangent else 0, ns, ns))
+    state_trial = np.empty((n, law.n_state))
+    info = np.zeros(2, dtype=np.int64)
+    status = update(strain, params, state_committed, state_trial, stress, tangent, dt, bool(want_tangent), info)
+    raise_for_status(status, info, law.name, law.param_names)
+    return stress, (tangent if want_tangent else None), state_trial

@@ -73,52 +73,16 @@ symmetric; elastic steps return the elastic matrix.
 """
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from numba import njit
 
-from ..errors import STATUS_NAN, STATUS_OK
+from ..errors import STATUS_OK
 from .plasticity import (
-    CODE_ELASTIC,
-    CODE_PLASTIC,
-    N_COMMON_PARAMS,
-    N_COMMON_STATE,
-    P_E,
-    P_NU,
-    P_VISCOSITY,
-    S_CODE,
-    S_EQ_PLASTIC_STRAIN,
-    S_PLASTIC_STRAIN,
-    S_STRESS,
-    SQRT_2_3,
-    SQRT_3_2,
-    STATUS_BAD_MATERIAL,
-    W_D,
-    W_N,
-    W_SCRATCH,
-    W_SIG,
-    WORK_SIZE,
-    check_batch,
-    check_dt,
-    check_elastic,
-    copy_state_row,
-    elastic_moduli,
-    embed_strain,
-    extract_stress,
-    extract_tangent,
-    fail_point,
-    isotropic_tangent,
-    kink_distance,
-    outputs_finite,
-    piecewise_root,
-    raise_for_status,
-    real_parameter,
-    row_finite,
-    tensor_norm,
-    trial_split,
-    vec_finite,
-    viscous_term,
+    CODE_ELASTIC, CODE_PLASTIC, N_COMMON_PARAMS, N_COMMON_STATE, P_E, P_NU, P_VISCOSITY, S_CODE,
+    S_EQ_PLASTIC_STRAIN, S_PLASTIC_STRAIN, S_STRESS, SQRT_2_3, SQRT_3_2, W_D, W_N, W_SIG, PlasticLaw,
+    bad_common_column, batch_update, check_param_table, copy_state_row, elastic_moduli, evaluate, finish_point,
+    initial_state, isotropic_tangent, kink_distance, param_row, piecewise_root, point_inputs_status, point_trial,
+    real_parameters, tensor_norm, viscous_term,
 )
 
 __all__ = [
@@ -151,16 +115,13 @@ PARAM_NAMES = {
 
 
 @njit(cache=True)
-def _bad_column(params, p, dt):
-    """First inadmissible parameter column of row ``p`` (-1 for ``dt < 0``), or -2 if all are fine."""
+def _bad_column(params, p):
+    """First inadmissible parameter column of row ``p``, or -2 if all are fine."""
+    bad = bad_common_column(params, p)
+    if bad != -2:
+        return bad
     E = params[p, P_E]
     nu = params[p, P_NU]
-    if not E > 0.0:
-        return P_E
-    if not (-1.0 < nu < 0.5):
-        return P_NU
-    if not params[p, P_VISCOSITY] >= 0.0:
-        return P_VISCOSITY
     sy0 = params[p, P_SIGMA_Y]
     if not sy0 > 0.0:
         return P_SIGMA_Y
@@ -170,8 +131,6 @@ def _bad_column(params, p, dt):
         return P_H_ISO
     if not (0.0 <= params[p, P_SIGMA_Y_RES] <= sy0):
         return P_SIGMA_Y_RES
-    if not dt >= 0.0:
-        return -1
     return -2
 
 
@@ -205,28 +164,17 @@ def von_mises_point(eps, params, p, state_committed, state_trial, k, dt, want_ta
         stress NaN, tangent 0); ``STATUS_BAD_MATERIAL`` for an inadmissible parameter or ``dt < 0``
         (same outputs; ``work[W_SCRATCH]`` holds the parameter column, -1 for dt).
     """
-    if not (vec_finite(eps) and row_finite(params, p, N_VM_PARAMS) and row_finite(state_committed, k, N_VM_STATE)
-            and math.isfinite(dt)):
-        fail_point(state_committed, state_trial, k, sig, D, want_tangent, N_VM_STATE)
-        return STATUS_NAN
-    bad = _bad_column(params, p, dt)
-    if bad != -2:
-        fail_point(state_committed, state_trial, k, sig, D, want_tangent, N_VM_STATE)
-        work[W_SCRATCH] = bad
-        return STATUS_BAD_MATERIAL
+    status = point_inputs_status(eps, params, p, N_VM_PARAMS, state_committed, state_trial, k, N_VM_STATE, dt,
+                                 _bad_column(params, p), want_tangent, sig, D, work)
+    if status != STATUS_OK:
+        return status
 
-    E = params[p, P_E]
-    nu = params[p, P_NU]
     sy0 = params[p, P_SIGMA_Y]
     h_iso = params[p, P_H_ISO]
     h_kin = params[p, P_H_KIN]
     sy_res = params[p, P_SIGMA_Y_RES]
-    G = E / (2.0 * (1.0 + nu))
-    K = E / (3.0 * (1.0 - 2.0 * nu))
+    K, G, p_tr = point_trial(eps, params, p, state_committed, k, work)
     G2 = 2.0 * G
-
-    embed_strain(eps, work)
-    p_tr, _ = trial_split(work, state_committed, k, K, G2)
     # relative stress xi_tr = s_tr - beta_n  -> W_N
     for i in range(6):
         work[W_N + i] = work[W_SIG + i] - state_committed[k, S_BACK_STRESS + i]
@@ -269,67 +217,22 @@ def von_mises_point(eps, params, p, state_committed, state_trial, k, dt, want_ta
             isotropic_tangent(work, K, G2)
     for i in range(3):
         work[W_SIG + i] += p_tr
-    for i in range(6):
-        state_trial[k, S_STRESS + i] = work[W_SIG + i]
-    extract_stress(work, sig)
-    if want_tangent:
-        extract_tangent(work, D)
-    if not (outputs_finite(sig, D, want_tangent) and row_finite(state_trial, k, N_VM_STATE)):
-        fail_point(state_committed, state_trial, k, sig, D, want_tangent, N_VM_STATE)
-        return STATUS_NAN
-    return STATUS_OK
+    return finish_point(work, state_committed, state_trial, k, N_VM_STATE, want_tangent, sig, D)
 
 
 @njit(cache=True)
 def von_mises_update(strain, params, state_committed, state_trial, stress_out, tangent_out, dt, want_tangent, info):
     """Batch von Mises update: :func:`von_mises_point` for every row.
 
-    Parameters
-    ----------
-    strain : float64 (n, ns)
-        Total strains, ns = 3 (plane strain) or 6 (3D), engineering shear.
-    params : float64 (n, N_VM_PARAMS)
-        One parameter row per point.
-    state_committed : float64 (n, N_VM_STATE)
-        Read only.
-    state_trial : float64 (n, N_VM_STATE), out
-    stress_out : float64 (n, ns), out
-        Stress (Pa).
-    tangent_out : float64 (n, ns, ns), out
-        Consistent tangent (Pa); not touched when ``want_tangent`` is False (any first dimension).
-    dt : float
-        Time step (s), >= 0 (Perzyna only).
-    want_tangent : bool
-    info : int64 (>= 1,), out
-        ``info[0]`` = the failing point; ``info[1]`` (if present) = the bad parameter column (-1 dt).
-
-    Returns
-    -------
-    int
-        Status of the first failing point (the later points are not evaluated), else STATUS_OK.
+    The loop of :func:`masonrydam.materials.plasticity.batch_update`, whose docstring gives the
+    arguments (less ``point``) and the return value, here with ``params`` float64 (n, N_VM_PARAMS)
+    and ``state_committed``, ``state_trial`` float64 (n, N_VM_STATE): ``strain`` (n, ns) with
+    ns = 3 (plane strain) or 6 (3D), ``stress_out`` (n, ns) and ``tangent_out`` (n, ns, ns) in Pa,
+    ``dt`` (s), ``info`` int64 (>= 1,); returns the status of the first failing point (the later
+    points are not evaluated), else STATUS_OK.
     """
-    n = strain.shape[0]
-    ns = strain.shape[1]
-    work = np.empty(WORK_SIZE)
-    eps = np.empty(ns)
-    sig = np.empty(ns)
-    D = np.empty((ns, ns))
-    for k in range(n):
-        for i in range(ns):
-            eps[i] = strain[k, i]
-        status = von_mises_point(eps, params, k, state_committed, state_trial, k, dt, want_tangent, sig, D, work)
-        for i in range(ns):
-            stress_out[k, i] = sig[i]
-        if want_tangent:
-            for i in range(ns):
-                for j in range(ns):
-                    tangent_out[k, i, j] = D[i, j]
-        if status != STATUS_OK:
-            info[0] = k
-            if status == STATUS_BAD_MATERIAL and info.shape[0] > 1:
-                info[1] = int(work[W_SCRATCH])
-            return status
-    return STATUS_OK
+    return batch_update(von_mises_point, strain, params, state_committed, state_trial, stress_out, tangent_out, dt,
+                        want_tangent, info)
 
 
 # ----------------------------------------------------------------------------------------------
@@ -337,6 +240,7 @@ def von_mises_update(strain, params, state_committed, state_trial, stress_out, t
 # ----------------------------------------------------------------------------------------------
 
 _LAW = "von Mises"
+_TABLES = PlasticLaw(_LAW, N_VM_PARAMS, N_VM_STATE, PARAM_NAMES)
 
 
 def check_von_mises_params(params) -> np.ndarray:
@@ -344,20 +248,12 @@ def check_von_mises_params(params) -> np.ndarray:
 
     Raises ValueError naming the parameter, the row and the value (the admissible ranges are those
     of the module docstring)."""
-    from .plasticity import as_float_table
+    return check_param_table(_TABLES, params, _check_row)
 
-    t = as_float_table("params", params, ncol=N_VM_PARAMS)
-    for r in range(t.shape[0]):
-        row = t[r]
-        where = f" (row {r})" if t.shape[0] > 1 else ""
-        for col, name in PARAM_NAMES.items():
-            if not math.isfinite(row[col]):
-                raise ValueError(f"{_LAW} parameter {name} must be finite{where}, got {row[col]!r}")
-        E, nu = row[P_E], row[P_NU]
-        check_elastic(_LAW, E, nu, where)
-        _check_plastic(float(E), float(nu), float(row[P_SIGMA_Y]), float(row[P_H_ISO]), float(row[P_H_KIN]),
-                       float(row[P_SIGMA_Y_RES]), float(row[P_VISCOSITY]), where)
-    return t
+
+def _check_row(row, where):
+    _check_plastic(*(float(row[c]) for c in (P_E, P_NU, P_SIGMA_Y, P_H_ISO, P_H_KIN, P_SIGMA_Y_RES, P_VISCOSITY)),
+                   where)
 
 
 def _check_plastic(E, nu, sy0, h_iso, h_kin, sy_res, eta, where=""):
@@ -407,7 +303,7 @@ def von_mises_params(
     ------
     ValueError naming the parameter and its value.
     """
-    vals = {
+    v = real_parameters(_TABLES, {
         "youngs_modulus": youngs_modulus,
         "poisson_ratio": poisson_ratio,
         "yield_stress": yield_stress,
@@ -415,25 +311,16 @@ def von_mises_params(
         "kinematic_hardening": kinematic_hardening,
         "residual_yield_stress": residual_yield_stress,
         "viscosity": viscosity,
-    }
-    v = {name: real_parameter(_LAW, name, x) for name, x in vals.items()}
-    check_elastic(_LAW, v["youngs_modulus"], v["poisson_ratio"])
+    })
     _check_plastic(v["youngs_modulus"], v["poisson_ratio"], v["yield_stress"], v["isotropic_hardening"],
                    v["kinematic_hardening"], v["residual_yield_stress"], v["viscosity"])
-    row = np.zeros(N_VM_PARAMS)
-    row[P_E] = v["youngs_modulus"]
-    row[P_NU] = v["poisson_ratio"]
-    row[P_VISCOSITY] = v["viscosity"]
-    row[P_SIGMA_Y] = v["yield_stress"]
-    row[P_H_ISO] = v["isotropic_hardening"]
-    row[P_H_KIN] = v["kinematic_hardening"]
-    row[P_SIGMA_Y_RES] = v["residual_yield_stress"]
-    return row
+    # every column is named by PARAM_NAMES with the keyword of its argument
+    return param_row(_TABLES, {col: v[name] for col, name in PARAM_NAMES.items()})
 
 
 def von_mises_initial_state(n: int) -> np.ndarray:
     """Virgin state (n, N_VM_STATE): zero stress, plastic strain, alpha and back stress."""
-    return np.zeros((int(n), N_VM_STATE))
+    return initial_state(_TABLES, n)
 
 
 def von_mises_evaluate(strain, params, state_committed, dt: float = 0.0, want_tangent: bool = True):
@@ -457,15 +344,4 @@ def von_mises_evaluate(strain, params, state_committed, dt: float = 0.0, want_ta
     ValueError for a bad shape, parameter or dt; masonrydam.errors.NumericalError for a non-finite
     strain, state or result.
     """
-    strain, params, state_committed = check_batch(strain, params, state_committed, N_VM_PARAMS, N_VM_STATE)
-    params = check_von_mises_params(params)
-    dt = check_dt(dt)
-    n, ns = strain.shape
-    stress = np.empty((n, ns))
-    tangent = np.empty((n if want_tangent else 0, ns, ns))
-    state_trial = np.empty((n, N_VM_STATE))
-    info = np.zeros(2, dtype=np.int64)
-    status = von_mises_update(strain, params, state_committed, state_trial, stress, tangent, dt, bool(want_tangent),
-                              info)
-    raise_for_status(status, info, _LAW, PARAM_NAMES)
-    return stress, (tangent if want_tangent else None), state_trial
+    return evaluate(_TABLES, von_mises_update, check_von_mises_params, strain, params, state_committed, dt, want_tangent)

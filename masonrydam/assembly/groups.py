@@ -55,10 +55,46 @@ class ContinuumGroup:
     dN: np.ndarray = field(init=False)
     weights: np.ndarray = field(init=False)
     scatter: np.ndarray | None = None
+    #: "elastic", or an elasto-plastic law of :mod:`masonrydam.elements.continuum_plastic` ("von_mises",
+    #: "drucker_prager") with its parameter table (1, P) (:mod:`masonrydam.materials.von_mises`, ...)
+    law: str = "elastic"
+    law_params: np.ndarray | None = None
 
     def __post_init__(self):
         self.N, self.dN, self.weights = ck.element_tables(self.type)
-        self.info = np.zeros(1, dtype=np.int64)
+        self.info = np.zeros(2, dtype=np.int64)
+        if self.plastic:
+            from ..materials import drucker_prager, von_mises
+
+            n_state = von_mises.N_VM_STATE if self.law == "von_mises" else drucker_prager.N_DP_STATE
+            n = self.n_elem * len(self.weights)
+            self.state_committed = np.zeros((n, n_state))
+            self.state_trial = np.zeros((n, n_state))
+            self.param_index = np.zeros(self.n_elem, dtype=np.int64)
+            self.fe = np.zeros((self.n_elem, self.n_edof))
+            self.ke = np.zeros((self.n_elem, self.n_edof, self.n_edof))
+
+    @property
+    def plastic(self) -> bool:
+        return self.law != "elastic"
+
+    def evaluate(self, coords, u, want_tangent=True, dt=0.0):
+        """Elasto-plastic groups: internal forces ``fe`` and tangents ``ke`` at ``u`` from the committed
+        state (trial state written), :mod:`masonrydam.elements.continuum_plastic`."""
+        from ..elements.continuum_plastic import LAW_IDS, continuum_plastic_evaluate
+
+        st = continuum_plastic_evaluate(coords, self.conn, self.dN, self.weights, self.thickness, u, self.law_params,
+                                        self.param_index, self.state_committed, self.state_trial, dt, want_tangent,
+                                        LAW_IDS[self.law], self.fe, self.ke, self.info)
+        raise_for_status(st, self.info, self.name, f"{self.law.replace('_', ' ')} material")
+
+    def commit(self):
+        if self.plastic:
+            self.state_committed[:] = self.state_trial
+
+    def revert(self):
+        if self.plastic:
+            self.state_trial[:] = self.state_committed
 
     @property
     def n_elem(self) -> int:
@@ -85,6 +121,9 @@ class ContinuumGroup:
 
     def stress(self, coords: np.ndarray, u: np.ndarray) -> np.ndarray:
         ns = self.D_table.shape[1]
+        if self.plastic:  # the law's stress of the last evaluation (trial = committed after a step)
+            cols = [0, 1, 3] if ns == 3 else [0, 1, 2, 3, 4, 5]
+            return self.state_trial[:, cols].reshape(self.n_elem, len(self.weights), ns).copy()
         out = np.empty((self.n_elem, len(self.weights), ns))
         st = ck.continuum_stress(coords, self.conn, self.dN, self.D_table, self.material_index, u, out, self.info)
         raise_for_status(st, self.info, self.name, "stress")

@@ -102,6 +102,8 @@ class Model:
         # full-DOF continuum stiffness (constant for linear elastic blocks)
         rows, cols, vals = [], [], []
         for g in cgroups:
+            if g.plastic:  # evaluated at every iteration (evaluate), not part of the linear stiffness
+                continue
             ke = g.stiffness(self.coords)
             nd = g.n_edof
             rows.append(np.repeat(g.dofs, nd, axis=1).ravel())
@@ -109,7 +111,7 @@ class Model:
             vals.append(ke.reshape(len(ke), -1).ravel())
         self.K_continuum = sp.csr_matrix(
             (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(self.n_dof, self.n_dof)
-        )
+        ) if vals else sp.csr_matrix((self.n_dof, self.n_dof))
         self.K_continuum.sum_duplicates()
         self.dofmap: DofMap | None = None
         #: node sets whose DOFs are coupled all to all beyond the elements (e.g. the wetted face under a
@@ -118,7 +120,12 @@ class Model:
 
     @property
     def nonlinear(self) -> bool:
-        return any(g.nonlinear for g in self.igroups)
+        return any(g.nonlinear for g in self.igroups) or self.plastic
+
+    @property
+    def plastic(self) -> bool:
+        """Some continuum group is elasto-plastic: the blocks are not linear (no joint-space condensation)."""
+        return any(g.plastic for g in self.cgroups)
 
     def add_coupling(self, nodes: np.ndarray) -> None:
         """Couple every DOF of ``nodes`` with every other in the sparsity pattern (a dense block, e.g.
@@ -143,7 +150,8 @@ class Model:
             g.scatter = s
         self.K_linear_data = np.zeros(len(self.indices))
         for g in self.cgroups:
-            scatter_matrix(g.stiffness(self.coords), g.scatter, self.K_linear_data)
+            if not g.plastic:
+                scatter_matrix(g.stiffness(self.coords), g.scatter, self.K_linear_data)
 
     def evaluate(self, u: np.ndarray, want_tangent: bool = True):
         """Internal forces (n_dof,) N at all DOFs and the free-DOF tangent (CSR) at displacement ``u``.
@@ -154,6 +162,12 @@ class Model:
         self._continuum_force = (u.copy(), fc)
         f = fc.copy()
         data = self.K_linear_data.copy() if want_tangent else None
+        for g in self.cgroups:
+            if g.plastic:
+                g.evaluate(self.coords, u, want_tangent)
+                scatter_vector(g.fe, g.dofs, f)
+                if want_tangent:
+                    scatter_matrix(g.ke, g.scatter, data)
         for g in self.igroups:
             g.evaluate(self.coords, u, want_tangent)
             scatter_vector(g.fe, g.dofs, f)
@@ -181,10 +195,14 @@ class Model:
             g.params_table[:, P_OPEN_TANGENT] = factor
 
     def commit(self) -> None:
+        for g in self.cgroups:
+            g.commit()
         for g in self.igroups:
             g.commit()
 
     def revert(self) -> None:
+        for g in self.cgroups:
+            g.revert()
         for g in self.igroups:
             g.revert()
 

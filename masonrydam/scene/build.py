@@ -64,8 +64,10 @@ def build_model(scene: dict, mesh: Mesh) -> Model:
         m = mats[b.name]
         D = elasticity_matrix(m["youngs_modulus"], m["poisson_ratio"], hyp)[None, :, :]
         ne = len(b.cells)
+        law = m.get("law", "elastic")
         cgroups.append(ContinuumGroup(b.name, b.type, b.cells, DofMap.node_dofs(b.cells, dim), np.ascontiguousarray(D),
-                                      np.zeros(ne, dtype=np.int64), np.full(ne, t), np.full(ne, m["density"])))
+                                      np.zeros(ne, dtype=np.int64), np.full(ne, t), np.full(ne, m["density"]),
+                                      law=law, law_params=_law_params(m, b.name, dim, hyp)))
     joint_specs = scene["joints"]
     mesh_joints = mesh.joint_set_names()
     for name in mesh_joints:
@@ -87,6 +89,30 @@ def build_model(scene: dict, mesh: Mesh) -> Model:
         except ValueError as exc:
             raise SceneError(f"joints.{j.name}.integration", str(exc)) from None
     return Model(mesh.points, cgroups, igroups)
+
+
+def _law_params(m: dict, name: str, dim: int, hypothesis: str):
+    """The parameter table (1, P) of an elasto-plastic material, None for an elastic one."""
+    law = m.get("law", "elastic")
+    if law == "elastic":
+        return None
+    key = f"materials.{name}"
+    if dim == 2 and hypothesis != "plane_strain":
+        raise SceneError(f"{key}.law", f"\"{law}\" needs plane strain in 2D ([model] hypothesis = "
+                                       f"\"plane_strain\"; the laws keep the out-of-plane stress), got {hypothesis!r}")
+    from ..materials.drucker_prager import drucker_prager_params
+    from ..materials.von_mises import von_mises_params
+
+    try:
+        if law == "von_mises":
+            row = von_mises_params(m["youngs_modulus"], m["poisson_ratio"], m["yield_stress"],
+                                   m["isotropic_hardening"], m["kinematic_hardening"], 0.0, m["viscosity"])
+        else:
+            row = drucker_prager_params(m["youngs_modulus"], m["poisson_ratio"], m["cohesion"], m["friction_angle"],
+                                        m["dilation_angle"], m["cohesion_hardening"], 0.0, m["viscosity"], m["match"])
+    except ValueError as exc:
+        raise SceneError(key, str(exc)) from None
+    return np.ascontiguousarray(np.asarray(row, dtype=np.float64).reshape(1, -1))
 
 
 def _node_set(mesh: Mesh, name: str, key: str) -> np.ndarray:
@@ -369,11 +395,21 @@ def initial_velocity_field(model: Model, items: list, key: str) -> np.ndarray:
 def effects(scene: dict, model: Model) -> list[str]:
     """Human-readable list of what the run simulates."""
     m = scene["model"]
-    groups = ', '.join(sorted({g.name for g in model.cgroups}))
-    if model.dim == 2:
-        out = [f"{m['hypothesis'].replace('_', ' ')} linear elastic continuum ({groups}; thickness {m['thickness']:g} m)"]
-    else:
-        out = [f"3D linear elastic continuum ({groups})"]
+    groups = ', '.join(sorted({g.name for g in model.cgroups if not g.plastic}))
+    out = []
+    if groups:
+        if model.dim == 2:
+            out = [f"{m['hypothesis'].replace('_', ' ')} linear elastic continuum ({groups}; thickness {m['thickness']:g} m)"]
+        else:
+            out = [f"3D linear elastic continuum ({groups})"]
+    for g in model.cgroups:
+        if g.plastic:
+            mat = scene["materials"][g.name]
+            what = (f"von Mises, yield stress {mat['yield_stress']:g} Pa" if g.law == "von_mises" else
+                    f"Drucker-Prager ({mat['match'].replace('_', ' ')} match), c {mat['cohesion']:g} Pa, phi "
+                    f"{mat['friction_angle']:g} deg")
+            out.append(f"elasto-plastic continuum '{g.name}': {what}, implicit return mapping, consistent tangent "
+                       "(Simo & Hughes 1998; de Souza Neto et al. 2008)")
     mc_sets = [g.name for g in model.igroups if g.law == "mohr_coulomb"]
     lin_sets = [g.name for g in model.igroups if g.law == "linear"]
     if mc_sets:

@@ -123,9 +123,53 @@ def _mesh(d):
     return {"file": str(d["file"]), "joints": joints}
 
 
+#: continuum laws of ``[materials.<group>] law`` and their own keys (with defaults; None: required)
+CONTINUUM_LAWS = {
+    "elastic": {},
+    "von_mises": {"yield_stress": None, "isotropic_hardening": 0.0, "kinematic_hardening": 0.0, "viscosity": 0.0},
+    "drucker_prager": {"cohesion": None, "friction_angle": None, "dilation_angle": None, "cohesion_hardening": 0.0,
+                       "viscosity": 0.0, "match": "plane_strain"},
+}
+
+
+def _material_law(d, key) -> dict:
+    """The elasto-plastic part of a material (``law`` and its parameters; SI, angles in degrees)."""
+    law = _choice(d.get("law", "elastic"), tuple(CONTINUUM_LAWS), f"{key}.law")
+    spec = CONTINUUM_LAWS[law]
+    for k in d:
+        if k in {kk for other in CONTINUUM_LAWS.values() for kk in other} and k not in spec:
+            raise SceneError(f"{key}.{k}", f"is a parameter of another law; law is \"{law}\"")
+    out = {"law": law}
+    for k, default in spec.items():
+        if k not in d:
+            if default is None and not (k == "dilation_angle"):
+                raise SceneError(f"{key}.{k}", f"is required for law = \"{law}\"")
+            out[k] = default
+            continue
+        v = d[k]
+        if k in ("yield_stress", "cohesion"):
+            out[k] = _positive(v, "stress", f"{key}.{k}", allow_zero=(k == "cohesion"))
+        elif k in ("isotropic_hardening", "kinematic_hardening", "cohesion_hardening"):
+            out[k] = _number(v, f"{key}.{k}")
+            if out[k] < 0.0:
+                raise SceneError(f"{key}.{k}", f"{v!r} is softening: a softening continuum needs a regularisation "
+                                               "length (fracture energy per element size), which is not available "
+                                               "yet; use a hardening modulus >= 0")
+        elif k == "viscosity":
+            out[k] = _number(v, f"{key}.{k}")
+            if out[k] < 0.0:
+                raise SceneError(f"{key}.{k}", f"the Perzyna viscosity (Pa s) must be >= 0, got {v!r}")
+        elif k in ("friction_angle", "dilation_angle"):
+            out[k] = _number(v, f"{key}.{k}", 0.0, 89.9)
+        else:  # match
+            out[k] = _choice(v, ("plane_strain", "outer", "inner"), f"{key}.{k}")
+    return out
+
+
 def _material(name, d):
     key = f"materials.{name}"
-    _check_keys(d, {"model", "youngs_modulus", "poisson_ratio", "density"}, key)
+    _check_keys(d, {"model", "youngs_modulus", "poisson_ratio", "density", "law"}
+                | {k for spec in CONTINUUM_LAWS.values() for k in spec}, key)
     _choice(d.get("model", "linear_elastic"), ("linear_elastic",), f"{key}.model")
     for req in ("youngs_modulus", "poisson_ratio"):
         if req not in d:
@@ -136,7 +180,8 @@ def _material(name, d):
     if isinstance(nu, bool) or not isinstance(nu, (int, float)) or not (-1.0 < nu < 0.5):  # (nan fails too)
         raise SceneError(f"{key}.poisson_ratio", f"must be in (-1, 0.5), got {nu!r}")
     rho = _positive(d.get("density", 0.0), "density", f"{key}.density", allow_zero=True)
-    return {"model": "linear_elastic", "youngs_modulus": E, "poisson_ratio": float(nu), "density": rho}
+    return {"model": "linear_elastic", "youngs_modulus": E, "poisson_ratio": float(nu), "density": rho,
+            **_material_law(d, key)}
 
 
 def _joint(name, d):

@@ -874,6 +874,11 @@ class DynamicSolver:
     # ------------------------------------------------------------------------------------------
     def _setup(self, stage):
         m, s = self.model, self.s
+        if m.plastic:
+            names = [g.name for g in m.cgroups if g.plastic]
+            raise SceneError(f"materials.{names[0]}.law", f"elasto-plastic blocks ({', '.join(names)}) are not yet "
+                                                          "available in dynamic stages (static stages only); use law = "
+                                                          "\"elastic\" for a dynamic analysis")
         m.set_constraints(stage.supports)
         self.free = free = m.dofmap.free
         self.n = m.dofmap.n_eq

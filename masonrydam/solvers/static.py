@@ -297,8 +297,8 @@ class StaticSolver:
         from .joint_space import JointSpace, joint_space_size
 
         m, s = self.model, self.s
-        if s.joint_space == "off" or s.method != "newton" or not m.nonlinear:
-            return None
+        if s.joint_space == "off" or s.method != "newton" or not m.nonlinear or m.plastic:
+            return None  # (elasto-plastic blocks: the condensation needs linear blocks)
         if self._js_dofmap is m.dofmap:
             return self._js
         self._js, self._js_dofmap = None, m.dofmap

@@ -1,0 +1,132 @@
+"""Continuum elements whose material is elasto-plastic (issue 17): internal forces and the consistent
+tangent from the point laws of :mod:`masonrydam.materials.von_mises` and
+:mod:`masonrydam.materials.drucker_prager`, small strains, plane strain (2D, strain [exx, eyy, gxy])
+and 3D.
+
+Per element and Gauss point ``g`` (state row ``k = e * n_gp + g``)::
+
+    eps = B u_e,   (sigma, D_t) = law(eps, committed state, dt)
+    f_e += B^T sigma w det(J) t,   k_e += B^T D_t B w det(J) t
+
+(the standard displacement element with a path-dependent material: Zienkiewicz & Taylor, *The Finite
+Element Method*, vol. 2, 6th ed. 2005, ch. 3; Simo & Hughes 1998, sec. 3.4). ``k_e`` is assembled in
+full: the tangent of non-associated Drucker-Prager is not symmetric. The law writes the trial state;
+the model commits or reverts it with the joints' protocol.
+"""
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from ..errors import STATUS_NAN, STATUS_OK
+from ..materials.drucker_prager import drucker_prager_point
+from ..materials.plasticity import WORK_SIZE
+from ..materials.von_mises import von_mises_point
+from .continuum import DETJ_RTOL, _bad_det_status, _block_finite, _dim_tag, _gather_element, _gradients, _voigt_map
+
+#: law identifiers of :func:`continuum_plastic_evaluate`
+LAW_VON_MISES = 1
+LAW_DRUCKER_PRAGER = 2
+LAW_IDS = {"von_mises": LAW_VON_MISES, "drucker_prager": LAW_DRUCKER_PRAGER}
+
+
+@numba.njit(cache=True)
+def _plastic_impl(coords, conn, dN_ref, weights, thickness, u, params, param_index, state_committed, state_trial, dt,
+                  want_tangent, law, fe_out, ke_out, info, dim_tag):
+    n_elem = conn.shape[0]
+    nen = conn.shape[1]
+    dim = len(dim_tag)
+    n_gp = weights.shape[0]
+    ns = 3 if dim == 2 else 6
+    nd = nen * dim
+    V = _voigt_map(dim_tag)
+    xe = np.empty((nen, dim))
+    ue = np.empty((nen, dim))
+    J = np.empty((dim, dim))
+    dNdx = np.empty((dim, nen))
+    B = np.empty((ns, nd))
+    eps = np.empty(ns)
+    sig = np.empty(ns)
+    D = np.empty((ns, ns))
+    DB = np.empty((ns, nd))
+    work = np.empty(WORK_SIZE)
+    for e in range(n_elem):
+        h = _gather_element(coords, conn, e, xe, dim_tag)
+        tol = DETJ_RTOL * h**dim
+        for a in range(nen):
+            base = conn[e, a] * dim
+            for i in range(dim):
+                ue[a, i] = u[base + i]
+        t_e = thickness[e] if dim == 2 else 1.0
+        fe = fe_out[e]
+        for r in range(nd):
+            fe[r] = 0.0
+        if want_tangent:
+            ke = ke_out[e]
+            for r in range(nd):
+                for c in range(nd):
+                    ke[r, c] = 0.0
+        for g in range(n_gp):
+            det = _gradients(xe, dN_ref, g, tol, J, dNdx, dim_tag)
+            if not (det > tol):
+                return _bad_det_status(det, e, info)
+            f = weights[g] * det * t_e
+            # B (ns, nd): eps[V(i, j)] = sum_a (u_ai dN_a/dx_j + u_aj dN_a/dx_i) for i < j, u_ai dN_a/dx_i on i = j
+            for s in range(ns):
+                for c in range(nd):
+                    B[s, c] = 0.0
+            for a in range(nen):
+                for i in range(dim):
+                    for j in range(dim):
+                        B[V[i, j], a * dim + i] += dNdx[j, a] if i != j else dNdx[i, a]
+            for s in range(ns):
+                acc = 0.0
+                for c in range(nd):
+                    acc += B[s, c] * ue[c // dim, c % dim]
+                eps[s] = acc
+            k = e * n_gp + g
+            if law == 1:
+                st = von_mises_point(eps, params, param_index[e], state_committed, state_trial, k, dt, want_tangent,
+                                     sig, D, work)
+            else:
+                st = drucker_prager_point(eps, params, param_index[e], state_committed, state_trial, k, dt,
+                                          want_tangent, sig, D, work)
+            if st != STATUS_OK:
+                info[0] = e
+                return st
+            for c in range(nd):
+                acc = 0.0
+                for s in range(ns):
+                    acc += B[s, c] * sig[s]
+                fe[c] += f * acc
+            if want_tangent:
+                for s in range(ns):
+                    for c in range(nd):
+                        acc = 0.0
+                        for t in range(ns):
+                            acc += D[s, t] * B[t, c]
+                        DB[s, c] = acc
+                for r in range(nd):
+                    for c in range(nd):
+                        acc = 0.0
+                        for s in range(ns):
+                            acc += B[s, r] * DB[s, c]
+                        ke[r, c] += f * acc
+        if not _block_finite(fe):
+            info[0] = e
+            return STATUS_NAN
+    return STATUS_OK
+
+
+def continuum_plastic_evaluate(coords, conn, dN_ref, weights, thickness, u, params, param_index, state_committed,
+                               state_trial, dt, want_tangent, law, fe_out, ke_out, info):
+    """Internal forces ``fe_out`` (ne, nd) N and, with ``want_tangent``, the consistent tangents ``ke_out``
+    (ne, nd, nd) N/m of elasto-plastic elements at the displacement ``u`` (n_dof,) m.
+
+    params (n_mat, P) law parameters, param_index (ne,) row of each element; state_committed,
+    state_trial (ne * n_gp, S): the law's state per Gauss point (row ``e * n_gp + g``; the trial rows
+    are written); dt (s): the step's time for Perzyna viscosity; law: :data:`LAW_IDS` value. Returns a
+    status (the failing element in ``info[0]``; a law's own status, e.g. bad parameters, passes through).
+    """
+    return _plastic_impl(coords, conn, dN_ref, weights, thickness, u, params, param_index, state_committed,
+                         state_trial, float(dt), bool(want_tangent), int(law), fe_out, ke_out, info, _dim_tag(coords))

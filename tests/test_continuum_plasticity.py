@@ -1,0 +1,167 @@
+"""Elasto-plastic blocks (``[materials.<group>] law = "von_mises" | "drucker_prager"``, issue 17 sec. 1):
+the element integration of the point laws (masonrydam/elements/continuum_plastic.py; the laws are
+tested in tests/test_von_mises.py and tests/test_drucker_prager.py) in static stages.
+
+Closed forms (perfect plasticity, homogeneous stress, so the finite-element answer is exact):
+- a block pressed vertically with free lateral expansion: 3D, the uniaxial yield stress sigma_y
+  (von Mises) and, for Drucker-Prager matched to the outer Mohr-Coulomb cone, the Mohr-Coulomb uniaxial
+  compressive strength 2 c cos(phi) / (1 - sin(phi)) (de Souza Neto, Peric & Owen 2008, sec. 8.3);
+  plane strain, von Mises: the out-of-plane stress tends to half the axial one (plastic
+  incompressibility), so the axial stress tends to 2 sigma_y / sqrt(3) (Hill, The Mathematical Theory of
+  Plasticity, 1950, ch. VI);
+- the elastic start: E / (1 - nu^2) in plane strain, E in 3D.
+Element checks (the project's standard): zero force under a rigid translation, and the tangent equal
+to a finite difference of the internal force in the plastic range.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import masonrydam
+from masonrydam.errors import SceneError
+
+E, NU, SY = 2e11, 0.3, 2.5e8
+
+
+def pressed_block(dim, material, steps=20, strain=0.01):
+    if dim == 2:
+        mesh = {"generator": "blocks_2d", "parameters": {"element_size": 0.5, "blocks": [
+            {"x0": 0, "y0": 0, "x1": 1, "y1": 1, "group": "solid"}]}}
+        model = {"name": "pressed", "hypothesis": "plane_strain", "thickness": 1.0, "gravity": [0.0, 0.0]}
+        supports = [{"set": "base", "components": ["y"]}, {"set": "left", "components": ["x"]}]
+        load = {"type": "displacement", "set": "top", "components": ["y"], "value": [-strain]}
+    else:
+        mesh = {"generator": "blocks_3d", "parameters": {"element_size": 0.5, "blocks": [
+            {"x0": 0, "y0": 0, "z0": 0, "x1": 1, "y1": 1, "z1": 1, "group": "solid"}]}}
+        model = {"name": "pressed", "dimension": 3, "gravity": [0.0, 0.0, 0.0]}
+        supports = [{"set": "base", "components": ["z"]}, {"set": "left", "components": ["x"]},
+                    {"set": "front", "components": ["y"]}]
+        load = {"type": "displacement", "set": "top", "components": ["z"], "value": [-strain]}
+    return {"model": model, "mesh": mesh,
+            "materials": {"solid": dict({"youngs_modulus": E, "poisson_ratio": NU, "density": 0.0}, **material)},
+            "supports": supports, "stages": [{"name": "press", "steps": steps, "loads": [load]}]}
+
+
+def axial_stress(ds, dim):
+    comp = "y" if dim == 2 else "z"
+    coord = ds.y.values if dim == 2 else ds.z.values
+    top = coord > coord.max() - 1e-9
+    return -ds.reaction.sel(component=comp).values[:, top].sum(axis=1)  # area 1 m2 (1 m thick in 2D)
+
+
+def test_plane_strain_von_mises_tends_to_two_over_root_three():
+    ds = masonrydam.run(pressed_block(2, {"law": "von_mises", "yield_stress": SY}))
+    s = axial_stress(ds, 2)
+    assert s[0] == pytest.approx(E / (1 - NU**2) * 0.01 / 20, rel=1e-9)  # elastic first step
+    assert s[-1] == pytest.approx(2 * SY / math.sqrt(3), rel=1e-6)
+    assert np.all(np.diff(s) > 0)  # hardening towards the limit, never above it
+    assert s.max() <= 2 * SY / math.sqrt(3) * (1 + 1e-9)
+
+
+def test_3d_von_mises_yields_at_sigma_y():
+    ds = masonrydam.run(pressed_block(3, {"law": "von_mises", "yield_stress": SY}, steps=10))
+    s = axial_stress(ds, 3)
+    assert s[0] == pytest.approx(E * 0.001, rel=1e-9)
+    assert s[-1] == pytest.approx(SY, rel=1e-9)
+
+
+def test_3d_drucker_prager_outer_cone_gives_the_mohr_coulomb_strength():
+    c, phi = 5e6, 30.0
+    ds = masonrydam.run(pressed_block(3, {"law": "drucker_prager", "cohesion": c, "friction_angle": phi,
+                                          "match": "outer"}, steps=10, strain=0.002))
+    s = axial_stress(ds, 3)
+    p = math.radians(phi)
+    assert s[-1] == pytest.approx(2 * c * math.cos(p) / (1 - math.sin(p)), rel=1e-6)
+
+
+def test_element_rigid_translation_and_consistent_tangent():
+    from masonrydam.scene import Scene
+    from masonrydam.scene.build import build_mesh, build_model
+
+    sc = Scene(pressed_block(2, {"law": "von_mises", "yield_stress": SY, "isotropic_hardening": 1e10}))
+    model = build_model(sc.normalized, build_mesh(sc.normalized, sc.base_dir))
+    g = model.cgroups[0]
+    u = np.zeros(model.n_dof)
+    u[0::2], u[1::2] = 0.3, -0.2  # a rigid translation: no strain, no force
+    g.evaluate(model.coords, u, True)
+    assert np.abs(g.fe).max() < 1e-15 * E  # round-off of u = 0.3 m: strains of 1e-17
+    rng = np.random.default_rng(3)
+    x, y = model.coords[:, 0], model.coords[:, 1]
+    u = np.zeros(model.n_dof)
+    u[0::2] = 0.004 * x + 1e-4 * rng.standard_normal(len(x))  # well past yield (eps_y = 1.25e-3)
+    u[1::2] = -0.006 * y + 1e-4 * rng.standard_normal(len(x))
+    g.evaluate(model.coords, u, True)
+    K = g.ke.copy()
+    dofs = g.dofs[0]
+    h = 1e-9
+    for j in range(len(dofs)):
+        up, um = u.copy(), u.copy()
+        up[dofs[j]] += h
+        um[dofs[j]] -= h
+        g.evaluate(model.coords, up, False)
+        fp = g.fe[0].copy()
+        g.evaluate(model.coords, um, False)
+        fm = g.fe[0].copy()
+        np.testing.assert_allclose(K[0][:, j], (fp - fm) / (2 * h), rtol=1e-5, atol=1e-6 * np.abs(K[0]).max())
+
+
+def test_bad_plastic_materials():
+    s = pressed_block(2, {"law": "von_mises"})
+    with pytest.raises(SceneError) as err:
+        masonrydam.run(s)
+    assert err.value.key == "materials.solid.yield_stress"
+    s = pressed_block(2, {"law": "von_mises", "yield_stress": SY, "isotropic_hardening": -1e9})
+    with pytest.raises(SceneError) as err:
+        masonrydam.run(s)
+    assert err.value.key == "materials.solid.isotropic_hardening" and "regularisation" in str(err.value)
+    s = pressed_block(2, {"law": "von_mises", "yield_stress": SY, "viscosity": -1.0})
+    with pytest.raises(SceneError) as err:
+        masonrydam.run(s)
+    assert err.value.key == "materials.solid.viscosity"
+    s = pressed_block(2, {"law": "von_mises", "yield_stress": SY})
+    s["model"]["hypothesis"] = "plane_stress"
+    with pytest.raises(SceneError) as err:
+        masonrydam.run(s)
+    assert err.value.key == "materials.solid.law"
+    s = pressed_block(2, {"law": "plasticity"})
+    with pytest.raises(SceneError) as err:
+        masonrydam.run(s)
+    assert err.value.key == "materials.solid.law"
+    s = pressed_block(2, {"law": "von_mises", "yield_stress": SY, "cohesion": 1e6})
+    with pytest.raises(SceneError) as err:
+        masonrydam.run(s)
+    assert err.value.key == "materials.solid.cohesion"
+    s = pressed_block(2, {"law": "von_mises", "yield_stress": SY})
+    s["stages"].append({"name": "shake", "type": "dynamic", "dt": 0.01, "steps": 2,
+                        "ground_motion": {"x": {"values": [0.0, 1.0, 0.0], "dt": 0.01}}})
+    with pytest.raises(SceneError) as err:
+        masonrydam.run(s)
+    assert err.value.key == "materials.solid.law" and "dynamic" in str(err.value)
+
+
+def test_plastic_block_sliding_on_a_joint():
+    """A (von Mises, still elastic) block on a cohesionless joint, pushed sideways at its top: the push
+    levels off at the friction force tan(phi) W (Coulomb). The model mixes a plastic group with joints,
+    so the static solver takes the general Newton path (no joint-space condensation)."""
+    phi, rho, g = 30.0, 2400.0, 9.80665
+    s = {"model": {"name": "pushed", "thickness": 1.0, "hypothesis": "plane_strain"},
+         "mesh": {"generator": "blocks_2d", "parameters": {"element_size": 0.25, "blocks": [
+             {"x0": 0.0, "y0": -0.25, "x1": 1.0, "y1": 0.0, "group": "base"},
+             {"x0": 0.0, "y0": 0.0, "x1": 1.0, "y1": 0.5, "group": "block"}]}},
+         "materials": {"base": {"youngs_modulus": 3e10, "poisson_ratio": 0.2, "density": rho},
+                       "block": {"youngs_modulus": 3e10, "poisson_ratio": 0.2, "density": rho, "law": "von_mises",
+                                 "yield_stress": 3e7}},
+         "joints": {"joints": {"normal_stiffness": 1e11, "shear_stiffness": 1e11, "friction_angle": phi}},
+         "supports": [{"set": "base"}],
+         "stages": [{"name": "gravity", "loads": [{"type": "self_weight"}]},
+                    {"name": "push", "steps": 10, "loads": [{"type": "displacement", "set": "top", "components": ["x"],
+                                                              "value": [2e-4]}]}]}
+    ds = masonrydam.run(s)
+    top = ds.y.values > 0.49
+    push = ds.reaction.sel(component="x").values[:, top].sum(axis=1)
+    W = rho * g * 1.0 * 0.5
+    assert push[-1] == pytest.approx(math.tan(math.radians(phi)) * W, rel=1e-6)
+    assert ds.attrs.get("joint_space_size", 0) in (0, "0")

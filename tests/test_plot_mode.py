@@ -22,24 +22,17 @@ from masonrydam.cli.main import main
 from masonrydam.errors import MasonrydamError
 from masonrydam.results.mode_plot import AUTO_FRACTION, mode_figure
 
-B, H, RHO, KN, KS, T, HE = 2.0, 1.0, 2000.0, 1e9, 4e8, 1.0, 0.125
+from test_modal_stage import B, KN, KS, RHO  # the rigid block on a joint of the modal stage tests
+from test_modal_stage import scene as modal_scene
+
 N_MODES = 4
 
 
 def scene(modes=N_MODES):
-    s = {
-        "model": {"name": "block_modes", "thickness": T},
-        "mesh": {"generator": "blocks_2d", "parameters": {"element_size": HE, "blocks": [
-            {"x0": 0.0, "y0": -0.5, "x1": B, "y1": 0.0, "group": "base"},
-            {"x0": 0.0, "y0": 0.0, "x1": B, "y1": H, "group": "block"}]}},
-        "materials": {"base": {"youngs_modulus": 1e14, "poisson_ratio": 0.2, "density": RHO},
-                      "block": {"youngs_modulus": 1e14, "poisson_ratio": 0.2, "density": RHO}},
-        "joints": {"joints": {"law": "linear", "normal_stiffness": KN, "shear_stiffness": KS}},
-        "supports": [{"set": "base"}],
-        "stages": [{"name": "gravity", "loads": [{"type": "self_weight"}]}],
-    }
-    if modes:
-        s["stages"].append({"name": "modes", "type": "modal", "modes": modes})
+    """The modal stage's test scene with ``modes`` modes, or without a modal stage (``modes = 0``)."""
+    s = modal_scene(modes=modes or 1)
+    if not modes:
+        s["stages"] = s["stages"][:1]
     return s
 
 

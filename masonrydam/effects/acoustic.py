@@ -730,10 +730,16 @@ class AcousticMatrices:
         for cmp in range(dim):
             iota[cmp::dim, cmp] = 1.0
         Bfull = Qfull.T @ iota
+        #: the part of B from the face translating with the ground (``Q^T iota``) and the rest, the
+        #: reservoir bottom and banks (they move with the ground surface, which a foundation of mass
+        #: separates from the frame of the dam's displacements)
+        self.B_face = np.ascontiguousarray(Bfull[sel])
         if len(bf):
             Bfull += th * np.stack([np.bincount(bf.ravel(), weights=Nnb[:, :, cmp].ravel(), minlength=nf)
                                     for cmp in range(dim)], axis=1)
         self.B = np.ascontiguousarray(Bfull[sel])
+        self.B_bottom = self.B - self.B_face
+        self._H_factor = None
 
         self.face_nodes = np.unique(facets)
         self._face_interp = _face_interpolation(mesh, coords, facet_type, facets, self.face_nodes, sel)
@@ -766,11 +772,26 @@ class AcousticMatrices:
         Dense over the face DOFs (n_face_dof^2 numbers: fine in 2D, large for fine 3D faces)."""
         rows = np.flatnonzero(np.diff(self.Q.indptr))
         Qr = self.Q[rows]
-        X = spla.splu(self.H.tocsc()).solve(Qr.T.toarray())
+        X = self.solve_H(Qr.T.toarray())
         Ma = self.density * (Qr @ X)
         Ma = 0.5 * (Ma + Ma.T)
         out = sp.coo_matrix(Ma)
         return sp.csr_matrix((out.data, (rows[out.row], rows[out.col])), shape=(self.Q.shape[0],) * 2)
+
+    def solve_H(self, rhs) -> np.ndarray:
+        """``H^-1 rhs`` (n_free,) or (n_free, k), with one sparse LU of ``H`` kept for later calls."""
+        if self._H_factor is None:
+            self._H_factor = spla.splu(self.H.tocsc())
+        return self._H_factor.solve(np.asarray(rhs, dtype=np.float64))
+
+    def bottom_influence(self) -> np.ndarray | None:
+        """Incompressible water: the force on the dam per unit acceleration of the reservoir bottom and
+        banks, ``rho Q H^-1 B_bottom`` as (dim, n_dof) kg (the load is ``-bottom_influence . a_bottom``),
+        or None where the bottom cannot push the water (a flat bottom under horizontal motion only has a
+        zero column, all zero: None)."""
+        if not np.abs(self.B_bottom).max(initial=0.0) > 0.0:
+            return None
+        return self.density * np.asarray(self.Q @ self.solve_H(self.B_bottom)).T
 
 
 def acoustic_matrices(fluid_mesh, coords, facet_type, facets, inward_points, *, density, sound_speed,

@@ -106,10 +106,8 @@ class DynamicWater:
         self.length = length
         A = self.acoustic
         if self.incompressible:
-            from ..solvers.fluid import incompressible_added_mass
-
-            self._incompressible_mass, self.extra_influence = incompressible_added_mass(A.H, A.Q, A.B, self.density)
-            self._H_lu = None
+            self._incompressible_mass = A.added_mass()
+            self.extra_influence = A.bottom_influence()
 
     @property
     def coupled_nodes(self):
@@ -141,22 +139,13 @@ class DynamicWater:
             from ..solvers.fluid import AcousticStep
 
             A = self.acoustic
-            self._fluid_step = AcousticStep(A.G, A.H, A.L, A.Q, A.B, self.density)
+            self._fluid_step = AcousticStep(A.G, A.H, A.L, A.Q, A.B_face, A.B_bottom, self.density)
         return self._fluid_step
 
     # ------------------------------------------------------------------------------------------
     def _pressure_incompressible(self, a_abs, a_bottom):
-        import scipy.sparse.linalg as spla
-
         A = self.acoustic
-        if self._H_lu is None:
-            self._H_lu = spla.splu(sp.csc_matrix(A.H))
-            dim = self.model.dim
-            iota = np.zeros((self.model.n_dof, dim))
-            for c in range(dim):
-                iota[c::dim, c] = 1.0
-            self._B_bottom = A.B - np.asarray(A.Q.T @ iota)
-        return -self.density * self._H_lu.solve(A.Q.T @ a_abs + self._B_bottom @ a_bottom)
+        return -self.density * A.solve_H(A.Q.T @ a_abs + A.B_bottom @ a_bottom)
 
     def outputs(self, a_abs: np.ndarray, a_bottom: np.ndarray, fluid_state=None, mass=None) -> dict:
         """Step values for the result: ``hydrodynamic_force`` (dim,) N and ``face_pressure`` (n_nodes,) Pa

@@ -144,6 +144,16 @@ def _gather_element(coords, conn, e, xe, dim_tag):
 
 
 @numba.njit(cache=True)
+def _gather_displacements(u, conn, e, ue, dim_tag):
+    """Copy the displacements of element ``e``'s nodes from ``u`` (n_dof,) into ``ue`` (nen, dim)."""
+    dim = len(dim_tag)
+    for a in range(ue.shape[0]):
+        base = conn[e, a] * dim
+        for k in range(dim):
+            ue[a, k] = u[base + k]
+
+
+@numba.njit(cache=True)
 def _gradients(xe, dN_ref, g, tol, J, dNdx, dim_tag):
     """Jacobian at point ``g`` and, if ``det J > tol``, the physical gradients ``dNdx`` (dim, nen).
 
@@ -367,10 +377,7 @@ def _internal_force_impl(coords, conn, dN_ref, weights, D_table, material_index,
     for e in range(n_elem):
         h = _gather_element(coords, conn, e, xe, dim_tag)
         tol = DETJ_RTOL * h**dim
-        for a in range(nen):
-            base = conn[e, a] * dim
-            for k in range(dim):
-                ue[a, k] = u[base + k]
+        _gather_displacements(u, conn, e, ue, dim_tag)
         mat = material_index[e]
         t_e = thickness[e] if dim == 2 else 1.0
         fe = fe_out[e]
@@ -566,10 +573,7 @@ def _stress_impl(coords, conn, dN_ref, D_table, material_index, u, stress_out, i
     for e in range(n_elem):
         h = _gather_element(coords, conn, e, xe, dim_tag)
         tol = DETJ_RTOL * h**dim
-        for a in range(nen):
-            base = conn[e, a] * dim
-            for k in range(dim):
-                ue[a, k] = u[base + k]
+        _gather_displacements(u, conn, e, ue, dim_tag)
         mat = material_index[e]
         for g in range(n_pt):
             det = _gradients(xe, dN_ref, g, tol, J, dNdx, dim_tag)

@@ -22,7 +22,8 @@ from ..errors import STATUS_NAN, STATUS_OK
 from ..materials.drucker_prager import drucker_prager_point
 from ..materials.plasticity import WORK_SIZE
 from ..materials.von_mises import von_mises_point
-from .continuum import DETJ_RTOL, _bad_det_status, _block_finite, _dim_tag, _gather_element, _gradients, _voigt_map
+from .continuum import (DETJ_RTOL, _bad_det_status, _block_finite, _dim_tag, _gather_displacements, _gather_element,
+                        _gradients, _voigt_map)
 
 #: law identifiers of :func:`continuum_plastic_evaluate`
 LAW_VON_MISES = 1
@@ -53,10 +54,7 @@ def _plastic_impl(coords, conn, dN_ref, weights, thickness, u, params, param_ind
     for e in range(n_elem):
         h = _gather_element(coords, conn, e, xe, dim_tag)
         tol = DETJ_RTOL * h**dim
-        for a in range(nen):
-            base = conn[e, a] * dim
-            for i in range(dim):
-                ue[a, i] = u[base + i]
+        _gather_displacements(u, conn, e, ue, dim_tag)
         t_e = thickness[e] if dim == 2 else 1.0
         fe = fe_out[e]
         for r in range(nd):

@@ -34,7 +34,8 @@ condensation of :mod:`.joint_space` applies unchanged, and a step costs one more
 the water's ``A`` plus two dense products of size ``n_p x n_w``. After the dam's step has converged the
 water is advanced with the same ``a1`` (:meth:`AcousticStep.finish`). For incompressible water
 (``G = L = 0``) ``M_w = rho Q H^-1 Q^T`` does not depend on ``h``: that case is a constant added mass and
-the run puts it in the mass matrix instead (:func:`incompressible_added_mass`).
+the run puts it in the mass matrix instead
+(:meth:`masonrydam.effects.acoustic.AcousticMatrices.added_mass`).
 
 Why written here: the condensation needs the integrator's coefficients and the dam's DOF numbering.
 ``A`` (symmetric positive definite, a 2D or 3D Laplacian-like matrix) gets the L D L^T with numba
@@ -54,34 +55,6 @@ import scipy.sparse.linalg as spla
 from .linear import SingularMatrix, SymmetricFactorization
 
 
-def incompressible_added_mass(H, Q, B, density):
-    """(M_a (n_dof, n_dof) CSR kg, extra (dim, n_dof) kg): the added mass ``rho Q H^-1 Q^T`` of
-    incompressible water and the part of its ground-motion load that is not ``M_a iota``: the reservoir
-    bottom moving with the ground, ``-rho Q H^-1 (B - Q^T iota)`` per unit ground acceleration, returned
-    as the extra influence ``rho Q H^-1 (B - Q^T iota)`` (the effective earthquake force is ``-(M iota +
-    extra) a_g``)."""
-    lu = spla.splu(sp.csc_matrix(H))
-    Qc = sp.csr_matrix(Q)
-    wet = np.unique(Qc.nonzero()[0])
-    Qw = Qc[wet].toarray()  # (n_w, n_p)
-    Z = lu.solve(np.ascontiguousarray(Qw.T))  # (n_p, n_w)
-    Mw = density * (Qw @ Z)
-    Mw = 0.5 * (Mw + Mw.T)
-    n_dof = Qc.shape[0]
-    rows = np.repeat(wet, len(wet))
-    cols = np.tile(wet, len(wet))
-    Ma = sp.csr_matrix((Mw.ravel(), (rows, cols)), shape=(n_dof, n_dof))
-    dim = B.shape[1]
-    extra = np.zeros((dim, n_dof))
-    for c in range(dim):
-        iota = np.zeros(n_dof)
-        iota[c::dim] = 1.0
-        rest = B[:, c] - Qc.T @ iota
-        if np.abs(rest).max(initial=0.0) > 0.0:
-            extra[c] = density * (Qc @ lu.solve(rest))
-    return Ma, extra
-
-
 @dataclass
 class FluidState:
     """Pressures (Pa) and their first two time derivatives on the free pressure unknowns (n_p,)."""
@@ -95,25 +68,20 @@ class AcousticStep:
     """The compressible reservoir of one dynamic stage (see the module docstring).
 
     G, H, L: (n_p, n_p) sparse (s2/m2, 1, s/m; times thickness in 2D); Q: (n_dof, n_p) sparse (m2);
-    B: (n_p, dim) (m2); density: kg/m3. :meth:`attach` binds it to the stage's free DOFs and integrator."""
+    B_face, B_bottom: (n_p, dim) (m2), the ground's load split into the face translating with the frame
+    (``Q^T iota``) and the reservoir bottom and banks, which move with the ground surface
+    (:class:`masonrydam.effects.acoustic.AcousticMatrices`); density: kg/m3. :meth:`attach` binds it to
+    the stage's free DOFs and integrator."""
 
-    def __init__(self, G, H, L, Q, B, density):
+    def __init__(self, G, H, L, Q, B_face, B_bottom, density):
         self.G, self.H, self.L = (sp.csr_matrix(x) for x in (G, H, L))
         self.Q = sp.csr_matrix(Q)
-        self.B = np.asarray(B, dtype=np.float64)
+        self.B_face = np.asarray(B_face, dtype=np.float64)
+        self.B_bottom = np.asarray(B_bottom, dtype=np.float64)
         self.rho = float(density)
         self.n_p = self.G.shape[0]
         #: wetted DOFs (full-DOF indices, sorted)
         self.wet = np.unique(self.Q.nonzero()[0])
-        dim = self.B.shape[1]
-        n_dof = self.Q.shape[0]
-        iota = np.zeros((n_dof, dim))
-        for c in range(dim):
-            iota[c::dim, c] = 1.0
-        #: the ground's load split: the face translating with the frame (Q^T iota) and the reservoir
-        #: bottom and banks (the rest of B), which move with the ground surface
-        self.B_face = np.asarray(self.Q.T @ iota)
-        self.B_bottom = self.B - self.B_face
         self._systems = {}
 
     def attach(self, eq_of_dof: np.ndarray, coefficients) -> None:

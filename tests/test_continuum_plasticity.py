@@ -134,12 +134,6 @@ def test_bad_plastic_materials():
     with pytest.raises(SceneError) as err:
         masonrydam.run(s)
     assert err.value.key == "materials.solid.cohesion"
-    s = pressed_block(2, {"law": "von_mises", "yield_stress": SY})
-    s["stages"].append({"name": "shake", "type": "dynamic", "dt": 0.01, "steps": 2,
-                        "ground_motion": {"x": {"values": [0.0, 1.0, 0.0], "dt": 0.01}}})
-    with pytest.raises(SceneError) as err:
-        masonrydam.run(s)
-    assert err.value.key == "materials.solid.law" and "dynamic" in str(err.value)
 
 
 def test_plastic_block_sliding_on_a_joint():

@@ -59,10 +59,18 @@ class ContinuumGroup:
     #: "drucker_prager") with its parameter table (1, P) (:mod:`masonrydam.materials.von_mises`, ...)
     law: str = "elastic"
     law_params: np.ndarray | None = None
+    #: "small" (linear kinematics) or "large": total Lagrangian St. Venant-Kirchhoff elements
+    #: (:mod:`masonrydam.elements.continuum_large`), evaluated at every iteration like a plastic group
+    kinematics: str = "small"
 
     def __post_init__(self):
         self.N, self.dN, self.weights = ck.element_tables(self.type)
         self.info = np.zeros(2, dtype=np.int64)
+        if self.large:
+            self.fe = np.zeros((self.n_elem, self.n_edof))
+            self.ke = np.zeros((self.n_elem, self.n_edof, self.n_edof))
+            #: elastic energy (ne,) J of the last evaluation
+            self.energy = np.zeros(self.n_elem)
         if self.plastic:
             from ..materials import drucker_prager, von_mises
 
@@ -78,9 +86,27 @@ class ContinuumGroup:
     def plastic(self) -> bool:
         return self.law != "elastic"
 
+    @property
+    def large(self) -> bool:
+        return self.kinematics == "large"
+
+    @property
+    def nonlinear(self) -> bool:
+        """Evaluated at every iteration (elasto-plastic or large kinematics), not part of the constant
+        linear stiffness."""
+        return self.plastic or self.large
+
     def evaluate(self, coords, u, want_tangent=True, dt=0.0):
-        """Elasto-plastic groups: internal forces ``fe`` and tangents ``ke`` at ``u`` from the committed
-        state (trial state written), :mod:`masonrydam.elements.continuum_plastic`."""
+        """Nonlinear groups: internal forces ``fe`` and tangents ``ke`` at ``u``: elasto-plastic from the
+        committed state (trial state written), :mod:`masonrydam.elements.continuum_plastic`; large
+        kinematics, :mod:`masonrydam.elements.continuum_large` (``energy`` written too)."""
+        if self.large:
+            from ..elements.continuum_large import continuum_large_evaluate
+
+            st = continuum_large_evaluate(coords, self.conn, self.dN, self.weights, self.D_table, self.material_index,
+                                          self.thickness, u, want_tangent, self.fe, self.ke, self.energy, self.info)
+            raise_for_status(st, self.info, self.name, "large-displacement element")
+            return
         from ..elements.continuum_plastic import LAW_IDS, continuum_plastic_evaluate
 
         st = continuum_plastic_evaluate(coords, self.conn, self.dN, self.weights, self.thickness, u, self.law_params,
@@ -125,6 +151,13 @@ class ContinuumGroup:
             cols = [0, 1, 3] if ns == 3 else [0, 1, 2, 3, 4, 5]
             return self.state_trial[:, cols].reshape(self.n_elem, len(self.weights), ns).copy()
         out = np.empty((self.n_elem, len(self.weights), ns))
+        if self.large:  # Cauchy stress of the current configuration
+            from ..elements.continuum_large import continuum_cauchy_stress
+
+            st = continuum_cauchy_stress(coords, self.conn, self.dN, self.D_table, self.material_index, u, out,
+                                         self.info)
+            raise_for_status(st, self.info, self.name, "stress (inverted deformation, det F <= 0)")
+            return out
         st = ck.continuum_stress(coords, self.conn, self.dN, self.D_table, self.material_index, u, out, self.info)
         raise_for_status(st, self.info, self.name, "stress")
         return out
@@ -138,8 +171,12 @@ class InterfaceGroup:
     law: 'mohr_coulomb' or 'linear' (a linear joint never changes state: tension is carried).
     """
 
-    def __init__(self, name, type_, conn, coords, dim, params, thickness, law, scheme, n_points=None):
+    def __init__(self, name, type_, conn, coords, dim, params, thickness, law, scheme, n_points=None,
+                 kinematics="small"):
         self.name, self.type, self.law, self.scheme = name, type_, law, scheme
+        #: "small" (frame of the reference mid-surface) or "large" (frame of the current mid-surface,
+        #: :mod:`masonrydam.elements.interface_large`)
+        self.kinematics = kinematics
         self.conn = np.ascontiguousarray(conn, dtype=np.int64)
         self.dofs = DofMap.node_dofs(self.conn, dim)
         face = INTERFACE_FACE_TYPE[type_]
@@ -179,7 +216,10 @@ class InterfaceGroup:
 
     def evaluate(self, coords, u, want_tangent=True):
         """Evaluate tractions, nodal forces and (optionally) tangents from the committed state."""
-        st = ik.interface_evaluate(coords, self.conn, u, self.N, self.dN, self.weights, self.thickness,
+        kernel = ik.interface_evaluate
+        if self.kinematics == "large":
+            from ..elements.interface_large import interface_large_evaluate as kernel
+        st = kernel(coords, self.conn, u, self.N, self.dN, self.weights, self.thickness,
                                    self.params_table, self.param_index, self.state_base, self.state_trial,
                                    self.delta, self.traction, self.fe, self.ke, want_tangent, self.info)
         raise_for_status(st, self.info, self.name, "joint evaluation")

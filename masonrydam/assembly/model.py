@@ -102,7 +102,7 @@ class Model:
         # full-DOF continuum stiffness (constant for linear elastic blocks)
         rows, cols, vals = [], [], []
         for g in cgroups:
-            if g.plastic:  # evaluated at every iteration (evaluate), not part of the linear stiffness
+            if g.nonlinear:  # evaluated at every iteration (evaluate), not part of the linear stiffness
                 continue
             ke = g.stiffness(self.coords)
             nd = g.n_edof
@@ -117,15 +117,46 @@ class Model:
         #: node sets whose DOFs are coupled all to all beyond the elements (e.g. the wetted face under a
         #: reservoir condensed on it): (1, n_nodes * dim) DOF arrays, part of the sparsity pattern
         self.couplings: list[np.ndarray] = []
+        #: time (s) of the step being solved, seen by rate-dependent (Perzyna) laws of elasto-plastic
+        #: groups; 0 is a rate-independent step (the solvers set it: the dynamic step, a static stage's
+        #: time per load step)
+        self.time_step = 0.0
 
     @property
     def nonlinear(self) -> bool:
-        return any(g.nonlinear for g in self.igroups) or self.plastic
+        return any(g.nonlinear for g in self.igroups) or self.continuum_nonlinear or self.large
 
     @property
     def plastic(self) -> bool:
         """Some continuum group is elasto-plastic: the blocks are not linear (no joint-space condensation)."""
         return any(g.plastic for g in self.cgroups)
+
+    @property
+    def large(self) -> bool:
+        """Large kinematics (``[model] kinematics = "large"``): total Lagrangian blocks and joints whose
+        frame turns with them."""
+        return any(g.large for g in self.cgroups) or any(g.kinematics == "large" for g in self.igroups)
+
+    @property
+    def continuum_nonlinear(self) -> bool:
+        """Some continuum group is evaluated at every iteration (plastic or large kinematics)."""
+        return any(g.nonlinear for g in self.cgroups)
+
+    @property
+    def condensable(self) -> bool:
+        """Linear blocks and small kinematics: the tangent of sticking joints is the constant elastic one,
+        so the joint-space condensation and the all-stick factorization apply."""
+        return not (self.continuum_nonlinear or self.large)
+
+    def continuum_energy(self, u: np.ndarray) -> float:
+        """Elastic energy of the blocks (J) at ``u``: ``u K_c u / 2`` of the linear groups plus the St.
+        Venant-Kirchhoff energy of large-kinematics groups (from their last evaluation if it was at ``u``,
+        else evaluated). Elasto-plastic groups are not included (their work is integrated by the caller)."""
+        cached = self._continuum_force
+        if self.large and not (cached is not None and np.array_equal(cached[0], u)):
+            self.continuum_force(u)
+        e = 0.5 * float(u @ (self.K_continuum @ u))
+        return e + sum(float(g.energy.sum()) for g in self.cgroups if g.large)
 
     def add_coupling(self, nodes: np.ndarray) -> None:
         """Couple every DOF of ``nodes`` with every other in the sparsity pattern (a dense block, e.g.
@@ -150,8 +181,45 @@ class Model:
             g.scatter = s
         self.K_linear_data = np.zeros(len(self.indices))
         for g in self.cgroups:
-            if not g.plastic:
+            if not g.nonlinear:
                 scatter_matrix(g.stiffness(self.coords), g.scatter, self.K_linear_data)
+
+    def elastic_continuum_data(self) -> np.ndarray:
+        """Free-DOF values (pattern) of the blocks' initial elastic stiffness: ``K_linear_data`` plus the
+        small-strain stiffness of the nonlinear groups (their tangent at rest), for the matrices that
+        stand for "the elastic structure" (Rayleigh damping, the all-stick reference factorization,
+        modal analysis). ``K_linear_data`` itself when every group is linear."""
+        if not self.continuum_nonlinear:
+            return self.K_linear_data
+        cached = getattr(self, "_elastic_data", None)
+        if cached is not None and cached[0] is self.dofmap:
+            return cached[1]
+        data = self.K_linear_data.copy()
+        for g in self.cgroups:
+            if g.nonlinear:
+                scatter_matrix(g.stiffness(self.coords), g.scatter, data)
+        self._elastic_data = (self.dofmap, data)
+        return data
+
+    @property
+    def K_continuum_elastic(self) -> sp.csr_matrix:
+        """Full-DOF initial elastic stiffness of all blocks (``K_continuum`` when every group is linear)."""
+        if not self.continuum_nonlinear:
+            return self.K_continuum
+        cached = getattr(self, "_K_elastic_full", None)
+        if cached is None:
+            rows, cols, vals = [], [], []
+            for g in self.cgroups:
+                if g.nonlinear:
+                    ke = g.stiffness(self.coords)
+                    nd = g.n_edof
+                    rows.append(np.repeat(g.dofs, nd, axis=1).ravel())
+                    cols.append(np.tile(g.dofs, (1, nd)).ravel())
+                    vals.append(ke.reshape(len(ke), -1).ravel())
+            extra = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                                  shape=(self.n_dof, self.n_dof))
+            cached = self._K_elastic_full = (self.K_continuum + extra).tocsr()
+        return cached
 
     def evaluate(self, u: np.ndarray, want_tangent: bool = True):
         """Internal forces (n_dof,) N at all DOFs and the free-DOF tangent (CSR) at displacement ``u``.
@@ -159,15 +227,15 @@ class Model:
         Interfaces are evaluated from their committed state (trial state updated).
         """
         fc = self.K_continuum @ u
-        self._continuum_force = (u.copy(), fc)
-        f = fc.copy()
         data = self.K_linear_data.copy() if want_tangent else None
         for g in self.cgroups:
-            if g.plastic:
-                g.evaluate(self.coords, u, want_tangent)
-                scatter_vector(g.fe, g.dofs, f)
+            if g.nonlinear:
+                g.evaluate(self.coords, u, want_tangent, self.time_step)
+                scatter_vector(g.fe, g.dofs, fc)
                 if want_tangent:
                     scatter_matrix(g.ke, g.scatter, data)
+        self._continuum_force = (u.copy(), fc)
+        f = fc.copy()
         for g in self.igroups:
             g.evaluate(self.coords, u, want_tangent)
             scatter_vector(g.fe, g.dofs, f)
@@ -180,12 +248,19 @@ class Model:
         return f, K
 
     def continuum_force(self, u: np.ndarray) -> np.ndarray:
-        """``K_continuum @ u`` (n_dof,) N: the one :meth:`evaluate` computed if it was called last at this very
-        ``u`` (a comparison instead of a sparse product), else computed. The array is shared: do not modify."""
+        """The blocks' internal forces (n_dof,) N at ``u`` (``K_continuum @ u`` plus the nonlinear groups'
+        forces): the ones :meth:`evaluate` computed if it was called last at this very ``u`` (a comparison
+        instead of a sparse product), else computed (nonlinear groups evaluated, forces only). The array
+        is shared: do not modify."""
         cached = self._continuum_force
         if cached is not None and np.array_equal(cached[0], u):
             return cached[1]
-        return self.K_continuum @ u
+        fc = self.K_continuum @ u
+        for g in self.cgroups:
+            if g.nonlinear:
+                g.evaluate(self.coords, u, False, self.time_step)
+                scatter_vector(g.fe, g.dofs, fc)
+        return fc
 
     def set_open_tangent(self, factor: float) -> None:
         """Tangent factor of open joint points (0: consistent; 1: initial stiffness). Residuals unchanged."""

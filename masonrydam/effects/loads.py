@@ -95,8 +95,12 @@ def edge_traction(model, facet_type: str, facets: np.ndarray, thickness: float, 
 
 # -- scene schema: the load types of a static stage ([[stages.loads]]) ----------------------------------
 def _self_weight(d, key, dim):
-    check_keys(d, {"type", "factor"}, key)
-    return {"type": "self_weight", "factor": number(d.get("factor", 1.0), f"{key}.factor")}
+    check_keys(d, {"type", "factor", "acceleration"}, key)
+    out = {"type": "self_weight", "factor": number(d.get("factor", 1.0), f"{key}.factor")}
+    if "acceleration" in d:  # a body force rho a in another direction than gravity (pseudo-static seismic
+        # coefficient, a tilt-table test): replaces [model] gravity for this load
+        out["acceleration"] = vector(d["acceleration"], "acceleration", f"{key}.acceleration", dim)
+    return out
 
 
 def _needs_set(d, key):
@@ -159,7 +163,7 @@ def _effects():
     rows = [("displacement", "prescribed displacements (displacement control)", "load type 'displacement'"),
             ("nodal", "nodal forces", "load type 'nodal'"),
             ("pressure", "{facet} pressures", "load type 'pressure' (or 'edge_pressure')"),
-            ("self_weight", "self-weight", "load type 'self_weight' (gravity of [model])"),
+            ("self_weight", "self-weight", "load type 'self_weight' (gravity of [model], or its acceleration)"),
             ("traction", "{facet} tractions", "load type 'traction' (or 'edge_traction')")]
     return [Effect(name, asked, __name__, ref, "tests/test_system.py, tests/test_solid3d.py", _describe(name, text))
             for name, text, asked in rows]

@@ -74,6 +74,8 @@ N_COMMON_STATE = 14
 CODE_ELASTIC = 0
 CODE_PLASTIC = 1  # smooth part of the surface (von Mises cylinder, Drucker-Prager cone)
 CODE_APEX = 2  # Drucker-Prager apex
+CODE_EDGE_RIGHT = 3  # Mohr-Coulomb / Tresca edge sigma_2 = sigma_3 (planes 1-3 and 1-2 active)
+CODE_EDGE_LEFT = 4  # Mohr-Coulomb / Tresca edge sigma_1 = sigma_2 (planes 1-3 and 2-3 active)
 
 #: Status of a kernel that met an inadmissible material parameter or time step (``info[0]`` = the
 #: point, ``info[1]`` = the parameter column, -1 for ``dt``). Local to the plasticity kernels: the

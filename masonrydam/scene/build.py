@@ -17,6 +17,7 @@ from ..assembly.model import Model
 from ..errors import SceneError
 from ..materials import mohr_coulomb as mc
 from ..materials.elastic import elasticity_matrix
+from ..materials.plasticity import P_VISCOSITY
 from ..mesh.io import read_mesh
 from ..mesh.model import Mesh
 from ..solvers.static import StaticStage
@@ -59,15 +60,20 @@ def build_model(scene: dict, mesh: Mesh) -> Model:
     for name in mats:
         if name not in mesh_groups:
             raise SceneError(f"materials.{name}", f"the mesh has no element group '{name}' (mesh groups: {mesh_groups})")
+    kinematics = scene["model"].get("kinematics", "small")
     cgroups = []
     for b in mesh.blocks:
         m = mats[b.name]
         D = elasticity_matrix(m["youngs_modulus"], m["poisson_ratio"], hyp)[None, :, :]
         ne = len(b.cells)
         law = m.get("law", "elastic")
+        if kinematics == "large" and law != "elastic":
+            raise SceneError(f"materials.{b.name}.law", f"\"{law}\" is a small-strain law: with [model] kinematics = "
+                                                        "\"large\" the blocks must be elastic (St. Venant-Kirchhoff); "
+                                                        "use kinematics = \"small\" for elasto-plastic blocks")
         cgroups.append(ContinuumGroup(b.name, b.type, b.cells, DofMap.node_dofs(b.cells, dim), np.ascontiguousarray(D),
                                       np.zeros(ne, dtype=np.int64), np.full(ne, t), np.full(ne, m["density"]),
-                                      law=law, law_params=_law_params(m, b.name, dim, hyp)))
+                                      law=law, law_params=_law_params(m, b.name, dim, hyp), kinematics=kinematics))
     joint_specs = scene["joints"]
     mesh_joints = mesh.joint_set_names()
     for name in mesh_joints:
@@ -85,7 +91,8 @@ def build_model(scene: dict, mesh: Mesh) -> Model:
             scheme = "lobatto"  # 3x3 Newton-Cotes: the lumped corner weights of quad8 are negative
         try:
             igroups.append(InterfaceGroup(j.name, j.type, j.cells, mesh.points, dim, joint_param_vector(spec),
-                                          np.full(len(j.cells), t), spec["law"], scheme, spec.get("points")))
+                                          np.full(len(j.cells), t), spec["law"], scheme, spec.get("points"),
+                                          kinematics=kinematics))
         except ValueError as exc:
             raise SceneError(f"joints.{j.name}.integration", str(exc)) from None
     return Model(mesh.points, cgroups, igroups)
@@ -327,6 +334,8 @@ def build_stages(scene: dict, mesh: Mesh, model: Model, base_dir: Path | None = 
                     raise SceneError(f"{key}.level", f"{ld['level']:g} m is not above the lowest point of the face "
                                                      f"'{reservoir.face.name}' ({reservoir.face.bottom:g} m)")
                 water_levels = (start, end)
+            elif ld["type"] == "self_weight" and "acceleration" in ld:  # a body force in its own direction
+                force += ld["factor"] * L.self_weight(model, ld["acceleration"])
             elif ld["type"] == "self_weight":
                 if weight is None:
                     weight = L.self_weight(model, scene["model"]["gravity"])
@@ -359,8 +368,13 @@ def build_stages(scene: dict, mesh: Mesh, model: Model, base_dir: Path | None = 
             start, end = water_levels
             water = StageWater(reservoir, start, end)
             water_levels = (end, end)  # later stages keep the water where this one left it
+        viscous = [g.name for g in model.cgroups if g.plastic and g.law_params[0, P_VISCOSITY] > 0]
+        if viscous and "duration" not in st:
+            raise SceneError(f"stages[{i}].duration", f"blocks {viscous} have Perzyna viscosity: a static stage needs "
+                                                      "its duration (s), the time over which its load is applied (set "
+                                                      "viscosity = 0 for a rate-independent law)")
         stages.append(StaticStage(st["name"], st["steps"], force, presc, incr, supports.copy(), water=water,
-                                  until_failure=st.get("until_failure", False)))
+                                  until_failure=st.get("until_failure", False), duration=st.get("duration", 0.0)))
         held = presc.copy()
     return stages
 
@@ -402,6 +416,10 @@ def effects(scene: dict, model: Model) -> list[str]:
             out = [f"{m['hypothesis'].replace('_', ' ')} linear elastic continuum ({groups}; thickness {m['thickness']:g} m)"]
         else:
             out = [f"3D linear elastic continuum ({groups})"]
+    if model.large:
+        out.append("large displacements: total Lagrangian St. Venant-Kirchhoff blocks (Green-Lagrange strain, second "
+                   "Piola-Kirchhoff stress; Bathe 1996 sec. 6.2.3) and joints whose frame turns with their current "
+                   "mid-surface")
     for g in model.cgroups:
         if g.plastic:
             mat = scene["materials"][g.name]

@@ -52,8 +52,12 @@ def plain(value):
     return copy.deepcopy(value)
 
 
+#: [model] kinematics: small displacements (linear) or large (total Lagrangian, rotating joint frames)
+KINEMATICS = ("small", "large")
+
+
 def _model(d):
-    _check_keys(d, {"name", "dimension", "hypothesis", "thickness", "gravity"}, "model")
+    _check_keys(d, {"name", "dimension", "hypothesis", "thickness", "gravity", "kinematics"}, "model")
     dim = _int(d.get("dimension", 2), "model.dimension")
     if dim not in (2, 3):
         raise SceneError("model.dimension", f"must be 2 or 3, got {dim}")
@@ -70,6 +74,8 @@ def _model(d):
         out["thickness"] = 1.0
         gravity = [0.0, 0.0, -G_STANDARD]
     out["gravity"] = _vector(d.get("gravity", gravity), "acceleration", "model.gravity", dim)
+    # "large": total Lagrangian blocks and joints whose frame turns with them (issue 17)
+    out["kinematics"] = _choice(d.get("kinematics", "small"), KINEMATICS, "model.kinematics")
     return out
 
 
@@ -660,7 +666,7 @@ def normalize(raw: dict) -> dict:
         if st and st[-1]["type"] in ("dynamic", "modal"):
             raise SceneError(f"{key}.type", "static stages must come before the modal and dynamic stages (they "
                                             "continue from the static state)")
-        _check_keys(s, {"name", "type", "steps", "loads", "until_failure"}, key)
+        _check_keys(s, {"name", "type", "steps", "loads", "until_failure", "duration"}, key)
         loads = s.get("loads", [])
         if not isinstance(loads, list):
             raise SceneError(f"{key}.loads", "expected an array of tables [[stages.loads]]")
@@ -668,6 +674,8 @@ def normalize(raw: dict) -> dict:
                    "steps": _int(s.get("steps", 1), f"{key}.steps", 1),
                    "until_failure": _bool(s.get("until_failure", False), f"{key}.until_failure"),
                    "loads": [_load(ld, f"{key}.loads[{j}]", dim) for j, ld in enumerate(loads)]})
+        if "duration" in s:  # physical time, for rate-dependent (Perzyna) blocks
+            st[-1]["duration"] = _positive(s["duration"], "time", f"{key}.duration")
         if st[-1]["until_failure"] and i != len(stages) - 1:
             raise SceneError(f"{key}.until_failure", "applies to the last stage only (the run ends where the stage "
                                                      "finds no equilibrium)")

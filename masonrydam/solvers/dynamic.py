@@ -874,11 +874,6 @@ class DynamicSolver:
     # ------------------------------------------------------------------------------------------
     def _setup(self, stage):
         m, s = self.model, self.s
-        if m.plastic:
-            names = [g.name for g in m.cgroups if g.plastic]
-            raise SceneError(f"materials.{names[0]}.law", f"elasto-plastic blocks ({', '.join(names)}) are not yet "
-                                                          "available in dynamic stages (static stages only); use law = "
-                                                          "\"elastic\" for a dynamic analysis")
         m.set_constraints(stage.supports)
         self.free = free = m.dofmap.free
         self.n = m.dofmap.n_eq
@@ -887,10 +882,10 @@ class DynamicSolver:
         d = s.damping
         self.damped = d is not None and d.active
         if self.damped:
-            Kd = m.K_linear_data if d.exclude_joints else self.Kel
+            Kd = m.elastic_continuum_data() if d.exclude_joints else self.Kel
             # mass-proportional damping of the continuum's own mass, not of the water's added mass
             self.Cdata = d.alpha * self.mass.structural_data + d.beta * Kd
-            Cf = d.alpha * self.mass.structural_full + d.beta * m.K_continuum
+            Cf = d.alpha * self.mass.structural_full + d.beta * m.K_continuum_elastic
             if not d.exclude_joints:
                 if self._Kj_full is None:
                     self._Kj_full = elastic_joint_full(m)
@@ -1016,6 +1011,8 @@ class DynamicSolver:
         elastic one, bitwise (the stick tangent depends on nothing but the geometry and ks, kn)."""
         from ..materials.mohr_coulomb import S_CODE, STICK
 
+        if not self.model.condensable:  # nonlinear blocks or large kinematics: the tangent moves anyway
+            return False
         return all((g.state_trial[:, :, S_CODE] == STICK).all() for g in self.model.igroups if g.nonlinear)
 
     def _add(self, h):
@@ -1138,6 +1135,7 @@ class DynamicSolver:
         self.f_static = np.zeros(m.n_dof) if f_static is None else np.asarray(f_static, dtype=np.float64).copy()
         dtc = self.check_stability()
         m.set_open_tangent(OPEN_TANGENT_DYNAMIC)
+        m.time_step = 0.0  # the state carried over, not a step in time
         try:
             f_int, K = m.evaluate(u, want_tangent=True)
             fs = self.f_static[free].copy()
@@ -1171,14 +1169,14 @@ class DynamicSolver:
             else:
                 a = np.array(a0, dtype=np.float64)
             st = _StepState(t0, 0.0, u, v, a, f_int, None if np.array_equal(K.data, self.Kel) else K.data.copy(), ag0)
-            st.Kc_u = m.K_continuum @ u
+            st.Kc_u = m.continuum_force(u)
             st.joints = self._joint_snapshot()
             if self.fluid is not None:  # the water from the stage before, or at rest
                 st.fluid = fluid0 if fluid0 is not None else self.fluid.initial_state()
                 st.fw = self.fluid.force(st.fluid)
             en = dict.fromkeys(ENERGY_KEYS, 0.0) if energy0 is None else dict(energy0)
             self._en_ref = {"kinetic0": 0.5 * float(v[free] @ self._Mf(v[free])) - en.get("kinetic", 0.0),
-                            "strain0": 0.5 * float(u @ st.Kc_u) - en.get("strain", 0.0),
+                            "strain0": self._strain_energy(u, st.Kc_u) - en.get("strain", 0.0),
                             "stored0": self._joint_stored() - en.get("joint_stored", 0.0)}
             st.energy = en
             self._energy_scale = max(abs(en.get(key, 0.0)) for key in ENERGY_SCALE_KEYS)
@@ -1229,7 +1227,7 @@ class DynamicSolver:
         the size allow (``self._js_by_h`` stays empty otherwise)."""
         self._js_by_h = {}
         s, m = self.s, self.model
-        if s.joint_space == "off" or not m.nonlinear:
+        if s.joint_space == "off" or not m.nonlinear or not m.condensable:
             return
         size = joint_space_size(m)
         self._new_joint_space(ref, s.dt)
@@ -1318,7 +1316,10 @@ class DynamicSolver:
         e["joint"] += float(w[3])
         kinetic_before = e["kinetic"]
         e["kinetic"] = float(w[4]) - self._en_ref["kinetic0"]
-        e["strain"] = 0.5 * float(st.u @ st.Kc_u) - self._en_ref["strain0"]
+        if self.model.plastic:  # the blocks' work, trapezoidal: stored energy and plastic dissipation together
+            e["strain"] = prev.energy["strain"] + 0.5 * float((st.u - prev.u) @ (prev.Kc_u + st.Kc_u))
+        else:
+            e["strain"] = self._strain_energy(st.u, st.Kc_u) - self._en_ref["strain0"]
         numerical = float(w[5]) - (e["kinetic"] - kinetic_before)
         if self.s.integrator != "central_difference":
             _, _, am, af = self.s.coefficients()
@@ -1337,6 +1338,13 @@ class DynamicSolver:
                                                    + e["joint_friction"] + e["joint_bond_break"]
                                                    + e["joint_contact"] + e["numerical"])
         st.energy = e
+
+    def _strain_energy(self, u, Kc_u) -> float:
+        """The blocks' elastic energy (J) at ``u`` (``Kc_u`` their forces there): ``u K_c u / 2`` for linear
+        blocks, plus the exact St. Venant-Kirchhoff energy of large-kinematics groups."""
+        if self.model.large:
+            return self.model.continuum_energy(u)
+        return 0.5 * float(u @ Kc_u)
 
     def _joint_weights(self):
         if self._joint_weight is None:
@@ -1559,6 +1567,7 @@ class DynamicSolver:
         for the joint-space iteration's sake took 2 484 of 2 801 refusals on the Koyna example at
         tolerance 1e-5 and held the steps small after them)."""
         m, s = self.model, self.s
+        m.time_step = h  # (Perzyna laws of elasto-plastic blocks)
         free = self.free
         beta, gamma, am, af = s.coefficients()
         w_m = (1.0 - am) / (1.0 - af)
@@ -1832,6 +1841,7 @@ class DynamicSolver:
             if h <= 1e-9 * s.dt:
                 break
             v_half = st.v[free] + 0.5 * h * st.a[free]
+            m.time_step = h
             u = st.u.copy()
             u[free] += h * v_half
             f_int, _ = m.evaluate(u, want_tangent=False)

@@ -292,7 +292,7 @@ def elastic_tangent_data(model) -> np.ndarray:
     Summed in the same order as :meth:`Model.evaluate` (continuum values, then each interface group
     scattered in turn), so that a tangent evaluated with all joints sticking is bitwise equal to it.
     """
-    data = model.K_linear_data.copy()
+    data = model.elastic_continuum_data().copy()
     for g, ke in _elastic_joint_parts(model):
         scatter_matrix(ke, g.scatter, data)
     return data

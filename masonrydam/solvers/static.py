@@ -91,6 +91,9 @@ class StaticStage:
     supports: np.ndarray
     water: object = None
     until_failure: bool = False
+    #: physical time of the stage (s): a load step of load-factor increment d_lambda lasts
+    #: ``duration * d_lambda``, the time step of rate-dependent (Perzyna) blocks; 0: no time (instantaneous)
+    duration: float = 0.0
 
 
 #: a static stage whose joint set is too large for the dense flexibility (JOINT_SPACE_MAX) is condensed
@@ -297,8 +300,8 @@ class StaticSolver:
         from .joint_space import JointSpace, joint_space_size
 
         m, s = self.model, self.s
-        if s.joint_space == "off" or s.method != "newton" or not m.nonlinear or m.plastic:
-            return None  # (elasto-plastic blocks: the condensation needs linear blocks)
+        if s.joint_space == "off" or s.method != "newton" or not m.nonlinear or not m.condensable:
+            return None  # (elasto-plastic blocks, large kinematics: the condensation needs linear blocks)
         if self._js_dofmap is m.dofmap:
             return self._js
         self._js, self._js_dofmap = None, m.dofmap
@@ -513,6 +516,7 @@ class StaticSolver:
                 dl = min(dlam, 1.0 - lam)
                 target = lam + dl
                 trial = u.copy()
+                m.time_step = st.duration * dl
                 trial[st.prescribed] = u_start[st.prescribed] + target * st.increment[st.prescribed]
                 f_ext = f_base + target * st.force
                 state_load = None

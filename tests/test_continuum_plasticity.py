@@ -77,6 +77,22 @@ def test_3d_drucker_prager_outer_cone_gives_the_mohr_coulomb_strength():
     assert s[-1] == pytest.approx(2 * c * math.cos(p) / (1 - math.sin(p)), rel=1e-6)
 
 
+def test_plane_strain_mohr_coulomb_and_tresca_strengths():
+    """Plane strain, lateral face free: the out-of-plane stress stays the intermediate principal stress, so
+    the main-plane return of Mohr-Coulomb gives the uniaxial strength 2 c cos(phi) / (1 - sin(phi)) and
+    Tresca sigma_y (de Souza Neto et al. 2008, sec. 8.1; Chen & Han, Plasticity for Structural Engineers,
+    1988, ch. 2). (A 3D cube pressed with free lateral faces sits on the edge sigma_1 = sigma_2 of both
+    laws, where associated flow leaves the lateral split undetermined: its tangent is singular.)"""
+    c, phi = 5e6, 30.0
+    ds = masonrydam.run(pressed_block(2, {"law": "mohr_coulomb", "cohesion": c, "friction_angle": phi},
+                                      steps=10, strain=0.002))
+    p = math.radians(phi)
+    assert axial_stress(ds, 2)[-1] == pytest.approx(2 * c * math.cos(p) / (1 - math.sin(p)), rel=1e-6)
+    assert "Mohr-Coulomb" in ds.attrs["simulated_effects"]
+    ds = masonrydam.run(pressed_block(2, {"law": "tresca", "yield_stress": SY}, steps=10))
+    assert axial_stress(ds, 2)[-1] == pytest.approx(SY, rel=1e-9)
+
+
 def test_element_rigid_translation_and_consistent_tangent():
     from masonrydam.scene import Scene
     from masonrydam.scene.build import build_mesh, build_model
@@ -189,19 +205,20 @@ def _punch_mesh(path, h_fine=0.02, h_coarse=0.3, L=3.0, D=2.0, b=0.5):
         gmsh.finalize()
 
 
-def test_prandtl_punch(tmp_path):
-    """A smooth rigid strip footing on a von Mises (Tresca in plane strain) half-space: the limit pressure
-    is (2 + pi) k, k = sigma_y / sqrt(3) the shear strength (Prandtl 1920; Hill 1950, ch. VIII). With
-    quad8 elements of 0.02 B at the punch edge (B the footing width) the pressure levels off within 3 % of
-    it (measured 1.7 % above; 4.2 % with 0.05 B); quad4 elements lock (plastic incompressibility) and
-    overshoot by 37 % and more, still rising."""
+@pytest.mark.parametrize("law,integration", [("von_mises", "full"), ("tresca", "reduced")])
+def test_prandtl_punch(tmp_path, law, integration):
+    """A smooth rigid strip footing on a von Mises or Tresca half-space (plane strain): the limit pressure
+    is (2 + pi) k, k the shear strength, sigma_y / sqrt(3) for von Mises and sigma_y / 2 for Tresca
+    (Prandtl 1920; Hill 1950, ch. VIII). With quad8 elements of 0.02 B at the punch edge (B the footing
+    width) the pressure levels off within 3 % of it (von Mises, full 3 x 3 rule: 1.7 % above; 4.2 % with
+    0.05 B); quad4 elements lock (plastic incompressibility) and overshoot by 37 % and more, still rising."""
     _punch_mesh(tmp_path / "punch.msh")
     sy = 1e6
-    k = sy / math.sqrt(3)
+    k = sy / math.sqrt(3) if law == "von_mises" else sy / 2
     s = {"model": {"name": "punch", "hypothesis": "plane_strain", "thickness": 1.0, "gravity": [0.0, 0.0]},
          "mesh": {"file": str(tmp_path / "punch.msh")},
-         "materials": {"soil": {"youngs_modulus": 1e9, "poisson_ratio": 0.3, "density": 0.0, "law": "von_mises",
-                                "yield_stress": sy}},
+         "materials": {"soil": {"youngs_modulus": 1e9, "poisson_ratio": 0.3, "density": 0.0, "law": law,
+                                "yield_stress": sy, "integration": integration}},
          "supports": [{"set": "sym", "components": ["x"]}, {"set": "bottom"}, {"set": "far", "components": ["x"]}],
          "solver": {"max_iterations": 60},
          "stages": [{"name": "press", "steps": 40, "loads": [{"type": "displacement", "set": "punch",
@@ -212,3 +229,93 @@ def test_prandtl_punch(tmp_path):
     q = -ds.reaction.sel(component="y").values[:, under].sum(axis=1) / 0.5
     assert q[-1] / k == pytest.approx(2 + math.pi, rel=0.03)
     assert q[-1] / q[-10] - 1 < 0.002  # a plateau, not a locked, still rising curve
+
+
+def test_plastic_block_under_an_impact_dynamic():
+    """Dynamic stage with an elasto-plastic block: a von Mises cube (massless, uniaxial stress, E A / L =
+    k, yield force F_y = sigma_y A) stopping a mass M launched at v0. Energy: M v0^2 / 2 = F_y u_y / 2 +
+    F_y (u_max - u_y), so u_max = 3 u_y for the v0 chosen; the mass then vibrates elastically about the
+    permanent set u_max - u_y = 2 u_y (elastic-perfectly plastic oscillator, Chopra, Dynamics of
+    Structures, 4th ed. 2012, sec. 7.3). The energy balance closes with the blocks' work (stored and
+    plastic together, trapezoidal)."""
+    rho, t_top = 1.0e4, 0.25  # the mass: a stiff, dense plate on the plastic cube
+    M, k, Fy = rho * t_top, E, SY
+    uy = Fy / k
+    v0 = math.sqrt(2 * Fy * (3 * uy - uy / 2) / M)
+    T = 2 * math.pi * math.sqrt(M / k)
+    scene = {"model": {"name": "plastic_spring", "dimension": 3, "gravity": [0.0, 0.0, 0.0]},
+             "mesh": {"generator": "blocks_3d", "parameters": {"element_size": 1.0, "blocks": [
+                 {"x0": 0, "y0": 0, "z0": 0, "x1": 1, "y1": 1, "z1": 1, "group": "spring"},
+                 {"x0": 0, "y0": 0, "z0": 1, "x1": 1, "y1": 1, "z1": 1 + t_top, "group": "mass"}]}},
+             "materials": {"spring": {"youngs_modulus": E, "poisson_ratio": NU, "density": 0.0, "law": "von_mises",
+                                      "yield_stress": SY},
+                           "mass": {"youngs_modulus": 1e12, "poisson_ratio": 0.0, "density": rho}},
+             # stiff across, nearly free along: the plate does not hold the cube's lateral (plastic) expansion
+             "joints": {"joints": {"law": "linear", "normal_stiffness": 1e14, "shear_stiffness": 1e6}},
+             "supports": [{"set": "base", "components": ["z"]}, {"set": "left", "components": ["x"]},
+                          {"set": "front", "components": ["y"]}],
+             "stages": [{"name": "impact", "type": "dynamic", "dt": T / 200, "duration": 2.0 * T,
+                         "integrator": "newmark_average", "mass": "consistent",
+                         "initial_velocity": {"groups": ["mass"], "velocity": [0.0, 0.0, -v0]},
+                         "output": {"stride": 1}}]}
+    ds = masonrydam.run(scene)
+    dyn = ds.where(~np.isnan(ds.time), drop=True)
+    top = np.abs(ds.z.values - 1 - t_top) < 1e-9
+    w = -dyn.displacement.sel(component="z").values[:, top].mean(axis=1)
+    assert w.max() == pytest.approx(3 * uy, rel=0.01)  # (the plate's and joint's own compliance: 0.7 %)
+    assert w[len(w) // 2:].mean() == pytest.approx(2 * uy, rel=0.01)
+    assert abs(float(dyn.energy_error[-1])) < 1e-9 * float(dyn.energy_strain[-1])
+    # the cube's work: the plastic dissipation F_y (u_max - u_y) plus at most its elastic energy F_y u_y / 2
+    stored = float(dyn.energy_strain[-1]) - Fy * (w.max() - uy)
+    assert 0.0 <= stored <= 0.5 * Fy * uy * 1.01
+
+
+def _softening_bar(h, regularisation_length, H=-5e9):
+    """A 3D bar 0.1 x 0.1 x 1 m pulled at its top; a band one element thick at mid-height yields first
+    (0.99 sigma_y). The band's faces slide freely on the bar (shear-soft linear joints), so its stress
+    stays uniaxial."""
+    def material(sy):
+        return {"youngs_modulus": E, "poisson_ratio": NU, "density": 0.0, "law": "von_mises", "yield_stress": sy,
+                "isotropic_hardening": H, "regularisation_length": regularisation_length}
+    return {"model": {"name": "softening_bar", "dimension": 3, "gravity": [0.0, 0.0, 0.0]},
+            "mesh": {"generator": "blocks_3d", "parameters": {"element_size": h, "blocks": [
+                {"x0": 0, "y0": 0, "z0": 0, "x1": 0.1, "y1": 0.1, "z1": 0.5 - h / 2, "group": "bar"},
+                {"x0": 0, "y0": 0, "z0": 0.5 - h / 2, "x1": 0.1, "y1": 0.1, "z1": 0.5 + h / 2, "group": "band"},
+                {"x0": 0, "y0": 0, "z0": 0.5 + h / 2, "x1": 0.1, "y1": 0.1, "z1": 1.0, "group": "bar"}]}},
+            "materials": {"bar": material(SY), "band": material(0.99 * SY)},
+            "joints": {"joints": {"law": "linear", "normal_stiffness": 1e15, "shear_stiffness": 1e6}},
+            "supports": [{"set": "base", "components": ["z"]}, {"set": "left", "components": ["x"]},
+                         {"set": "front", "components": ["y"]}],
+            "stages": [{"name": "pull", "steps": 40, "loads": [{"type": "displacement", "set": "top",
+                                                                 "components": ["z"], "value": [8e-3]}]}]}
+
+
+def test_regularised_softening_is_mesh_objective():
+    """Crack-band regularisation (Bazant & Oh 1983; Pietruszczak & Mroz 1981): each element softens with
+    H_e = H l_e / l_ref, so a band of any thickness l_e dissipates the same energy and the bar's softening
+    branch does not depend on the mesh. Closed form (uniaxial stress, elastic bar of length L, band
+    softening linearly to zero): w = sigma L / E + (sigma_b - sigma) l_ref / |H|, zero load at
+    w = sigma_b l_ref / |H|. Without the scaling (l_ref = l_e) the branch moves with the mesh."""
+    H, l_ref, L = -5e9, 0.1, 1.0
+    sb = 0.99 * SY
+    branches = []
+    for h in (0.1, 0.05):
+        ds = masonrydam.run(_softening_bar(h, l_ref, H))
+        top = ds.z.values > 1 - 1e-9
+        F = ds.reaction.sel(component="z").values[:, top].sum(axis=1) / 0.01  # average stress, Pa
+        w = ds.displacement.sel(component="z").values[:, top].mean(axis=1)
+        soft = (w > 2e-3) & (w < 4.5e-3)
+        expected = (w[soft] - sb * l_ref / abs(H)) / (L / E - l_ref / abs(H))
+        np.testing.assert_allclose(F[soft], expected, rtol=0.02, atol=0.01 * SY)
+        assert np.abs(F[w > 5.1e-3]).max() < 1e-3 * SY  # fully softened: no load
+        branches.append(F)
+    # not regularised (the modulus of each mesh's own element size): the finer band dissipates half
+    ds = masonrydam.run(_softening_bar(0.05, 0.05, H))
+    top = ds.z.values > 1 - 1e-9
+    F = ds.reaction.sel(component="z").values[:, top].sum(axis=1) / 0.01
+    w = ds.displacement.sel(component="z").values[:, top].mean(axis=1)
+    assert np.abs(F[w > 2.6e-3]).max() < 1e-3 * SY  # at zero load already at sigma_b l_e / |H| = 2.5 mm
+    with pytest.raises(SceneError) as err:  # the largest element would snap back
+        masonrydam.run(_softening_bar(0.1, 1e-4, H))
+    assert err.value.key in ("materials.bar.isotropic_hardening", "materials.band.isotropic_hardening")
+    assert "snap" in str(err.value) or "too steep" in str(err.value)

@@ -295,8 +295,8 @@ def _half_cycle(ds):
 
 def test_housner_free_rocking_half_cycle():
     """Reference problem 3: a 0.5 x 2.0 m block launched about its corner so that it reaches half its
-    slenderness angle comes back upright within 3 % of the nonlinear equation of motion (and closer as
-    dt falls); with small kinematics the same block comes back about a third too early."""
+    slenderness angle comes back upright within 3 % of the nonlinear equation of motion (1 % asserted, at two
+    time steps); with small kinematics the same block comes back about a third too early."""
     b, h = 0.25, 1.0
     R, alpha = math.hypot(b, h), math.atan(b / h)
     p2 = 3 * G / (4 * R)
@@ -312,9 +312,9 @@ def test_housner_free_rocking_half_cycle():
     for dt in (0.005, 0.0025):
         t_half, theta_max = _half_cycle(masonrydam.run(_rocking_scene("large", dt, 1.05 * t_ref, w0)))
         errors.append(abs(t_half / t_ref - 1))
-        assert t_half == pytest.approx(t_ref, rel=0.03)
-        assert theta_max == pytest.approx(alpha / 2, rel=0.03)
-    assert errors[1] < errors[0]  # converging with the step (the launch's contact release is O(dt))
+        assert t_half == pytest.approx(t_ref, rel=0.01)  # (the issue asks for 3 %; measured 0.14 %)
+        assert theta_max == pytest.approx(alpha / 2, rel=0.01)
+    assert abs(errors[1] - errors[0]) < 0.005  # the same at half the step: converged in dt
     t_small, _ = _half_cycle(masonrydam.run(_rocking_scene("small", 0.005, 1.05 * t_ref, w0)))
     assert t_small < 0.8 * t_ref  # linearised rotation: the error the issue reported
 

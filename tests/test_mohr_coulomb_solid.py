@@ -3,11 +3,11 @@ of the principal-space helpers it uses (masonrydam.materials.principal_return).
 
 Sources: de Souza Neto, Peric & Owen (2008), Computational Methods for Plasticity: the Mohr-Coulomb
 planes, the return to the main plane, the edges and the apex (sec. 8.2.2, boxes 8.4-8.5), the
-hardening variable eps_bar_dot = 2 cos(phi) gamma_dot, the consistent tangent (sec. 8.2.3) and the
+hardening variable eps_bar_dot = 2 cos(phi) gamma_dot, the consistent tangent (sec. 8.2) and the
 tangent of isotropic tensor functions (appendix A, box A.6, eqs. A.46-A.48); Perzyna viscoplasticity
 after Simo & Hughes (1998), Computational Inelasticity, sec. 2.7, and de Souza Neto et al.
 sec. 11.5; closed-form strengths after Chen & Han (1988), Plasticity for Structural Engineers,
-sec. 2.3 (tension positive: uniaxial compressive strength 2 c cos(phi) / (1 - sin(phi)), tensile
+ch. 2 (tension positive: uniaxial compressive strength 2 c cos(phi) / (1 - sin(phi)), tensile
 strength 2 c cos(phi) / (1 + sin(phi)), triaxial compression |sigma_3| = p0 (1 + sin phi) /
 (1 - sin phi) + 2 c cos(phi) / (1 - sin(phi)), plane strain t + sigma_m sin(phi) = c cos(phi)).
 """
@@ -282,6 +282,26 @@ def test_simple_shear_non_dilatant(ns):
 
 
 @pytest.mark.parametrize("psi", [0.0, 10.0, PHI])
+def test_plane_strain_pure_shear_with_free_normal_strains(psi):
+    """Plane strain (ns = 3), gxy driven, sxx = syy = 0 held by a Newton on exx, eyy: the in-plane Mohr
+    circle has centre sigma_m = 0 and radius tau, and szz = nu (sxx + syy) = 0 stays the intermediate
+    principal stress (the main-plane flow N = (1 + sin psi, 0, -(1 - sin psi)) has no part along z, so
+    eps_e_zz = 0), hence Phi_13 = 2 tau - 2 c cos(phi) = 0: tau = c cos(phi) for every psi (Chen & Han
+    1988: t + sigma_m sin(phi) = c cos(phi)). The dilatancy goes into the free normal strains: the
+    plastic volume change per engineering plastic shear is d eps_v / d gamma_p = sin(psi) (principal
+    plastic strains dgamma (1 + sin psi, 0, -(1 - sin psi)) at +-45 degrees)."""
+    prm = params(psi)
+    path = [[g] for g in np.linspace(0.2, 6.0, 30) * EPS_C]
+    s, state, iters = mixed_control(prm, [2], path, [0, 1], np.zeros(2), ns=3)
+    assert s[-1, 2] == pytest.approx(C * COS, rel=1e-10)
+    assert state[0, S_CODE] == CODE_PLASTIC
+    assert iters <= 4
+    ep = state[0, S_PLASTIC_STRAIN:S_PLASTIC_STRAIN + 6]
+    assert ep[2] == pytest.approx(0.0, abs=1e-13 * abs(ep[3]))
+    assert ep[:3].sum() == pytest.approx(math.sin(math.radians(psi)) * ep[3], rel=1e-9, abs=1e-13 * abs(ep[3]))
+
+
+@pytest.mark.parametrize("psi", [0.0, 10.0, PHI])
 def test_plane_strain_collapse(psi):
     """Plane strain (ns = 3), syy = -p0 held, exx compressed far into the plastic range: the in-plane
     stresses satisfy t + sigma_m sin(phi) = c cos(phi) (Chen & Han 1988; de Souza Neto et al.
@@ -372,19 +392,25 @@ def test_returns_land_on_their_planes(name, psi):
 
 def test_plane_strain_equals_3d_in_every_region():
     """A plane-strain point equals a 3D point with ezz = gyz = gzx = 0 (stress, tangent block, state)
-    through the main plane, both edges and the apex."""
+    in each region from a virgin state and along a history through them."""
     prm = params(10.0, H=0.01 * G)
-    st2, st3 = mohr_coulomb_solid_initial_state(1), mohr_coulomb_solid_initial_state(1)
-    codes = set()
-    for d in ([-1.0, 0.3, 2.0], [1.0, 0.2, 0.3], [-3.0, 0.5, 4.0], [4.0, 5.0, 0.1], [-6.0, -1.0, 3.0]):
-        eps = np.array(d) * 3 * EPS_C
+
+    def both(eps, st2, st3):
         s2, D2, st2 = evaluate(eps, prm, st2)
         s3, D3, st3 = evaluate(np.array([eps[0], eps[1], 0, eps[2], 0, 0]), prm, st3)
         assert np.allclose(s2, s3[PS], rtol=0, atol=1e-9 * C)
         assert np.allclose(D2, D3[np.ix_(PS, PS)], rtol=0, atol=1e-9 * E)
         assert np.allclose(st2, st3, rtol=0, atol=1e-12 * C)
+        return st2, st3
+
+    codes = set()
+    for e2 in (M2, R2, L2, A2):
+        st2, _ = both(np.array(e2) * EPS_C, mohr_coulomb_solid_initial_state(1), mohr_coulomb_solid_initial_state(1))
         codes.add(int(st2[0, S_CODE]))
     assert codes == {CODE_PLASTIC, CODE_EDGE_RIGHT, CODE_EDGE_LEFT, CODE_APEX}
+    st2, st3 = mohr_coulomb_solid_initial_state(1), mohr_coulomb_solid_initial_state(1)
+    for e2 in (M2, R2, L2, A2, [-6.0, -1.0, 3.0]):
+        st2, st3 = both(np.array(e2) * EPS_C, st2, st3)
 
 
 def test_elastic_step_returns_elastic_matrix():
@@ -405,33 +431,30 @@ def test_elastic_step_returns_elastic_matrix():
 # consistent tangent
 # ---------------------------------------------------------------------------------------------
 
+M3, M2 = [-3.0, -0.6, 1.8, 0.9, 0.3, 0.0], [-3.0, 0.9, 6.0]  # main plane
+R3, R2 = [3.0, -1.35, -1.65, 0.15, 0.0, 0.0], [1.0, 0.2, 0.3]  # right edge
+L3, L2 = [3.3, 2.7, -6.0, 0.0, 0.3, 0.0], [-9.0, 1.5, 12.0]  # left edge
+A3, A2 = [12.0, 10.5, 11.4, 0.6, -0.3, 0.3], [12.0, 15.0, 0.3]  # apex
+
 TANGENT_CASES = {
-    # name: (psi, H / G, c_res / C, eta / G (s), dt, 3D direction, plane-strain direction, factor, code)
-    "main_assoc": (PHI, 0.0, 0.0, 0.0, 0.0, [-1.0, -0.2, 0.6, 0.3, 0.1, 0.0], [-1.0, 0.3, 2.0], 3, CODE_PLASTIC),
-    "main_nonassoc_hard": (10.0, 0.02, 0.0, 0.0, 0.0, [-1.0, -0.2, 0.6, 0.3, 0.1, 0.0], [-1.0, 0.3, 2.0], 3,
-                           CODE_PLASTIC),
-    "main_psi0_soft": (0.0, -0.01, 0.2, 0.0, 0.0, [-1.0, -0.2, 0.6, 0.3, 0.1, 0.0], [-1.0, 0.3, 2.0], 3,
-                       CODE_PLASTIC),
-    "main_residual": (10.0, -0.05, 0.8, 0.0, 0.0, [-1.0, -0.2, 0.6, 0.3, 0.1, 0.0], [-1.0, 0.3, 2.0], 6,
-                      CODE_PLASTIC),
-    "main_perzyna": (10.0, 0.02, 0.0, 0.3, 1.0, [-1.0, -0.2, 0.6, 0.3, 0.1, 0.0], [-1.0, 0.3, 2.0], 3, CODE_PLASTIC),
-    "right_assoc": (PHI, 0.0, 0.0, 0.0, 0.0, [2.0, -0.9, -1.1, 0.1, 0.0, 0.0], [1.0, 0.2, 0.3], 1.5,
-                    CODE_EDGE_RIGHT),
-    "right_nonassoc_soft": (10.0, -0.01, 0.3, 0.0, 0.0, [2.0, -0.9, -1.1, 0.1, 0.0, 0.0], [1.0, 0.2, 0.3], 1.5,
-                            CODE_EDGE_RIGHT),
-    "right_perzyna": (0.0, 0.02, 0.0, 0.3, 1.0, [2.0, -0.9, -1.1, 0.1, 0.0, 0.0], [1.0, 0.2, 0.3], 1.5,
-                      CODE_EDGE_RIGHT),
-    "left_assoc_hard": (PHI, 0.03, 0.0, 0.0, 0.0, [1.1, 0.9, -2.0, 0.0, 0.1, 0.0], [-3.0, 0.5, 4.0], 3,
-                        CODE_EDGE_LEFT),
-    "left_residual": (10.0, -0.05, 0.8, 0.0, 0.0, [1.1, 0.9, -2.0, 0.0, 0.1, 0.0], [-3.0, 0.5, 4.0], 6,
+    # name: (psi, H / G, c_res / C, eta / G (s), dt, 3D strain, plane-strain strain (times EPS_C), code)
+    "main_assoc": (PHI, 0.0, 0.0, 0.0, 0.0, M3, M2, CODE_PLASTIC),
+    "main_nonassoc_hard": (10.0, 0.02, 0.0, 0.0, 0.0, M3, M2, CODE_PLASTIC),
+    "main_psi0_soft": (0.0, -0.01, 0.2, 0.0, 0.0, M3, M2, CODE_PLASTIC),
+    "main_residual": (10.0, -0.05, 0.8, 0.0, 0.0, [-6.0, -1.2, 3.6, 1.8, 0.6, 0.0], [-6.0, 6.0, 0.0], CODE_PLASTIC),
+    "main_perzyna": (10.0, 0.02, 0.0, 0.3, 1.0, M3, M2, CODE_PLASTIC),
+    "right_assoc": (PHI, 0.0, 0.0, 0.0, 0.0, R3, R2, CODE_EDGE_RIGHT),
+    "right_nonassoc_soft": (10.0, -0.01, 0.3, 0.0, 0.0, R3, R2, CODE_EDGE_RIGHT),
+    "right_perzyna": (0.0, 0.02, 0.0, 0.3, 1.0, R3, R2, CODE_EDGE_RIGHT),
+    "left_assoc_hard": (PHI, 0.03, 0.0, 0.0, 0.0, L3, L2, CODE_EDGE_LEFT),
+    "left_residual": (10.0, -0.05, 0.8, 0.0, 0.0, [6.6, 5.4, -12.0, 0.0, 0.6, 0.0], [-18.0, 3.0, 24.0],
                       CODE_EDGE_LEFT),
-    "left_perzyna": (10.0, 0.0, 0.0, 0.3, 1.0, [1.1, 0.9, -2.0, 0.0, 0.1, 0.0], [-3.0, 0.5, 4.0], 3, CODE_EDGE_LEFT),
-    "apex_assoc_hard": (PHI, 0.05, 0.0, 0.0, 0.0, [4.0, 3.5, 3.8, 0.2, -0.1, 0.1], [4.0, 5.0, 0.1], 3, CODE_APEX),
-    "apex_nonassoc_soft": (10.0, -0.01, 0.5, 0.0, 0.0, [4.0, 3.5, 3.8, 0.2, -0.1, 0.1], [4.0, 5.0, 0.1], 3,
-                           CODE_APEX),
-    "apex_psi0_hard": (0.0, 0.05, 0.0, 0.0, 0.0, [4.0, 3.5, 3.8, 0.2, -0.1, 0.1], [4.0, 5.0, 0.1], 3, CODE_APEX),
-    "apex_psi0_perzyna": (0.0, 0.01, 0.0, 0.2, 1.0, [4.0, 3.5, 3.8, 0.2, -0.1, 0.1], [4.0, 5.0, 0.1], 3, CODE_APEX),
-    "apex_perzyna": (10.0, 0.0, 0.0, 0.2, 1.0, [4.0, 3.5, 3.8, 0.2, -0.1, 0.1], [4.0, 5.0, 0.1], 3, CODE_APEX),
+    "left_perzyna": (10.0, 0.0, 0.0, 0.3, 1.0, L3, L2, CODE_EDGE_LEFT),
+    "apex_assoc_hard": (PHI, 0.05, 0.0, 0.0, 0.0, A3, A2, CODE_APEX),
+    "apex_nonassoc_soft": (10.0, -0.002, 0.5, 0.0, 0.0, A3, A2, CODE_APEX),
+    "apex_psi0_hard": (0.0, 0.05, 0.0, 0.0, 0.0, A3, A2, CODE_APEX),
+    "apex_psi0_perzyna": (0.0, 0.01, 0.0, 0.2, 1.0, A3, A2, CODE_APEX),
+    "apex_perzyna": (10.0, 0.0, 0.0, 0.2, 1.0, A3, A2, CODE_APEX),
 }
 
 
@@ -442,12 +465,12 @@ def test_consistent_tangent_equals_finite_difference(case, ns):
     hardening, softening, residual, Perzyna), 3D and plane strain, from a committed plastic state,
     vs a central difference of the stress update (relative 1e-6 of max |D|; measured <= 1e-8).
     Associated returns give a symmetric tangent, non-associated ones do not."""
-    psi, H, c_res, eta, dt, d3, d2, f, code = TANGENT_CASES[case]
+    psi, H, c_res, eta, dt, e3, e2, code = TANGENT_CASES[case]
     prm = params(psi, H * G, c_res * C, eta * G)
     first = (np.array([-1.0, -0.5, 0.0, 3.0, 0, 0]) if ns == 6 else np.array([-1.0, -0.5, 3.0])) * EPS_C
     _, _, state = evaluate(first, prm, mohr_coulomb_solid_initial_state(1), dt)
     assert state[0, S_EQ_PLASTIC_STRAIN] > 0
-    eps = np.array(d3 if ns == 6 else d2) * f * EPS_C
+    eps = np.array(e3 if ns == 6 else e2) * EPS_C
     _, D, trial = evaluate(eps, prm, state, dt)
     assert trial[0, S_CODE] == code
     if c_res == 0.8:  # past the residual kink
@@ -485,24 +508,30 @@ def test_tangent_with_repeated_trial_eigenvalues(direction, code):
 
 
 def test_rotating_the_strain_rotates_the_stress():
-    """Isotropy: sigma(R eps R^T) = R sigma(eps) R^T (and the same for the plastic strain) over a
-    non-proportional history through the main plane, both edges and the apex (relative 1e-10)."""
+    """Isotropy: sigma(R eps R^T) = R sigma(eps) R^T (and the same for the plastic strain), in each
+    region from a virgin state and over a non-proportional history (relative 1e-10)."""
     prm = params(10.0, H=0.01 * G)
     R = rotation(5)
-    sa, sb = mohr_coulomb_solid_initial_state(1), mohr_coulomb_solid_initial_state(1)
-    codes = set()
-    for d in ([-1.0, -0.2, 0.6, 0.3, 0.1, 0.0], [2.0, -0.9, -1.1, 0.1, 0.0, 0.0], [-2, 1, 0.1, 4, 1, 1],
-              [1.1, 0.9, -2.0, 0.0, 0.1, 0.0], [4.0, 3.5, 3.8, 0.2, -0.1, 0.1], [-3, -2, 1, 0, 2, 3]):
-        eps = np.array(d, dtype=float) * 3 * EPS_C
-        s1, D1, sa = evaluate(eps, prm, sa)
-        s2, D2, sb = evaluate(strain_vector(R @ strain_tensor(eps) @ R.T), prm, sb)
+
+    def both(eps, sa, sb):
+        s1, _, sa = evaluate(eps, prm, sa)
+        s2, _, sb = evaluate(strain_vector(R @ strain_tensor(eps) @ R.T), prm, sb)
         assert np.allclose(stress_vector(R @ stress_tensor(s1) @ R.T), s2, rtol=0, atol=1e-10 * C)
         ep_a = strain_tensor(sa[0, S_PLASTIC_STRAIN:S_PLASTIC_STRAIN + 6])
         ep_b = strain_tensor(sb[0, S_PLASTIC_STRAIN:S_PLASTIC_STRAIN + 6])
-        assert np.allclose(R @ ep_a @ R.T, ep_b, rtol=0, atol=1e-10 * np.max(np.abs(ep_a)))
+        assert np.allclose(R @ ep_a @ R.T, ep_b, rtol=0, atol=1e-10 * max(np.max(np.abs(ep_a)), EPS_C))
         assert sa[0, S_EQ_PLASTIC_STRAIN] == pytest.approx(sb[0, S_EQ_PLASTIC_STRAIN], rel=1e-10)
+        assert sa[0, S_CODE] == sb[0, S_CODE]
+        return sa, sb
+
+    codes = set()
+    for e3 in (M3, R3, L3, A3):
+        sa, _ = both(np.array(e3) * EPS_C, mohr_coulomb_solid_initial_state(1), mohr_coulomb_solid_initial_state(1))
         codes.add(int(sa[0, S_CODE]))
     assert codes == {CODE_PLASTIC, CODE_EDGE_RIGHT, CODE_EDGE_LEFT, CODE_APEX}
+    sa, sb = mohr_coulomb_solid_initial_state(1), mohr_coulomb_solid_initial_state(1)
+    for e3 in (M3, [-2, 1, 0.1, 4, 1, 1], R3, L3, A3, [-3, -2, 1, 0, 2, 3]):
+        sa, sb = both(np.array(e3, dtype=float) * EPS_C, sa, sb)
 
 
 def test_softening_in_simple_shear_follows_closed_form():
@@ -565,8 +594,8 @@ def test_perzyna_relaxation_at_constant_strain(region):
     gamma_dot = Phi / eta, a = 4G (1 + sin(phi) sin(psi) / 3) + 4K sin(phi) sin(psi) (de Souza Neto
     et al. box 8.4), so Phi = Phi0 exp(-(a + 4 cos^2 phi H) t / eta); on the right edge the same with
     a_edge = (a + b_right) / 2 (Phi_13 = Phi_12 all along). Backward Euler gives
-    Phi_k = Phi_k0 / (1 + dt a_tot / eta)^(k - k0) exactly (relative 1e-9; k0 = 0 on the plane, 1 on
-    the edge where the first viscous step moves the trial onto sigma_2 = sigma_3) and the
+    Phi_k = Phi_k0 / (1 + dt a_tot / eta)^(k - k0) exactly (relative 1e-9; k0 = 0 on the plane; on
+    the edge k0 = 1, after a first long step of 20 tau that moves the stress onto sigma_2 = sigma_3) and the
     exponential to first order in dt (relative 3e-3 at dt = tau / 500). The long-time limit is the
     rate-independent return."""
     eta, H, psi = 2.0e8, 0.02 * G, 10.0
@@ -582,16 +611,18 @@ def test_perzyna_relaxation_at_constant_strain(region):
     assert st0[0, S_CODE] == CODE_ELASTIC  # no time for viscous flow
     n = 1000
     dt = 2 * tau / n
-    _, _, st = evaluate(eps, prm, st0, dt=dt)
+    # the edge: a first long step (20 tau) brings the stress onto sigma_2 = sigma_3
+    _, _, st = evaluate(eps, prm, st0, dt=dt if region == "main" else 20 * tau)
     assert st[0, S_CODE] == code
     k0 = 0 if region == "main" else 1
     f0 = _overstress(st0 if k0 == 0 else st, C, H)
-    assert f0 > 0.5 * C
+    assert f0 > (0.5 if k0 == 0 else 0.01) * C
     for k in range(2, n + 1):
         _, _, st = evaluate(eps, prm, st, dt=dt)
         assert st[0, S_CODE] == code
         assert _overstress(st, C, H) == pytest.approx(f0 / (1 + dt / tau) ** (k - k0), rel=1e-9)
-    assert _overstress(st, C, H) == pytest.approx(f0 * math.exp(-(n - k0) * dt / tau), rel=3e-3)
+    assert _overstress(st, C, H) == pytest.approx(f0 * math.exp(-(n - 1) * dt / tau) if k0 else
+                                                  f0 * math.exp(-n * dt / tau), rel=3e-3)
     s_ri, _, _ = evaluate(eps, params(psi, H), mohr_coulomb_solid_initial_state(1))
     for _ in range(40):
         s_v, _, st = evaluate(eps, prm, st, dt=2 * tau)
@@ -606,15 +637,18 @@ def test_perzyna_tends_to_rate_independent(region):
     eps = np.array(direction) * 3 * EPS_C
     s_ri, D_ri, t_ri = evaluate(eps, params(10.0, 0.01 * G), mohr_coulomb_solid_initial_state(1))
     assert t_ri[0, S_CODE] == code
-    diffs = []
+    diffs, ddiffs = [], []
     for eta in (1e6, 1e4, 1e2):
         s_v, D_v, t_v = evaluate(eps, params(10.0, 0.01 * G, eta=eta), mohr_coulomb_solid_initial_state(1), dt=1.0)
         assert t_v[0, S_CODE] == code
         diffs.append(np.max(np.abs(s_v - s_ri)))
-        assert np.max(np.abs(D_v - D_ri)) <= 10 * eta / G * np.max(np.abs(D_ri)) + 1e-9 * E
+        ddiffs.append(np.max(np.abs(D_v - D_ri)))
     assert diffs[-1] <= 1e-5 * C
+    assert ddiffs[-1] <= 1e-5 * np.max(np.abs(D_ri))
     for d1, d2 in zip(diffs, diffs[1:]):
         assert d2 == pytest.approx(d1 / 100, rel=2e-2)
+    for d1, d2 in zip(ddiffs, ddiffs[1:]):
+        assert d2 == pytest.approx(d1 / 100, rel=5e-2)
 
 
 def test_viscous_jump_with_zero_dt_is_elastic():

@@ -24,16 +24,14 @@ masonrydam/elements/continuum_plastic.py with the point law masonrydam/materials
    package (full 3 x 3 Gauss integration) locks in this contained, volume-preserving plastic flow (Nagtegaal,
    Parks & Rice 1974, CMAME 4:153-177: 9 incompressibility constraints per element against about 6 degrees of
    freedom): the ring carries any pressure (4 x 4 elements: 100 p_lim converged, all Gauss points on the
-   yield surface with a growing hydrostatic stress), so no limit is found; recorded as a strict xfail below.
-   (De Souza Neto et al. use quad8 with reduced 2 x 2 integration; with that rule the same mesh finds the
-   limit 0.04 % below p_lim, but the package offers no way to ask for it.)
+   yield surface with a growing hydrostatic stress), so no limit is found. With ``[materials.<group>]
+   integration = "reduced"`` (2 x 2, as de Souza Neto et al. use) the quad8 mesh finds the limit; both are
+   checked below.
 
 2. Perzyna viscoplasticity (``viscosity`` eta, Pa s) at element level, the group's evaluation
    ``ContinuumGroup.evaluate(coords, u, want_tangent, dt)`` (masonrydam/assembly/groups.py) driven directly
-   with physical time steps: static stages carry no time (a static stage has only name, type, steps, loads,
-   until_failure; ``Model.time_step`` stays 0 in masonrydam/solvers/static.py), so there the law gets dt = 0,
-   ``viscous_term`` (masonrydam/materials/plasticity.py) turns the flow off and a viscous block stays elastic
-   at any stress. Closed forms (Perzyna 1966; Simo & Hughes 1998, *Computational
+   with physical time steps, and in a scene whose static stages give their ``duration`` (s; required with
+   viscous blocks, each load step then lasts ``duration`` times its load-factor increment). Closed forms (Perzyna 1966; Simo & Hughes 1998, *Computational
    Inelasticity*, sec. 2.7; de Souza Neto et al. 2008, sec. 11.5), gamma_dot = <f> / eta, f = q(s - beta)
    - sigma_y(alpha):
 
@@ -53,6 +51,7 @@ import numpy as np
 import pytest
 
 import masonrydam
+from masonrydam.errors import SceneError
 from masonrydam.materials.von_mises import CODE_PLASTIC, S_CODE, S_EQ_PLASTIC_STRAIN, S_STRESS
 
 E, NU, SY = 2.1e11, 0.3, 2.4e8
@@ -203,16 +202,23 @@ def test_thick_cylinder_limit_pressure(tmp_path):
     assert slope < 0.05 * p[0] / ub[0].mean()
 
 
-@pytest.mark.xfail(strict=True, raises=AssertionError,
-                   reason="quad8 with full 3 x 3 integration locks in plastic flow (Nagtegaal, Parks & Rice 1974): "
-                          "the ring carries 1.5 p_lim and no limit is found")
-def test_thick_cylinder_limit_pressure_quad8(tmp_path):
-    P = 1.5 * P_LIMIT
-    ds = masonrydam.run(_cylinder(tmp_path / "ring.msh", [
+def _cylinder_quad8(tmp_path, integration, P):
+    s = _cylinder(tmp_path / "ring.msh", [
         {"name": "pressurise", "steps": 10, "until_failure": True,
-         "loads": [{"type": "pressure", "set": "inner", "pressure": P}]}], n_r=4, n_t=4, quads=True))
+         "loads": [{"type": "pressure", "set": "inner", "pressure": P}]}], n_r=4, n_t=4, quads=True)
+    s["materials"]["ring"]["integration"] = integration
+    return masonrydam.run(s)
+
+
+def test_thick_cylinder_limit_pressure_quad8_reduced(tmp_path):
+    """quad8 with the reduced 2 x 2 rule (``integration = "reduced"``) finds the limit pressure; with the
+    full 3 x 3 rule it locks (Nagtegaal, Parks & Rice 1974) and carries 1.5 p_lim."""
+    P = 1.5 * P_LIMIT
+    ds = _cylinder_quad8(tmp_path, "reduced", P)
     assert "limit_load_factor" in ds.attrs
     assert float(ds.attrs["limit_load_factor"]) * P / P_LIMIT == pytest.approx(1.0, rel=0.03)
+    locked = _cylinder_quad8(tmp_path, "full", P)
+    assert "limit_load_factor" not in locked.attrs and locked.load_factor.values[-1] == pytest.approx(1.0)
 
 
 # --------------------------------------------------------------------------------------------------
@@ -368,3 +374,32 @@ def test_perzyna_creep_under_constant_stress(h_iso, h_kin):
     # lateral contraction: elastic nu plus plastic 1/2 (plastic incompressibility)
     right = c[:, 0] > 1 - 1e-12
     assert u[0::3][right] == pytest.approx(-NU * sig / E - 0.5 * ep, rel=1e-8)
+
+
+def test_perzyna_creep_in_a_scene_with_stage_durations():
+    """A 3D block loaded at once (a stage of 1 microsecond) to a uniaxial 1.5 sigma_y, then held for 100 s:
+    perfect Perzyna plasticity creeps at (sigma - sigma_y) / eta, exactly under backward Euler; a static
+    stage without a duration is refused for viscous blocks."""
+    eta = 1.25e12  # Pa s: 1 % plastic strain in 100 s at 0.5 sigma_y of overstress
+    sigma = 1.5 * SY
+    scene = {"model": {"name": "creep", "dimension": 3, "gravity": [0.0, 0.0, 0.0]},
+             "mesh": {"generator": "blocks_3d", "parameters": {"element_size": 1.0, "blocks": [
+                 {"x0": 0, "y0": 0, "z0": 0, "x1": 1, "y1": 1, "z1": 1, "group": "solid"}]}},
+             "materials": {"solid": {"youngs_modulus": E, "poisson_ratio": NU, "density": 0.0, "law": "von_mises",
+                                     "yield_stress": SY, "viscosity": eta}},
+             "supports": [{"set": "base", "components": ["z"]}, {"set": "left", "components": ["x"]},
+                          {"set": "front", "components": ["y"]}],
+             "stages": [{"name": "load", "steps": 1, "duration": 1e-6,
+                         "loads": [{"type": "pressure", "set": "top_face", "pressure": sigma}]},
+                        {"name": "hold", "steps": 10, "duration": 100.0, "loads": []}]}
+    ds = masonrydam.run(scene)
+    top = ds.z.values > 1 - 1e-9
+    w = -ds.displacement.sel(component="z").values[:, top].mean(axis=1)
+    assert w[0] == pytest.approx(sigma / E, rel=1e-4)  # instant load: elastic
+    t = np.arange(len(w)) * 10.0  # s: the hold's steps
+    # (atol: the loading stage's own microsecond of creep, 1e-10)
+    np.testing.assert_allclose(w - sigma / E, (sigma - SY) * t / eta, rtol=1e-6, atol=2e-10)
+    del scene["stages"][1]["duration"]
+    with pytest.raises(SceneError) as err:
+        masonrydam.run(scene)
+    assert err.value.key == "stages[1].duration"

@@ -34,6 +34,13 @@ def raise_for_status(status: int, info: np.ndarray, group: str, what: str, eleme
     raise NumericalError(f"{what}: kernel status {status} in element group '{group}', element {label}")
 
 
+#: points per direction of the reduced rules: the serendipity quad8 and hex20 with 2 x 2 (x 2) Gauss
+#: points (CPE8R / C3D20R in common codes) do not lock under plastic incompressibility (Nagtegaal, Parks &
+#: Rice 1974, CMAME 4) and have no spreading zero-energy mode in a mesh of more than one element (Zienkiewicz
+#: & Taylor, The Finite Element Method, vol. 1, 6th ed. 2005, sec. 9.10). The mass keeps the full rule.
+REDUCED_RULES = {"quad8": 2, "hex20": 2}
+
+
 @dataclass
 class ContinuumGroup:
     """Continuum elements of one type.
@@ -62,9 +69,15 @@ class ContinuumGroup:
     #: "small" (linear kinematics) or "large": total Lagrangian St. Venant-Kirchhoff elements
     #: (:mod:`masonrydam.elements.continuum_large`), evaluated at every iteration like a plastic group
     kinematics: str = "small"
+    #: "full" (the type's default rule) or "reduced" (quad8 2 x 2, hex20 2 x 2 x 2: :data:`REDUCED_RULES`)
+    integration: str = "full"
 
     def __post_init__(self):
-        self.N, self.dN, self.weights = ck.element_tables(self.type)
+        if self.integration == "reduced" and self.type not in REDUCED_RULES:
+            raise ValueError(f"reduced integration is available for {sorted(REDUCED_RULES)} elements, not "
+                             f"{self.type} (its one-point rule has hourglass modes)")
+        self.N, self.dN, self.weights = ck.element_tables(
+            self.type, REDUCED_RULES[self.type] if self.integration == "reduced" else None)
         self.info = np.zeros(2, dtype=np.int64)
         if self.large:
             self.fe = np.zeros((self.n_elem, self.n_edof))
@@ -72,13 +85,16 @@ class ContinuumGroup:
             #: elastic energy (ne,) J of the last evaluation
             self.energy = np.zeros(self.n_elem)
         if self.plastic:
-            from ..materials import drucker_prager, von_mises
+            from ..materials import drucker_prager, mohr_coulomb_solid, tresca, von_mises
 
-            n_state = von_mises.N_VM_STATE if self.law == "von_mises" else drucker_prager.N_DP_STATE
+            n_state = {"von_mises": von_mises.N_VM_STATE, "drucker_prager": drucker_prager.N_DP_STATE,
+                       "tresca": tresca.N_TRESCA_STATE, "mohr_coulomb": mohr_coulomb_solid.N_MC_STATE}[self.law]
             n = self.n_elem * len(self.weights)
             self.state_committed = np.zeros((n, n_state))
             self.state_trial = np.zeros((n, n_state))
-            self.param_index = np.zeros(self.n_elem, dtype=np.int64)
+            # one parameter row for the group, or one per element (a softening modulus scaled by the size)
+            per_element = self.law_params.shape[0] == self.n_elem and self.n_elem > 1
+            self.param_index = np.arange(self.n_elem) if per_element else np.zeros(self.n_elem, dtype=np.int64)
             self.fe = np.zeros((self.n_elem, self.n_edof))
             self.ke = np.zeros((self.n_elem, self.n_edof, self.n_edof))
 

@@ -1,6 +1,7 @@
 """Continuum elements whose material is elasto-plastic (issue 17): internal forces and the consistent
-tangent from the point laws of :mod:`masonrydam.materials.von_mises` and
-:mod:`masonrydam.materials.drucker_prager`, small strains, plane strain (2D, strain [exx, eyy, gxy])
+tangent from the point laws of :mod:`masonrydam.materials.von_mises`,
+:mod:`masonrydam.materials.drucker_prager`, :mod:`masonrydam.materials.tresca` and
+:mod:`masonrydam.materials.mohr_coulomb_solid`, small strains, plane strain (2D, strain [exx, eyy, gxy])
 and 3D.
 
 Per element and Gauss point ``g`` (state row ``k = e * n_gp + g``)::
@@ -20,7 +21,9 @@ import numpy as np
 
 from ..errors import STATUS_NAN, STATUS_OK
 from ..materials.drucker_prager import drucker_prager_point
+from ..materials.mohr_coulomb_solid import mohr_coulomb_solid_point
 from ..materials.plasticity import WORK_SIZE
+from ..materials.tresca import tresca_point
 from ..materials.von_mises import von_mises_point
 from .continuum import (DETJ_RTOL, _bad_det_status, _block_finite, _dim_tag, _gather_displacements, _gather_element,
                         _gradients, _voigt_map)
@@ -28,7 +31,10 @@ from .continuum import (DETJ_RTOL, _bad_det_status, _block_finite, _dim_tag, _ga
 #: law identifiers of :func:`continuum_plastic_evaluate`
 LAW_VON_MISES = 1
 LAW_DRUCKER_PRAGER = 2
-LAW_IDS = {"von_mises": LAW_VON_MISES, "drucker_prager": LAW_DRUCKER_PRAGER}
+LAW_TRESCA = 3
+LAW_MOHR_COULOMB = 4
+LAW_IDS = {"von_mises": LAW_VON_MISES, "drucker_prager": LAW_DRUCKER_PRAGER, "tresca": LAW_TRESCA,
+           "mohr_coulomb": LAW_MOHR_COULOMB}
 
 
 @numba.njit(cache=True)
@@ -86,9 +92,15 @@ def _plastic_impl(coords, conn, dN_ref, weights, thickness, u, params, param_ind
             if law == 1:
                 st = von_mises_point(eps, params, param_index[e], state_committed, state_trial, k, dt, want_tangent,
                                      sig, D, work)
-            else:
+            elif law == 2:
                 st = drucker_prager_point(eps, params, param_index[e], state_committed, state_trial, k, dt,
                                           want_tangent, sig, D, work)
+            elif law == 3:
+                st = tresca_point(eps, params, param_index[e], state_committed, state_trial, k, dt, want_tangent, sig,
+                                  D, work)
+            else:
+                st = mohr_coulomb_solid_point(eps, params, param_index[e], state_committed, state_trial, k, dt,
+                                              want_tangent, sig, D, work)
             if st != STATUS_OK:
                 info[0] = e
                 return st

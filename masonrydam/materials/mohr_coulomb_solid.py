@@ -35,7 +35,7 @@ State row (float64, ``N_MC_STATE`` columns, zeros is the virgin state): the shar
     CODE_EDGE_LEFT    4  return to the edge sigma_1 = sigma_2 (triaxial-compression meridian)
 
 Law (de Souza Neto, Peric & Owen 2008, *Computational Methods for Plasticity*, sec. 6.4.3 and
-8.2; Chen & Han 1988, *Plasticity for Structural Engineers*, sec. 2.3)
+8.2; Chen & Han 1988, *Plasticity for Structural Engineers*, ch. 2)
 ---------------------------------------------------------------------------------------------------
 Six planes ``Phi_ij``, ``i != j``, of which three matter for ordered principal stresses::
 
@@ -102,7 +102,7 @@ would converge in one iteration). Admissible softening (unique returns, no snap-
 for phi > 0, ``2 sin(phi) K + 2 cos^2(phi) H / s_a > 0`` (apex).
 
 Consistent tangent: in principal space ``Dsig = d sigma / d t`` of the active return (derived from the
-closed forms above; de Souza Neto et al. sec. 8.2.3 for the rate-independent case)::
+closed forms above; de Souza Neto et al. sec. 8.2 for the rate-independent case)::
 
     main:  Dsig = I - r_13 n_13^T / (a + h + v),               r = De N
     edge:  Dsig = I - R (A + (h + v) 1 1^T)^-1 N^T,            R = [r_13, r_b], N = [n_13, n_b]
@@ -140,7 +140,7 @@ __all__ = [
     "CODE_ELASTIC", "CODE_PLASTIC", "CODE_APEX", "CODE_EDGE_RIGHT", "CODE_EDGE_LEFT",
     "mohr_coulomb_solid_point", "mohr_coulomb_solid_update", "mohr_coulomb_solid_evaluate",
     "mohr_coulomb_solid_params", "check_mohr_coulomb_solid_params", "mohr_coulomb_solid_initial_state",
-    "return_stiffnesses", "principal_return",
+    "return_stiffnesses", "mohr_coulomb_return",
 ]
 
 P_COHESION = N_COMMON_PARAMS
@@ -246,7 +246,7 @@ def _elastic_out(work, p_tr, K, G, want_tangent):
 
 
 @njit(cache=True)
-def principal_return(work, state_committed, state_trial, k, K, G, p_tr, sphi, spsi, k_y, k_k, y0, h, y_res, flow,
+def mohr_coulomb_return(work, state_committed, state_trial, k, K, G, p_tr, sphi, spsi, k_y, k_k, y0, h, y_res, flow,
                      eta_dt, want_tangent):
     """Return mapping of the Mohr-Coulomb pyramid in principal stresses (module docstring), shared
     with :mod:`masonrydam.materials.tresca`.
@@ -463,7 +463,7 @@ def mohr_coulomb_solid_point(eps, params, p, state_committed, state_trial, k, dt
     flow, eta_dt = viscous_term(params[p, P_VISCOSITY], dt)
     copy_state_row(state_committed, state_trial, k, N_MC_STATE)
     k2 = 2.0 * params[p, P_COS_PHI]
-    principal_return(work, state_committed, state_trial, k, K, G, p_tr, params[p, P_SIN_PHI], params[p, P_SIN_PSI],
+    mohr_coulomb_return(work, state_committed, state_trial, k, K, G, p_tr, params[p, P_SIN_PHI], params[p, P_SIN_PSI],
                      k2, k2, params[p, P_COHESION], params[p, P_COHESION_HARDENING], params[p, P_RESIDUAL_COHESION],
                      flow, eta_dt, want_tangent)
     return finish_point(work, state_committed, state_trial, k, N_MC_STATE, want_tangent, sig, D)

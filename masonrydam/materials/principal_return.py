@@ -20,7 +20,7 @@ return:
   Carlson & Hoger 1986; Miehe 1993), including repeated eigenvalues;
 - Voigt <-> tensor conversions in the conventions of :mod:`masonrydam.materials.plasticity`.
 
-Tangent of an isotropic tensor function (de Souza Neto et al. appendix A.5; the same result as
+Tangent of an isotropic tensor function (de Souza Neto et al. appendix A; the same result as
 first-order perturbation of the eigenvectors). With ``X`` the trial elastic strain (eigenvalues
 ``x_a``), ``Y = sigma`` (eigenvalues ``y_a``) and the principal tangent ``Dp[a, b] = d y_a / d x_b``::
 
@@ -64,6 +64,7 @@ __all__ = [
     "W_PR_TRIAL", "W_PR_NEW", "W_PR_DSIG", "W_PR_VEC", "W_PR_JAC", "REPEATED_TOL", "VOIGT_I", "VOIGT_J",
     "sym_eig3", "principal_trial", "principal_stress_out", "principal_plastic_strain", "principal_tangent",
     "stress_voigt_to_tensor", "strain_voigt_to_tensor", "tensor_to_stress_voigt", "tensor_to_strain_voigt",
+    "principal_stresses",
 ]
 
 W_PR_TRIAL = W_EPS  # 3

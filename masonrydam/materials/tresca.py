@@ -34,8 +34,8 @@ State row (float64, ``N_TRESCA_STATE`` columns; zeros is the virgin state): the 
 
 (no apex: the Tresca prism is open along the hydrostatic axis; CODE_APEX never occurs).
 
-Law (Simo & Hughes 1998, *Computational Inelasticity*, sec. 2.3 and 3.1; de Souza Neto et al.
-sec. 6.4.1 and 8.1; Chen & Han 1988, *Plasticity for Structural Engineers*, sec. 2.3)
+Law (de Souza Neto et al. sec. 6.4.1 and 8.1; Chen & Han 1988, *Plasticity for Structural
+Engineers*, ch. 2; Perzyna: Simo & Hughes 1998, *Computational Inelasticity*, sec. 2.7)
 ------------------------------------------------------------------------------------------------------
 ::
 
@@ -51,14 +51,14 @@ compression (``eps_p = kappa (1, -1/2, -1/2)``) and the maximum principal plasti
 Closed forms: uniaxial yield ``|sigma| = sigma_y``, pure shear ``tau = sigma_y / 2``, triaxial
 ``sigma_1 - sigma_3 = sigma_y`` whatever the confinement.
 
-Return mapping (de Souza Neto et al. sec. 8.1, boxes 8.1-8.3: main plane, right and left edges; the
+Return mapping (de Souza Neto et al. sec. 8.1: main plane, right and left edges; the
 closed forms of :mod:`.mohr_coulomb_solid` with phi = psi = 0, ``a = 4G``, ``a_edge = 3G``)::
 
     trial t_1 >= t_2 >= t_3;  Phi_tr = t_1 - t_3 - sigma_y(kappa_n) <= 0 (or eta > 0, dt = 0): elastic
     main: dgamma = Phi_tr / (4G + H + eta/dt); sigma_1 = t_1 - 2G dgamma, sigma_3 = t_3 + 2G dgamma,
           sigma_2 = t_2; valid if sigma_1 >= sigma_2 >= sigma_3
     right (t_1 + t_3 - 2 t_2 > 0) / left edge: the two active planes, total multiplier
-          s = (Phi_13,tr + Phi_b,tr) / (2 (3G + H + eta/dt)) (de Souza Neto et al. box 8.3)
+          s = (Phi_13,tr + Phi_b,tr) / (2 (3G + H + eta/dt))
 
 The Perzyna update is backward Euler on ``gamma_dot = Phi / eta`` with the total multiplier (see
 :mod:`.mohr_coulomb_solid`): ``Phi_(n+1) = (eta / dt) dgamma``. At constant strain the overstress
@@ -67,7 +67,7 @@ edge. Softening past the residual continues with ``H = 0`` (closed form,
 :func:`masonrydam.materials.plasticity.piecewise_root`). Admissible: ``3G + H > 0`` (the edge
 returns; the main plane needs ``4G + H > 0``).
 
-Consistent tangent: :func:`masonrydam.materials.mohr_coulomb_solid.principal_return` (principal
+Consistent tangent: :func:`masonrydam.materials.mohr_coulomb_solid.mohr_coulomb_return` (principal
 tangent of each return, assembled with the eigenprojection derivatives of
 :func:`masonrydam.materials.principal_return.principal_tangent`); symmetric (associated flow).
 """
@@ -77,7 +77,7 @@ import numpy as np
 from numba import njit
 
 from ..errors import STATUS_OK
-from .mohr_coulomb_solid import principal_return, return_stiffnesses
+from .mohr_coulomb_solid import mohr_coulomb_return, return_stiffnesses
 from .plasticity import (
     CODE_EDGE_LEFT, CODE_EDGE_RIGHT, CODE_ELASTIC, CODE_PLASTIC, N_COMMON_PARAMS, N_COMMON_STATE, P_E, P_NU,
     P_VISCOSITY, S_CODE, S_EQ_PLASTIC_STRAIN, S_PLASTIC_STRAIN, S_STRESS, PlasticLaw, bad_common_column,
@@ -141,7 +141,7 @@ def tresca_point(eps, params, p, state_committed, state_trial, k, dt, want_tange
     K, G, p_tr = point_trial(eps, params, p, state_committed, k, work)
     flow, eta_dt = viscous_term(params[p, P_VISCOSITY], dt)
     copy_state_row(state_committed, state_trial, k, N_TRESCA_STATE)
-    principal_return(work, state_committed, state_trial, k, K, G, p_tr, 0.0, 0.0, 1.0, 1.0, params[p, P_SIGMA_Y],
+    mohr_coulomb_return(work, state_committed, state_trial, k, K, G, p_tr, 0.0, 0.0, 1.0, 1.0, params[p, P_SIGMA_Y],
                      params[p, P_H_ISO], params[p, P_SIGMA_Y_RES], flow, eta_dt, want_tangent)
     return finish_point(work, state_committed, state_trial, k, N_TRESCA_STATE, want_tangent, sig, D)
 

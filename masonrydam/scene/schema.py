@@ -132,10 +132,18 @@ def _mesh(d):
 #: continuum laws of ``[materials.<group>] law`` and their own keys (with defaults; None: required)
 CONTINUUM_LAWS = {
     "elastic": {},
-    "von_mises": {"yield_stress": None, "isotropic_hardening": 0.0, "kinematic_hardening": 0.0, "viscosity": 0.0},
+    "von_mises": {"yield_stress": None, "isotropic_hardening": 0.0, "kinematic_hardening": 0.0, "viscosity": 0.0,
+                  "residual_yield_stress": 0.0, "regularisation_length": None},
     "drucker_prager": {"cohesion": None, "friction_angle": None, "dilation_angle": None, "cohesion_hardening": 0.0,
-                       "viscosity": 0.0, "match": "plane_strain"},
+                       "viscosity": 0.0, "match": "plane_strain", "residual_cohesion": 0.0,
+                       "regularisation_length": None},
+    "tresca": {"yield_stress": None, "isotropic_hardening": 0.0, "viscosity": 0.0, "residual_yield_stress": 0.0,
+               "regularisation_length": None},
+    "mohr_coulomb": {"cohesion": None, "friction_angle": None, "dilation_angle": None, "cohesion_hardening": 0.0,
+                     "viscosity": 0.0, "residual_cohesion": 0.0, "regularisation_length": None},
 }
+#: keys that may be absent (None: not given)
+_OPTIONAL_LAW_KEYS = ("dilation_angle", "regularisation_length")
 
 
 def _material_law(d, key) -> dict:
@@ -148,19 +156,27 @@ def _material_law(d, key) -> dict:
     out = {"law": law}
     for k, default in spec.items():
         if k not in d:
-            if default is None and not (k == "dilation_angle"):
+            if default is None and k not in _OPTIONAL_LAW_KEYS:
                 raise SceneError(f"{key}.{k}", f"is required for law = \"{law}\"")
             out[k] = default
             continue
         v = d[k]
         if k in ("yield_stress", "cohesion"):
             out[k] = _positive(v, "stress", f"{key}.{k}", allow_zero=(k == "cohesion"))
+        elif k in ("residual_yield_stress", "residual_cohesion"):
+            out[k] = _positive(v, "stress", f"{key}.{k}", allow_zero=True)
+        elif k == "regularisation_length":
+            out[k] = _positive(v, "length", f"{key}.{k}")
         elif k in ("isotropic_hardening", "kinematic_hardening", "cohesion_hardening"):
             out[k] = _number(v, f"{key}.{k}")
-            if out[k] < 0.0:
+            if out[k] < 0.0 and k == "kinematic_hardening":
+                raise SceneError(f"{key}.{k}", f"must be >= 0 (Pa), got {v!r}")
+            if out[k] < 0.0 and "regularisation_length" not in d:
                 raise SceneError(f"{key}.{k}", f"{v!r} is softening: a softening continuum needs a regularisation "
-                                               "length (fracture energy per element size), which is not available "
-                                               "yet; use a hardening modulus >= 0")
+                                               "length (regularisation_length, m: the element size this softening "
+                                               "modulus holds for; each element's modulus is scaled by its size so "
+                                               "that the fracture energy does not depend on the mesh); or use a "
+                                               "hardening modulus >= 0")
         elif k == "viscosity":
             out[k] = _number(v, f"{key}.{k}")
             if out[k] < 0.0:
@@ -174,7 +190,7 @@ def _material_law(d, key) -> dict:
 
 def _material(name, d):
     key = f"materials.{name}"
-    _check_keys(d, {"model", "youngs_modulus", "poisson_ratio", "density", "law"}
+    _check_keys(d, {"model", "youngs_modulus", "poisson_ratio", "density", "law", "integration"}
                 | {k for spec in CONTINUUM_LAWS.values() for k in spec}, key)
     _choice(d.get("model", "linear_elastic"), ("linear_elastic",), f"{key}.model")
     for req in ("youngs_modulus", "poisson_ratio"):
@@ -186,8 +202,10 @@ def _material(name, d):
     if isinstance(nu, bool) or not isinstance(nu, (int, float)) or not (-1.0 < nu < 0.5):  # (nan fails too)
         raise SceneError(f"{key}.poisson_ratio", f"must be in (-1, 0.5), got {nu!r}")
     rho = _positive(d.get("density", 0.0), "density", f"{key}.density", allow_zero=True)
+    # "reduced": 2 x 2 (x 2) Gauss points for quad8 / hex20 (the elements' full rule locks in plastic flow)
+    integration = _choice(d.get("integration", "full"), ("full", "reduced"), f"{key}.integration")
     return {"model": "linear_elastic", "youngs_modulus": E, "poisson_ratio": float(nu), "density": rho,
-            **_material_law(d, key)}
+            "integration": integration, **_material_law(d, key)}
 
 
 def _joint(name, d):

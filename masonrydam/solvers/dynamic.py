@@ -1179,7 +1179,9 @@ class DynamicSolver:
                             "strain0": self._strain_energy(u, st.Kc_u) - en.get("strain", 0.0),
                             "stored0": self._joint_stored() - en.get("joint_stored", 0.0)}
             st.energy = en
-            self._energy_scale = max(abs(en.get(key, 0.0)) for key in ENERGY_SCALE_KEYS)
+            # (with the kinetic energy the stage starts with: a launched block's energy terms are changes of it)
+            self._energy_scale = max([abs(en.get(key, 0.0)) for key in ENERGY_SCALE_KEYS]
+                                     + [0.5 * float(v[free] @ self._Mf(v[free]))])
             self._iters_since_record = 0
             self._last_emitted_t = None if record_initial else st.t
             if record_initial:

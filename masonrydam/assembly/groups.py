@@ -188,11 +188,11 @@ class InterfaceGroup:
     """
 
     def __init__(self, name, type_, conn, coords, dim, params, thickness, law, scheme, n_points=None,
-                 kinematics="small"):
+                 kinematics="small", frame="mid_surface"):
         self.name, self.type, self.law, self.scheme = name, type_, law, scheme
-        #: "small" (frame of the reference mid-surface) or "large" (frame of the current mid-surface,
-        #: :mod:`masonrydam.elements.interface_large`)
-        self.kinematics = kinematics
+        #: "small" (frame of the reference mid-surface) or "large" (frame of the current mid-surface or
+        #: bottom face, ``frame_surface``: :mod:`masonrydam.elements.interface_large`)
+        self.kinematics, self.frame_surface = kinematics, frame
         self.conn = np.ascontiguousarray(conn, dtype=np.int64)
         self.dofs = DofMap.node_dofs(self.conn, dim)
         face = INTERFACE_FACE_TYPE[type_]
@@ -232,12 +232,15 @@ class InterfaceGroup:
 
     def evaluate(self, coords, u, want_tangent=True):
         """Evaluate tractions, nodal forces and (optionally) tangents from the committed state."""
-        kernel = ik.interface_evaluate
+        args = (coords, self.conn, u, self.N, self.dN, self.weights, self.thickness, self.params_table,
+                self.param_index, self.state_base, self.state_trial, self.delta, self.traction, self.fe, self.ke,
+                want_tangent, self.info)
         if self.kinematics == "large":
-            from ..elements.interface_large import interface_large_evaluate as kernel
-        st = kernel(coords, self.conn, u, self.N, self.dN, self.weights, self.thickness,
-                                   self.params_table, self.param_index, self.state_base, self.state_trial,
-                                   self.delta, self.traction, self.fe, self.ke, want_tangent, self.info)
+            from ..elements.interface_large import interface_large_evaluate
+
+            st = interface_large_evaluate(*args, 0.0 if self.frame_surface == "bottom" else 0.5)
+        else:
+            st = ik.interface_evaluate(*args)
         raise_for_status(st, self.info, self.name, "joint evaluation")
 
     def commit(self):

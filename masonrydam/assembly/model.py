@@ -281,6 +281,25 @@ class Model:
         for g in self.igroups:
             g.revert()
 
+    def far_slips(self) -> list[str]:
+        """Joint sets whose points have slid farther than the length of their element (last evaluation):
+        a node-to-node joint keeps the partners it was meshed with (no contact search re-pairs them), which
+        holds only approximately, and only while the faces stay on one straight (plane), rigid line. One
+        text per such set."""
+        out = []
+        for g in self.igroups:
+            face = g.jw.sum(axis=1)  # (ne,) element length (2D) or area (3D)
+            size = face if self.dim == 2 else np.sqrt(face)  # m
+            slip = np.linalg.norm(g.delta[:, :, :-1], axis=2)  # (ne, nip) m
+            ratio = slip / size[:, None]
+            if ratio.size and ratio.max() > 1.0:
+                e, i = np.unravel_index(int(np.argmax(ratio)), ratio.shape)
+                out.append(f"joint set '{g.name}': points slid up to {ratio.max():.3g} element lengths ({slip[e, i]:.4g} "
+                           f"m at element {e}); node-to-node joints keep the partners they were meshed with, so the "
+                           "contact forces still act between those partners (a sound approximation on a straight, "
+                           "rigid joint only: there is no contact search)")
+        return out
+
     def latch_broken_bonds(self) -> int:
         return sum(g.latch_broken_bonds() for g in self.igroups if g.nonlinear)
 

@@ -6,14 +6,19 @@ is now, at any rotation of the blocks it joins.
 Kinematics at a point xi of the reference face (``N_a``, ``dN_a`` the face's shape functions;
 bottom / top node ``a`` at reference ``X_b,a``, ``X_t,a`` with displacements ``u_b,a``, ``u_t,a``)::
 
-    current mid-surface   x_m,a = (X_b,a + u_b,a + X_t,a + u_t,a) / 2
+    frame surface         x_m,a = x_b,a + w (x_t,a - x_b,a): the current mid-surface (w = 1/2, the seed's
+                          choice, default) or the bottom face (w = 0, ``[joints.<set>] frame = "bottom"``)
     frame                 R(u): rows e_t, e_n (2D: e_t = a / |a|, a = sum_a dN_a x_m,a, e_n = e_t turned
                           +90 deg); 3D: e_1 = a_1 / |a_1|, n = a_1 x a_2 / |a_1 x a_2|, e_2 = n x e_1
     gap vector            d = sum_a N_a (x_t,a - x_b,a)           (global axes, current)
     local displacement    delta = R(u) d - R(0) d(0)              [slip(s), opening]
 
 ``delta`` is zero for any rigid motion of a closed joint (``R`` and ``d`` rotate together), and
-equals the small-displacement interface's ``R0 (u_t - u_b)`` to first order. The law
+equals the small-displacement interface's ``R0 (u_t - u_b)`` to first order. The node pairs are those
+of the mesh: a side that slides farther than an element length still acts on its first partner. On the
+mid-surface frame such a pair, ``s`` apart, makes the normal force a couple ``t_n s`` on the joint (its
+frame turns with either side); on the bottom-face frame the frame depends on the bottom side alone, so a
+block sliding far over a supporting face feels no such couple (tests/test_large_kinematics.py). The law
 (:func:`~masonrydam.materials.mohr_coulomb.mohr_coulomb_point`) is unchanged. Forces are the exact
 gradient of the joint's work with ``delta(q)`` (a co-rotational formulation in the sense of Crisfield,
 *Non-linear Finite Element Analysis of Solids and Structures*, vol. 1, 1991, ch. 7; for interfaces
@@ -54,8 +59,9 @@ FD_STEP_3D = 1e-6
 
 
 @njit(cache=True)
-def _element_arrays(coords, conn, u, e, ns, dim, xm0, xm, gap):
-    """Reference mid-surface ``xm0`` (ns, dim), current mid-surface ``xm`` and current node-pair gaps
+def _element_arrays(coords, conn, u, e, ns, dim, top_weight, xm0, xm, gap):
+    """Reference mid-surface ``xm0`` (ns, dim), the current frame surface ``xm`` (the mid-surface for
+    ``top_weight`` 0.5, the bottom face for 0: ``x_bot + w (x_top - x_bot)``) and current node-pair gaps
     ``gap`` (ns, dim) = x_top - x_bot of element e; returns the reference face size (m)."""
     size = _mid_surface(coords, conn, e, ns, dim, xm0)
     for a in range(ns):
@@ -64,13 +70,13 @@ def _element_arrays(coords, conn, u, e, ns, dim, xm0, xm, gap):
         for k in range(dim):
             ub = u[b * dim + k]
             ut = u[t * dim + k]
-            xm[a, k] = xm0[a, k] + 0.5 * (ub + ut)
+            xm[a, k] = (coords[b, k] + ub) + top_weight * (coords[t, k] + ut - coords[b, k] - ub)
             gap[a, k] = coords[t, k] + ut - coords[b, k] - ub
     return size
 
 
 @njit(cache=True)
-def _b_matrix_3d(xm, gap, N, dN, g, B, R, dvec):
+def _b_matrix_3d(xm, gap, N, dN, g, top_weight, B, R, dvec):
     """Frame R (3, 3) of the current mid-surface, gap vector d (3,) and B = d(R d)/dq (3, n_q) at point g
     (3D). Returns |a_1 x a_2| (> 0), or 0.0 for a degenerate point."""
     ns = xm.shape[0]
@@ -111,14 +117,15 @@ def _b_matrix_3d(xm, gap, N, dN, g, B, R, dvec):
     de2 = np.empty(3)
     for side in range(2):
         sgn = -1.0 if side == 0 else 1.0
+        wside = 1.0 - top_weight if side == 0 else top_weight  # d x_frame / d u of this side
         for a in range(ns):
             for k in range(3):
                 col = side * ns * 3 + a * 3 + k
                 for m in range(3):
                     da1[m] = 0.0
                     da2[m] = 0.0
-                da1[k] = 0.5 * dN[g, 0, a]
-                da2[k] = 0.5 * dN[g, 1, a]
+                da1[k] = wside * dN[g, 0, a]
+                da2[k] = wside * dN[g, 1, a]
                 # d e1 = (da1 - e1 (e1 . da1)) / |a1|
                 p = e1[0] * da1[0] + e1[1] * da1[1] + e1[2] * da1[2]
                 for m in range(3):
@@ -142,7 +149,7 @@ def _b_matrix_3d(xm, gap, N, dN, g, B, R, dvec):
 
 
 @njit(cache=True)
-def _b_matrix_2d(xm, gap, N, dN, g, B, R, dvec, P, A, Gt, Gn):
+def _b_matrix_2d(xm, gap, N, dN, g, top_weight, B, R, dvec, P, A, Gt, Gn):
     """2D: frame R, gap d, B = d delta / dq (2, n_q) and the vectors P, A, G_t, G_n (n_q,) of the second
     derivatives (module docstring). Returns |a| (> 0) or 0.0 for a degenerate point."""
     ns = xm.shape[0]
@@ -172,8 +179,9 @@ def _b_matrix_2d(xm, gap, N, dN, g, B, R, dvec, P, A, Gt, Gn):
     d_n = nx * dx + ny * dy
     for side in range(2):
         sgn = -1.0 if side == 0 else 1.0
+        wside = 1.0 - top_weight if side == 0 else top_weight
         for a in range(ns):
-            h = 0.5 * dN[g, 0, a] / la
+            h = wside * dN[g, 0, a] / la
             col = side * ns * 2 + a * 2
             # component x then y of node a
             P[col] = nx * h
@@ -192,7 +200,8 @@ def _b_matrix_2d(xm, gap, N, dN, g, B, R, dvec, P, A, Gt, Gn):
 
 @njit(cache=True)
 def interface_large_evaluate(coords, conn, u, N, dN, weights, thickness, params_table, param_index, state_committed,
-                             state_trial, delta_out, traction_out, fe_out, ke_out, want_tangent, info):
+                             state_trial, delta_out, traction_out, fe_out, ke_out, want_tangent, info,
+                             top_weight=0.5):
     """Co-rotational interface elements: the arguments, outputs and status codes of
     :func:`masonrydam.elements.interface.interface_evaluate` (shapes, units), with the frame of the
     current mid-surface (module docstring). ``delta_out`` holds ``[slip(s), opening]`` in that frame."""
@@ -223,6 +232,7 @@ def interface_large_evaluate(coords, conn, u, N, dN, weights, thickness, params_
     ds = np.zeros(dim)
     xmp = np.empty((ns, dim))
     gapp = np.empty((ns, dim))
+    xf0 = np.empty((ns, dim))
     for e in range(n_elem):
         for r in range(nq):
             fe_out[e, r] = 0.0
@@ -230,14 +240,17 @@ def interface_large_evaluate(coords, conn, u, N, dN, weights, thickness, params_
             for r in range(nq):
                 for c in range(nq):
                     ke_out[e, r, c] = 0.0
-        size = _element_arrays(coords, conn, u, e, ns, dim, xm0, xm, gap)
+        size = _element_arrays(coords, conn, u, e, ns, dim, top_weight, xm0, xm, gap)
         for a in range(ns):
             for k in range(dim):
                 gap0[a, k] = coords[conn[e, ns + a], k] - coords[conn[e, a], k]
+                xf0[a, k] = coords[conn[e, a], k] + top_weight * gap0[a, k]  # the frame surface at rest
         h = thickness[e]
         pidx = param_index[e]
         for g in range(nip):
             j0 = _frame(xm0, dN, g, dim, R0, size)
+            if top_weight != 0.5:  # the frame at rest of a surface other than the mid-surface (areas stay)
+                _frame(xf0, dN, g, dim, R0, size)
             if not math.isfinite(j0):
                 info[0] = e
                 return STATUS_NAN
@@ -256,9 +269,9 @@ def interface_large_evaluate(coords, conn, u, N, dN, weights, thickness, params_
                     s += R0[r, k] * d0[k]
                 delta0[r] = s
             if dim == 2:
-                jc = _b_matrix_2d(xm, gap, N, dN, g, B, R, dvec, P, A, Gt, Gn)
+                jc = _b_matrix_2d(xm, gap, N, dN, g, top_weight, B, R, dvec, P, A, Gt, Gn)
             else:
-                jc = _b_matrix_3d(xm, gap, N, dN, g, B, R, dvec)
+                jc = _b_matrix_3d(xm, gap, N, dN, g, top_weight, B, R, dvec)
             if not math.isfinite(jc):
                 info[0] = e
                 return STATUS_NAN
@@ -329,9 +342,9 @@ def interface_large_evaluate(coords, conn, u, N, dN, weights, thickness, params_
                         eps = step if sign == 0 else -step
                         xmp[:, :] = xm
                         gapp[:, :] = gap
-                        xmp[a, k] += 0.5 * eps
+                        xmp[a, k] += (top_weight if side == 1 else 1.0 - top_weight) * eps
                         gapp[a, k] += sgn * eps
-                        _b_matrix_3d(xmp, gapp, N, dN, g, Bp if sign == 0 else Bm, Rs, ds)
+                        _b_matrix_3d(xmp, gapp, N, dN, g, top_weight, Bp if sign == 0 else Bm, Rs, ds)
                     for r in range(nq):
                         s = 0.0
                         for q in range(3):

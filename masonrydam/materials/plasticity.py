@@ -1,4 +1,5 @@
-"""Shared pieces of the continuum plasticity laws (:mod:`.von_mises`, :mod:`.drucker_prager`).
+"""Shared pieces of the continuum plasticity laws (:mod:`.von_mises`, :mod:`.drucker_prager`, :mod:`.tresca`,
+:mod:`.mohr_coulomb_solid`).
 
 Small strains, isotropic linear elasticity, Voigt vectors with engineering shear strains
 (docs/architecture.md): 2D plane strain ``[exx, eyy, gxy]`` (``ezz = gyz = gzx = 0``) and 3D
@@ -24,7 +25,8 @@ own columns after ``N_COMMON_STATE``)::
                           also in plane strain (szz is kept there)
     S_PLASTIC_STRAIN      6 columns: plastic strain [exx, eyy, ezz, gxy, gyz, gzx] (engineering shear)
     S_EQ_PLASTIC_STRAIN   the hardening variable of the law (see each law), >= 0
-    S_CODE                what the last update did: CODE_ELASTIC, CODE_PLASTIC, CODE_APEX (DP only)
+    S_CODE                what the last update did: CODE_ELASTIC, CODE_PLASTIC, CODE_APEX (Drucker-Prager,
+                          Mohr-Coulomb), CODE_EDGE_RIGHT / CODE_EDGE_LEFT (Tresca, Mohr-Coulomb)
 
 Parameter columns shared by both laws (the laws append theirs after ``N_COMMON_PARAMS``)::
 

@@ -97,7 +97,7 @@ def build_model(scene: dict, mesh: Mesh) -> Model:
         try:
             igroups.append(InterfaceGroup(j.name, j.type, j.cells, mesh.points, dim, joint_param_vector(spec),
                                           np.full(len(j.cells), t), spec["law"], scheme, spec.get("points"),
-                                          kinematics=kinematics))
+                                          kinematics=kinematics, frame=spec.get("frame", "mid_surface")))
         except ValueError as exc:
             raise SceneError(f"joints.{j.name}.integration", str(exc)) from None
     return Model(mesh.points, cgroups, igroups)

@@ -286,7 +286,7 @@ def run(scene, output: str | os.PathLike | None = None, progress: bool = False, 
         os.unlink(work)
     if summary:
         print_summary(sc, mesh, model, eff, solver, stats, target, ds, dyn_solvers=dyn_solvers)
-    for text in filter(None, stats.get("energy_warnings", "").split(" | ")):
+    for text in filter(None, (stats.get("energy_warnings", "") + " | " + stats.get("joint_slip_warnings", "")).split(" | ")):
         warnings.warn(text, AccuracyWarning, stacklevel=2)
     return ds
 
@@ -615,6 +615,9 @@ def _stats_attrs(solver, t_start, dyn_solvers=()):
            "joint_space_flexibility_s": round(st.joint_space_flexibility_s, 4),
            "step_cuts": st.step_cuts, "solve_wall_time_s": round(st.wall_time_s, 4),
            "total_wall_time_s": round(time.perf_counter() - t_start, 4), "per_stage": json.dumps(st.per_stage)}
+    far = solver.model.far_slips()
+    if far:
+        out["joint_slip_warnings"] = " | ".join(far)
     if solver.limit is not None:
         out["limit_state"] = _limit_text(solver)
         out["limit_load_factor"] = float(solver.limit["load_factor"])
@@ -761,7 +764,10 @@ def print_summary(sc, mesh, model, eff, solver, stats, path, ds, file=None, dyn_
                                          stats['dynamic_joint_space_flexibility_s'],
                                          stats['dynamic_joint_space_store_full']))
         else:
-            lines.append("joint space: off (no nonlinear joints, an explicit scheme, or joint_space = 'off')")
+            why = ("the blocks are nonlinear (plastic or large kinematics): every iteration is general"
+                   if not model.condensable else
+                   "no nonlinear joints, an explicit scheme, or joint_space = 'off'")
+            lines.append(f"joint space: off ({why})")
         lines.append(f"energy     : balance error {stats['energy_error_max_J']:.3g} J "
                      f"({100 * stats['energy_error_relative']:.3g} % of the largest energy term); numerical "
                      f"dissipation {100 * stats['energy_numerical_relative']:.3g} %, contact events "

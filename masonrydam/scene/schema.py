@@ -54,6 +54,8 @@ def plain(value):
 
 #: [model] kinematics: small displacements (linear) or large (total Lagrangian, rotating joint frames)
 KINEMATICS = ("small", "large")
+#: [joints.<set>] frame with large kinematics: the surface whose current direction is the joint's frame
+JOINT_FRAMES = ("mid_surface", "bottom")
 
 
 def _model(d):
@@ -211,7 +213,7 @@ def _material(name, d):
 def _joint(name, d):
     key = f"joints.{name}"
     _check_keys(d, {"law", "normal_stiffness", "shear_stiffness", "cohesion", "friction_angle", "tensile_strength",
-                    "residual_shear_stiffness", "integration", "points"}, key)
+                    "residual_shear_stiffness", "integration", "points", "frame"}, key)
     law = _choice(d.get("law", "mohr_coulomb"), JOINT_LAWS, f"{key}.law")
     for req in ("normal_stiffness", "shear_stiffness"):
         if req not in d:
@@ -238,6 +240,9 @@ def _joint(name, d):
                 raise SceneError(f"{key}.{k}", "has no meaning for a linear joint (law = 'linear')")
     # default: nodal ("lumped") integration (Schellekens & de Borst 1993); the build step switches
     # 16-node (quad8) interfaces to 3x3 Newton-Cotes, whose lumped corner weights would be negative
+    # large kinematics: the joint's frame turns with its current mid-surface (the seed's), or with its
+    # bottom face (a supporting face on which the top side may slide far)
+    out["frame"] = _choice(d.get("frame", "mid_surface"), JOINT_FRAMES, f"{key}.frame")
     out["integration_given"] = "integration" in d
     out["integration"] = _choice(d.get("integration", "lumped"), QUADRATURE_SCHEMES, f"{key}.integration")
     if "points" in d:

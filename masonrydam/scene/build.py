@@ -17,6 +17,7 @@ from ..assembly.model import Model
 from ..errors import SceneError
 from ..materials import mohr_coulomb as mc
 from ..materials.elastic import elasticity_matrix
+from ..effects import plasticity
 from ..materials.plasticity import P_VISCOSITY
 from ..mesh.io import read_mesh
 from ..mesh.model import Mesh
@@ -71,7 +72,7 @@ def build_model(scene: dict, mesh: Mesh) -> Model:
             raise SceneError(f"materials.{b.name}.law", f"\"{law}\" is a small-strain law: with [model] kinematics = "
                                                         "\"large\" the blocks must be elastic (St. Venant-Kirchhoff); "
                                                         "use kinematics = \"small\" for elasto-plastic blocks")
-        law_params = _law_params(m, b.name, dim, hyp, mesh.points, b.cells, b.type)
+        law_params = plasticity.law_params(m, b.name, dim, hyp, mesh.points, b.cells, b.type)
         try:
             cgroups.append(ContinuumGroup(b.name, b.type, b.cells, DofMap.node_dofs(b.cells, dim),
                                           np.ascontiguousarray(D), np.zeros(ne, dtype=np.int64), np.full(ne, t),
@@ -101,69 +102,6 @@ def build_model(scene: dict, mesh: Mesh) -> Model:
         except ValueError as exc:
             raise SceneError(f"joints.{j.name}.integration", str(exc)) from None
     return Model(mesh.points, cgroups, igroups)
-
-
-def element_sizes(coords: np.ndarray, conn: np.ndarray, type_name: str) -> np.ndarray:
-    """Characteristic length of each element (ne,) m: the square root of its area (2D) or the cube root of
-    its volume (3D), the crack-band width of a softening element (Bazant & Oh 1983, Mater. Struct. 16)."""
-    from ..elements.continuum import element_tables
-
-    _, dN, w = element_tables(type_name)
-    J = np.einsum("gin,enj->egij", dN, coords[conn])
-    size = np.einsum("g,eg->e", w, np.abs(np.linalg.det(J)))
-    return size ** (1.0 / coords.shape[1])
-
-
-def _law_params(m: dict, name: str, dim: int, hypothesis: str, coords=None, conn=None, type_name=None):
-    """The parameter table of an elasto-plastic material, None for an elastic one: one row (1, P), or one
-    row per element (ne, P) when a softening modulus is regularised by the element size (crack band:
-    ``H_e = H l_e / regularisation_length`` keeps the energy dissipated per unit area of a localised band
-    independent of the mesh; Bazant & Oh 1983; Pietruszczak & Mroz 1981, IJNME 17, for plasticity)."""
-    law = m.get("law", "elastic")
-    if law == "elastic":
-        return None
-    key = f"materials.{name}"
-    if dim == 2 and hypothesis != "plane_strain":
-        raise SceneError(f"{key}.law", f"\"{law}\" needs plane strain in 2D ([model] hypothesis = "
-                                       f"\"plane_strain\"; the laws keep the out-of-plane stress), got {hypothesis!r}")
-    from ..materials import drucker_prager, mohr_coulomb_solid, tresca, von_mises
-
-    soft_key = "isotropic_hardening" if law in ("von_mises", "tresca") else "cohesion_hardening"
-    column = {"von_mises": von_mises.P_H_ISO, "drucker_prager": drucker_prager.P_COHESION_HARDENING,
-              "tresca": tresca.P_H_ISO, "mohr_coulomb": mohr_coulomb_solid.P_COHESION_HARDENING}[law]
-    E, nu = m["youngs_modulus"], m["poisson_ratio"]
-
-    def row(h, where=""):
-        try:
-            if law == "von_mises":
-                r = von_mises.von_mises_params(E, nu, m["yield_stress"], h, m["kinematic_hardening"],
-                                               m["residual_yield_stress"], m["viscosity"])
-            elif law == "drucker_prager":
-                r = drucker_prager.drucker_prager_params(E, nu, m["cohesion"], m["friction_angle"], m["dilation_angle"],
-                                                         h, m["residual_cohesion"], m["viscosity"], m["match"])
-            elif law == "tresca":
-                r = tresca.tresca_params(E, nu, m["yield_stress"], h, m["residual_yield_stress"], m["viscosity"])
-            else:
-                r = mohr_coulomb_solid.mohr_coulomb_solid_params(E, nu, m["cohesion"], m["friction_angle"],
-                                                                 m["dilation_angle"], h, m["residual_cohesion"],
-                                                                 m["viscosity"])
-        except ValueError as exc:
-            raise SceneError(key if not where else f"{key}.{soft_key}", str(exc) + where) from None
-        return np.asarray(r, dtype=np.float64)
-
-    h = m[soft_key]
-    base = row(h)
-    length = m.get("regularisation_length")
-    if length is None or h >= 0.0 or conn is None:
-        return np.ascontiguousarray(base.reshape(1, -1))
-    sizes = element_sizes(coords, conn, type_name)
-    big = int(np.argmax(sizes))
-    # the steepest softening is that of the largest element: it must not snap back within the element
-    row(h * sizes[big] / length, f" (element {big} of '{name}', size {sizes[big]:.4g} m, scaled from "
-                                 f"regularisation_length = {length:g} m: refine the mesh there, or soften less)")
-    table = np.repeat(base.reshape(1, -1), len(conn), axis=0)
-    table[:, column] = h * sizes / length
-    return np.ascontiguousarray(table)
 
 
 def _node_set(mesh: Mesh, name: str, key: str) -> np.ndarray:
@@ -455,29 +393,12 @@ def effects(scene: dict, model: Model) -> list[str]:
     m = scene["model"]
     groups = ', '.join(sorted({g.name for g in model.cgroups if not g.plastic}))
     out = []
+    kind = "elastic (St. Venant-Kirchhoff)" if model.large else "linear elastic"
     if groups:
         if model.dim == 2:
-            out = [f"{m['hypothesis'].replace('_', ' ')} linear elastic continuum ({groups}; thickness {m['thickness']:g} m)"]
+            out = [f"{m['hypothesis'].replace('_', ' ')} {kind} continuum ({groups}; thickness {m['thickness']:g} m)"]
         else:
-            out = [f"3D linear elastic continuum ({groups})"]
-    if model.large:
-        out.append("large displacements: total Lagrangian St. Venant-Kirchhoff blocks (Green-Lagrange strain, second "
-                   "Piola-Kirchhoff stress; Bathe 1996 sec. 6.2.3) and joints whose frame turns with their current "
-                   "mid-surface")
-    for g in model.cgroups:
-        if g.plastic:
-            mat = scene["materials"][g.name]
-            what = {"von_mises": lambda: f"von Mises, yield stress {mat['yield_stress']:g} Pa",
-                    "tresca": lambda: f"Tresca, yield stress {mat['yield_stress']:g} Pa",
-                    "drucker_prager": lambda: f"Drucker-Prager ({mat['match'].replace('_', ' ')} match), c "
-                                              f"{mat['cohesion']:g} Pa, phi {mat['friction_angle']:g} deg",
-                    "mohr_coulomb": lambda: f"Mohr-Coulomb, c {mat['cohesion']:g} Pa, phi {mat['friction_angle']:g} "
-                                            "deg (principal-space return: plane, edges, apex)"}[g.law]()
-            if mat.get("regularisation_length") is not None:
-                what += (f", softening regularised by the element size (crack band, l_ref = "
-                         f"{mat['regularisation_length']:g} m)")
-            out.append(f"elasto-plastic continuum '{g.name}': {what}, implicit return mapping, consistent tangent "
-                       "(Simo & Hughes 1998; de Souza Neto et al. 2008)")
+            out = [f"3D {kind} continuum ({groups})"]
     mc_sets = [g.name for g in model.igroups if g.law == "mohr_coulomb"]
     lin_sets = [g.name for g in model.igroups if g.law == "linear"]
     if mc_sets:

@@ -25,6 +25,8 @@ from ..checks import positive as _positive
 from ..checks import seconds as _time
 from ..checks import vector as _vector
 from ..units import quantity
+from ..effects.large_kinematics import JOINT_FRAMES, KINEMATICS
+from ..effects.plasticity import CONTINUUM_LAWS, material_law
 
 JOINT_LAWS = ("mohr_coulomb", "linear")
 HYPOTHESES = ("plane_stress", "plane_strain")
@@ -50,12 +52,6 @@ def plain(value):
     if isinstance(value, (str, int, float, bool)) or value is None:
         return value
     return copy.deepcopy(value)
-
-
-#: [model] kinematics: small displacements (linear) or large (total Lagrangian, rotating joint frames)
-KINEMATICS = ("small", "large")
-#: [joints.<set>] frame with large kinematics: the surface whose current direction is the joint's frame
-JOINT_FRAMES = ("mid_surface", "bottom")
 
 
 def _model(d):
@@ -131,65 +127,6 @@ def _mesh(d):
     return {"file": str(d["file"]), "joints": joints}
 
 
-#: continuum laws of ``[materials.<group>] law`` and their own keys (with defaults; None: required)
-CONTINUUM_LAWS = {
-    "elastic": {},
-    "von_mises": {"yield_stress": None, "isotropic_hardening": 0.0, "kinematic_hardening": 0.0, "viscosity": 0.0,
-                  "residual_yield_stress": 0.0, "regularisation_length": None},
-    "drucker_prager": {"cohesion": None, "friction_angle": None, "dilation_angle": None, "cohesion_hardening": 0.0,
-                       "viscosity": 0.0, "match": "plane_strain", "residual_cohesion": 0.0,
-                       "regularisation_length": None},
-    "tresca": {"yield_stress": None, "isotropic_hardening": 0.0, "viscosity": 0.0, "residual_yield_stress": 0.0,
-               "regularisation_length": None},
-    "mohr_coulomb": {"cohesion": None, "friction_angle": None, "dilation_angle": None, "cohesion_hardening": 0.0,
-                     "viscosity": 0.0, "residual_cohesion": 0.0, "regularisation_length": None},
-}
-#: keys that may be absent (None: not given)
-_OPTIONAL_LAW_KEYS = ("dilation_angle", "regularisation_length")
-
-
-def _material_law(d, key) -> dict:
-    """The elasto-plastic part of a material (``law`` and its parameters; SI, angles in degrees)."""
-    law = _choice(d.get("law", "elastic"), tuple(CONTINUUM_LAWS), f"{key}.law")
-    spec = CONTINUUM_LAWS[law]
-    for k in d:
-        if k in {kk for other in CONTINUUM_LAWS.values() for kk in other} and k not in spec:
-            raise SceneError(f"{key}.{k}", f"is a parameter of another law; law is \"{law}\"")
-    out = {"law": law}
-    for k, default in spec.items():
-        if k not in d:
-            if default is None and k not in _OPTIONAL_LAW_KEYS:
-                raise SceneError(f"{key}.{k}", f"is required for law = \"{law}\"")
-            out[k] = default
-            continue
-        v = d[k]
-        if k in ("yield_stress", "cohesion"):
-            out[k] = _positive(v, "stress", f"{key}.{k}", allow_zero=(k == "cohesion"))
-        elif k in ("residual_yield_stress", "residual_cohesion"):
-            out[k] = _positive(v, "stress", f"{key}.{k}", allow_zero=True)
-        elif k == "regularisation_length":
-            out[k] = _positive(v, "length", f"{key}.{k}")
-        elif k in ("isotropic_hardening", "kinematic_hardening", "cohesion_hardening"):
-            out[k] = _number(v, f"{key}.{k}")
-            if out[k] < 0.0 and k == "kinematic_hardening":
-                raise SceneError(f"{key}.{k}", f"must be >= 0 (Pa), got {v!r}")
-            if out[k] < 0.0 and "regularisation_length" not in d:
-                raise SceneError(f"{key}.{k}", f"{v!r} is softening: a softening continuum needs a regularisation "
-                                               "length (regularisation_length, m: the element size this softening "
-                                               "modulus holds for; each element's modulus is scaled by its size so "
-                                               "that the fracture energy does not depend on the mesh); or use a "
-                                               "hardening modulus >= 0")
-        elif k == "viscosity":
-            out[k] = _number(v, f"{key}.{k}")
-            if out[k] < 0.0:
-                raise SceneError(f"{key}.{k}", f"the Perzyna viscosity (Pa s) must be >= 0, got {v!r}")
-        elif k in ("friction_angle", "dilation_angle"):
-            out[k] = _number(v, f"{key}.{k}", 0.0, 89.9)
-        else:  # match
-            out[k] = _choice(v, ("plane_strain", "outer", "inner"), f"{key}.{k}")
-    return out
-
-
 def _material(name, d):
     key = f"materials.{name}"
     _check_keys(d, {"model", "youngs_modulus", "poisson_ratio", "density", "law", "integration"}
@@ -207,7 +144,7 @@ def _material(name, d):
     # "reduced": 2 x 2 (x 2) Gauss points for quad8 / hex20 (the elements' full rule locks in plastic flow)
     integration = _choice(d.get("integration", "full"), ("full", "reduced"), f"{key}.integration")
     return {"model": "linear_elastic", "youngs_modulus": E, "poisson_ratio": float(nu), "density": rho,
-            "integration": integration, **_material_law(d, key)}
+            "integration": integration, **material_law(d, key)}
 
 
 def _joint(name, d):

@@ -601,9 +601,10 @@ class EffectiveSolver:
             self.columns_computed = 0
 
     def __init__(self, indptr, indices, n, backend="auto", max_rank=256, max_cached=MAX_CACHED, stats=None,
-                 symmetric_fast=False):
+                 symmetric_fast=False, reuse_analysis=False):
         self.indptr, self.indices, self.n = indptr, indices, n
         self.symmetric_fast = symmetric_fast
+        self.reuse_analysis = reuse_analysis
         self.rows = np.repeat(np.arange(n, dtype=np.int64), np.diff(indptr))
         self.cols = indices.astype(np.int64)
         self.backend = backend
@@ -630,6 +631,8 @@ class EffectiveSolver:
                 fact = SymmetricFactorization(self._matrix(data.copy()))
             except (ValueError, SingularMatrix):
                 fact = None
+        if fact is None and self.reuse_analysis and len(self.refs) >= self.max_cached:
+            fact = self._refactorize_oldest(data)
         if fact is None:
             fact = Factorization(self._matrix(data.copy()), self.backend)
         if symmetric:
@@ -654,6 +657,20 @@ class EffectiveSolver:
             else:
                 break
         return ref
+
+    def _refactorize_oldest(self, data):
+        """The factorization the cache would evict next, refactorized with ``data`` on its kept symbolic
+        analysis (:meth:`~masonrydam.solvers.linear.Factorization.refactorize`) and taken out of the cache;
+        None where there is none (pinned, symmetric L D L^T, another backend)."""
+        for k in range(len(self.refs) - 1, -1, -1):
+            ref = self.refs[k]
+            if ref.pinned or not isinstance(ref.fact, Factorization):
+                continue
+            if ref.fact.refactorize(self._matrix(data.copy())):
+                del self.refs[k]
+                return ref.fact
+            return None
+        return None
 
     def _substitute(self, ref, b):
         return ref.fact.solve(b)
@@ -1190,9 +1207,13 @@ class DynamicSolver:
                 st = self._run_explicit(stage, st)
             else:
                 # "auto": the all-stick matrices get the L D L^T with fast substitutions (linear.py)
-                self.eff = EffectiveSolver(m.indptr, m.indices, self.n, self.backend, s.low_rank_max,
-                                           max_cached=MAX_CACHED, stats=self.stats,
-                                           symmetric_fast=s.linear_solver == "auto")
+                # nonlinear blocks change every entry of the tangent in every iteration: no low-rank
+                # updates (their search costs and never pays), and a new factorization reuses the
+                # symbolic analysis of the one it evicts (same pattern; PARDISO phase 22)
+                self.eff = EffectiveSolver(m.indptr, m.indices, self.n, self.backend,
+                                           s.low_rank_max if m.condensable else 0, max_cached=MAX_CACHED,
+                                           stats=self.stats, symmetric_fast=s.linear_solver == "auto",
+                                           reuse_analysis=not m.condensable)
                 ref = self.eff.factorize(self._elastic_eff(s.dt), pin=True, key=("elastic", s.dt), symmetric=True)
                 self._setup_joint_space(ref)
                 try:

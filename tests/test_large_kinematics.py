@@ -268,8 +268,8 @@ def _rocking_scene(kinematics, dt, duration, w0, frame="mid_surface"):
                 {"x0": 0.0, "y0": 0.0, "x1": 0.5, "y1": 2.0, "group": "block"}]}},
             "materials": {g: {"youngs_modulus": 3e10, "poisson_ratio": 0.2, "density": 2400.0}
                           for g in ("base", "block")},
-            "joints": {"joints": {"normal_stiffness": 1e12, "shear_stiffness": 1e12, "friction_angle": 60.0,
-                                  "frame": frame}},
+            "joints": {"joints": dict({"normal_stiffness": 1e12, "shear_stiffness": 1e12, "friction_angle": 60.0},
+                                      **({"frame": frame} if kinematics == "large" else {}))},
             "supports": [{"set": "base"}],
             "stages": [{"name": "gravity", "loads": [{"type": "self_weight"}]},
                        {"name": "rock", "type": "dynamic", "dt": dt, "duration": duration,
@@ -369,6 +369,21 @@ def test_bad_large_kinematics_input():
     with pytest.raises(SceneError) as err:
         masonrydam.run(s)
     assert err.value.key == "materials.block.law" and "small-strain" in str(err.value)
+    s = _tilt_scene("small")
+    s["joints"]["joints"]["frame"] = "bottom"
+    with pytest.raises(SceneError) as err:
+        masonrydam.run(s)
+    assert err.value.key == "joints.joints.frame"
+    s = _tilt_scene("large")
+    s["joints"]["joints"]["frame"] = "top"
+    with pytest.raises(SceneError) as err:
+        masonrydam.run(s)
+    assert err.value.key == "joints.joints.frame"
+    s = _tilt_scene("large")
+    s["materials"]["block"]["integration"] = "reduced"  # quad4: one point, hourglass modes
+    with pytest.raises(SceneError) as err:
+        masonrydam.run(s)
+    assert err.value.key == "materials.block.integration" and "hourglass" in str(err.value)
 
 
 def _sliding_scene(kinematics, v0, frame="bottom"):
@@ -407,3 +422,40 @@ def test_block_sliding_far_on_a_long_joint():
         tipped = masonrydam.run(_sliding_scene("large", v0, frame="mid_surface"))
     u = tipped.displacement.sel(component="x").values[-1, top]
     assert np.ptp(u) > 1e-4  # m: the top edge of a block turned by ~2 degrees shortens by ~0.5 mm
+
+
+@pytest.mark.parametrize("top_weight", [0.5, 0.0])
+def test_joint_recloses_after_a_large_relative_rotation(top_weight):
+    """A 2D joint whose top face is swung open by 60 degrees about one end reads at the other end the gap
+    across its turned frame, and when the face comes back pressed by 1e-5 m it is in contact again with
+    the compressive traction kn 1e-5 at both ends: re-contact from a large relative rotation."""
+    X, _ = _joint("line2", 2, "lumped", 0.0, 1e6)
+    X = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 0.0], [1.0, 0.0]])
+    N, dN, w, _ = interface_tables("line2", "lumped")
+    params = np.ascontiguousarray(mc.joint_params(1e9, 4e8, 0.0, 30.0, 0.0, 1e6)[None, :])
+    conn = np.arange(4)[None, :]
+
+    def evaluate(u, committed):
+        trial = np.zeros_like(committed)
+        d, t = np.zeros((1, 2, 2)), np.zeros((1, 2, 2))
+        fe, ke = np.zeros((1, 8)), np.zeros((1, 8, 8))
+        assert interface_large_evaluate(X, conn, u, N, dN, w, np.ones(1), params, np.zeros(1, np.int64), committed,
+                                        trial, d, t, fe, ke, True, np.zeros(1, np.int64), top_weight) == 0
+        return d[0], t[0], trial
+
+    Q = _rotation(2, math.radians(60.0))
+    x = X.copy()
+    x[2:] = X[2:] @ Q.T  # the top face turned about the common end (0, 0)
+    d, t, state = evaluate((x - X).ravel(), np.zeros((1, 2, mc.N_JOINT_STATE)))
+    # the far end: the mid-surface frame (turned by 30 deg) reads the chord 2 L sin(30 deg) = L as opening and no
+    # slip; the bottom-face frame reads L sin(60 deg) of opening and L (cos(60 deg) - 1) of slip
+    assert state[0, 1, mc.S_CODE] == mc.OPEN and np.abs(t[1]).max() == 0.0
+    if top_weight == 0.5:
+        np.testing.assert_allclose(d[1], [0.0, 1.0], atol=1e-12)
+    else:
+        np.testing.assert_allclose(d[1], [-0.5, math.sqrt(3) / 2], atol=1e-12)
+    u_back = np.zeros(8)
+    u_back[5] = u_back[7] = -1e-5  # back down and pressed
+    d, t, state = evaluate(u_back, state)
+    assert (state[0, :, mc.S_CODE] != mc.OPEN).all()  # in contact (the far end slides back to where it opened)
+    np.testing.assert_allclose(t[:, 1], -1e9 * 1e-5, rtol=1e-9)

@@ -92,6 +92,10 @@ def build_model(scene: dict, mesh: Mesh) -> Model:
     igroups = []
     for j in mesh.joints:
         spec = joint_specs[j.name]
+        if "frame" in spec and kinematics != "large":
+            raise SceneError(f"joints.{j.name}.frame", "chooses the turning frame of large kinematics; with [model] "
+                                                       "kinematics = \"small\" the frame is the reference one "
+                                                       "(remove it, or set kinematics = \"large\")")
         scheme = spec["integration"]
         if j.type == "interface_quad8" and scheme == "lumped" and not spec.get("integration_given", True):
             scheme = "lobatto"  # 3x3 Newton-Cotes: the lumped corner weights of quad8 are negative

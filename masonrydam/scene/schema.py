@@ -179,7 +179,8 @@ def _joint(name, d):
     # 16-node (quad8) interfaces to 3x3 Newton-Cotes, whose lumped corner weights would be negative
     # large kinematics: the joint's frame turns with its current mid-surface (the seed's), or with its
     # bottom face (a supporting face on which the top side may slide far)
-    out["frame"] = _choice(d.get("frame", "mid_surface"), JOINT_FRAMES, f"{key}.frame")
+    if "frame" in d:
+        out["frame"] = _choice(d["frame"], JOINT_FRAMES, f"{key}.frame")
     out["integration_given"] = "integration" in d
     out["integration"] = _choice(d.get("integration", "lumped"), QUADRATURE_SCHEMES, f"{key}.integration")
     if "points" in d:

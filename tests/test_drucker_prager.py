@@ -14,6 +14,9 @@ import math
 import numpy as np
 import pytest
 
+from plasticity_checks import point_checks, strain_tensor, strain_vector, stress_tensor, stress_vector
+from plasticity_checks import mixed_control as _mixed_control
+
 from masonrydam.errors import STATUS_NAN, NumericalError
 from masonrydam.materials.drucker_prager import (
     N_DP_PARAMS,
@@ -42,7 +45,6 @@ K = E / (3 * (1 - 2 * NU))
 EPS_C = C / G  # a strain of the order of the elastic limit in shear
 SIN, COS = math.sin(math.radians(PHI)), math.cos(math.radians(PHI))
 
-VOIGT = [(0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (2, 0)]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -50,73 +52,12 @@ VOIGT = [(0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (2, 0)]
 # ---------------------------------------------------------------------------------------------
 
 
-def strain_tensor(v):
-    t = np.zeros((3, 3))
-    for i, (a, b) in enumerate(VOIGT):
-        t[a, b] = t[b, a] = v[i] if i < 3 else 0.5 * v[i]
-    return t
-
-
-def strain_vector(t):
-    return np.array([t[0, 0], t[1, 1], t[2, 2], 2 * t[0, 1], 2 * t[1, 2], 2 * t[2, 0]])
-
-
-def stress_tensor(v):
-    t = np.zeros((3, 3))
-    for i, (a, b) in enumerate(VOIGT):
-        t[a, b] = t[b, a] = v[i]
-    return t
-
-
-def stress_vector(t):
-    return np.array([t[0, 0], t[1, 1], t[2, 2], t[0, 1], t[1, 2], t[2, 0]])
-
-
-def evaluate(strain, params, committed, dt=0.0):
-    before = committed.copy()
-    s, D, t = drucker_prager_evaluate(np.atleast_2d(strain), params, committed, dt=dt)
-    assert np.array_equal(committed, before)
-    return s[0], D[0], t
-
-
-def fd_tangent(strain, params, committed, dt=0.0, rel=1e-6):
-    strain = np.asarray(strain, dtype=float)
-    h = rel * np.max(np.abs(strain))
-    ns = strain.shape[0]
-    D = np.empty((ns, ns))
-    for j in range(ns):
-        e = np.zeros(ns)
-        e[j] = h
-        sp = evaluate(strain + e, params, committed, dt)[0]
-        sm = evaluate(strain - e, params, committed, dt)[0]
-        D[:, j] = (sp - sm) / (2 * h)
-    return D
+evaluate, fd_tangent = point_checks(drucker_prager_evaluate)
 
 
 def mixed_control(params, drive, path, free, target, state=None, ns=6):
-    """Strain components ``drive`` follow ``path`` (rows of values), the components ``free`` are
-    found by a Newton with the consistent tangent so that the stresses ``free`` equal ``target``
-    (the other components stay zero). Returns the stresses, the last state and the largest
-    iteration count."""
-    state = drucker_prager_initial_state(1) if state is None else state
-    x = np.zeros(len(free))
-    out, iters = [], 0
-    for vals in path:
-        for it in range(30):
-            eps = np.zeros(ns)
-            eps[list(drive)] = vals
-            eps[list(free)] = x
-            s, D, trial = evaluate(eps, params, state)
-            r = s[list(free)] - target
-            if np.max(np.abs(r)) <= 1e-10 * C:
-                break
-            x -= np.linalg.solve(D[np.ix_(free, free)], r)
-        else:
-            raise AssertionError("mixed-control Newton did not converge")
-        iters = max(iters, it)
-        state = trial
-        out.append(s)
-    return np.array(out), state, iters
+    """:func:`plasticity_checks.mixed_control` for this law (stress tolerance 1e-10 C)."""
+    return _mixed_control(evaluate, drucker_prager_initial_state, params, drive, path, free, target, C, state, ns)
 
 
 def sqrt_j2(s6):

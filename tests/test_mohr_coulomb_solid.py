@@ -18,6 +18,9 @@ import math
 import numpy as np
 import pytest
 
+from plasticity_checks import point_checks, rotation, strain_tensor, strain_vector, stress_tensor, stress_vector
+from plasticity_checks import mixed_control as _mixed_control
+
 from masonrydam.errors import STATUS_NAN, STATUS_OK, NumericalError
 from masonrydam.materials.mohr_coulomb_solid import (
     N_MC_PARAMS,
@@ -55,7 +58,6 @@ SIN, COS = math.sin(math.radians(PHI)), math.cos(math.radians(PHI))
 F_C = 2 * C * COS / (1 - SIN)  # uniaxial compressive strength (Chen & Han 1988)
 F_T = 2 * C * COS / (1 + SIN)  # uniaxial tensile strength
 
-VOIGT = [(0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (2, 0)]
 PS = [0, 1, 3]  # plane-strain components in the 3D vector
 
 
@@ -64,95 +66,19 @@ PS = [0, 1, 3]  # plane-strain components in the 3D vector
 # ---------------------------------------------------------------------------------------------
 
 
-def strain_tensor(v):
-    t = np.zeros((3, 3))
-    for i, (a, b) in enumerate(VOIGT):
-        t[a, b] = t[b, a] = v[i] if i < 3 else 0.5 * v[i]
-    return t
-
-
-def strain_vector(t):
-    return np.array([t[0, 0], t[1, 1], t[2, 2], 2 * t[0, 1], 2 * t[1, 2], 2 * t[2, 0]])
-
-
-def stress_tensor(v):
-    t = np.zeros((3, 3))
-    for i, (a, b) in enumerate(VOIGT):
-        t[a, b] = t[b, a] = v[i]
-    return t
-
-
-def stress_vector(t):
-    return np.array([t[0, 0], t[1, 1], t[2, 2], t[0, 1], t[1, 2], t[2, 0]])
-
-
-def rotation(seed):
-    rng = np.random.default_rng(seed)
-    q, r = np.linalg.qr(rng.normal(size=(3, 3)))
-    q = q @ np.diag(np.sign(np.diag(r)))
-    if np.linalg.det(q) < 0:
-        q[:, 0] *= -1
-    return q
-
-
 def params(psi=PHI, H=0.0, c_res=0.0, eta=0.0, c=C, phi=PHI):
     return mohr_coulomb_solid_params(E, NU, c, phi, psi, cohesion_hardening=H, residual_cohesion=c_res, viscosity=eta)
 
 
-def evaluate(strain, prm, committed, dt=0.0):
-    """One point: (stress, tangent, trial state); checks that the committed state is untouched."""
-    before = committed.copy()
-    s, D, t = mohr_coulomb_solid_evaluate(np.atleast_2d(strain), prm, committed, dt=dt)
-    assert np.array_equal(committed, before)
-    return s[0], D[0], t
-
-
-def fd_tangent(strain, prm, committed, dt=0.0, rel=1e-6):
-    """Central finite difference of the stress update with respect to the strain."""
-    strain = np.asarray(strain, dtype=float)
-    h = rel * np.max(np.abs(strain))
-    ns = strain.shape[0]
-    D = np.empty((ns, ns))
-    for j in range(ns):
-        e = np.zeros(ns)
-        e[j] = h
-        sp = evaluate(strain + e, prm, committed, dt)[0]
-        sm = evaluate(strain - e, prm, committed, dt)[0]
-        D[:, j] = (sp - sm) / (2 * h)
-    return D
+evaluate, fd_tangent = point_checks(mohr_coulomb_solid_evaluate)
 
 
 def mixed_control(prm, drive, path, free, target, state=None, ns=6, tol=1e-10):
-    """Strain components ``drive`` follow ``path`` (rows of values); each group of components in
-    ``free`` (a tuple of components sharing one unknown, e.g. ``(1, 2)`` for eyy = ezz) is found by a
-    Newton with the consistent tangent so that the stress of the group's first component equals
-    ``target`` (the other strain components stay zero). Tying the lateral strains of an
-    axisymmetric test keeps its Jacobian regular: on a Mohr-Coulomb edge sigma_1 = sigma_2 (or
-    sigma_2 = sigma_3) holds whatever the strain, so d(syy - szz)/d(eyy - ezz) = 0. Returns the
-    stresses, the last state and the largest iteration count."""
-    state = mohr_coulomb_solid_initial_state(1) if state is None else state
-    free = [tuple(g) if isinstance(g, (tuple, list)) else (g,) for g in free]
-    rows = [g[0] for g in free]
-    x = np.zeros(len(free))
-    out, iters = [], 0
-    for vals in path:
-        for it in range(30):
-            eps = np.zeros(ns)
-            eps[list(drive)] = vals
-            for g, xg in zip(free, x):
-                eps[list(g)] = xg
-            s, D, trial = evaluate(eps, prm, state)
-            r = s[rows] - target
-            if np.max(np.abs(r)) <= tol * C:
-                break
-            J = np.array([[D[i, list(g)].sum() for g in free] for i in rows])
-            x -= np.linalg.solve(J, r)
-        else:
-            raise AssertionError("mixed-control Newton did not converge")
-        iters = max(iters, it)
-        state = trial
-        out.append(s)
-    return np.array(out), state, iters
+    """:func:`plasticity_checks.mixed_control` for this law (stress tolerance relative to C). Tying lateral
+    strains, e.g. ``free = [(1, 2)]`` for eyy = ezz, keeps an axisymmetric test's Jacobian regular: on a
+    Mohr-Coulomb edge sigma_1 = sigma_2 (or sigma_2 = sigma_3) holds whatever the strain, so
+    d(syy - szz)/d(eyy - ezz) = 0."""
+    return _mixed_control(evaluate, mohr_coulomb_solid_initial_state, prm, drive, path, free, target, C, state, ns, tol)
 
 
 def planes(sig6, c, sphi=SIN, cphi=COS):

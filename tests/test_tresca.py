@@ -15,6 +15,8 @@ import math
 import numpy as np
 import pytest
 
+from plasticity_checks import point_checks, rotation, strain_tensor, strain_vector, stress_tensor, stress_vector
+
 from masonrydam.errors import STATUS_NAN, STATUS_OK, NumericalError
 from masonrydam.materials.mohr_coulomb_solid import (
     mohr_coulomb_solid_evaluate,
@@ -50,7 +52,6 @@ EPS_Y = SY / E
 EPS_S = SY / G  # a strain of the order of the elastic limit in shear
 PS = [0, 1, 3]
 
-VOIGT = [(0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (2, 0)]
 
 M3, M2 = [0.0, 0.0, 0.0, 4.0, 0.4, 0.2], [0.6, -0.6, 4.0]  # main plane
 R3, R2 = [3.0, -1.35, -1.65, 0.15, 0.0, 0.0], [2.0, 0.4, 0.6]  # right edge (sigma_2 = sigma_3)
@@ -62,55 +63,7 @@ L3, L2 = [3.3, 2.7, -6.0, 0.0, 0.3, 0.0], [-4.0, 2.0, 0.5]  # left edge (sigma_1
 # ---------------------------------------------------------------------------------------------
 
 
-def strain_tensor(v):
-    t = np.zeros((3, 3))
-    for i, (a, b) in enumerate(VOIGT):
-        t[a, b] = t[b, a] = v[i] if i < 3 else 0.5 * v[i]
-    return t
-
-
-def strain_vector(t):
-    return np.array([t[0, 0], t[1, 1], t[2, 2], 2 * t[0, 1], 2 * t[1, 2], 2 * t[2, 0]])
-
-
-def stress_tensor(v):
-    t = np.zeros((3, 3))
-    for i, (a, b) in enumerate(VOIGT):
-        t[a, b] = t[b, a] = v[i]
-    return t
-
-
-def stress_vector(t):
-    return np.array([t[0, 0], t[1, 1], t[2, 2], t[0, 1], t[1, 2], t[2, 0]])
-
-
-def rotation(seed):
-    rng = np.random.default_rng(seed)
-    q, r = np.linalg.qr(rng.normal(size=(3, 3)))
-    q = q @ np.diag(np.sign(np.diag(r)))
-    if np.linalg.det(q) < 0:
-        q[:, 0] *= -1
-    return q
-
-
-def evaluate(strain, prm, committed, dt=0.0):
-    """One point: (stress, tangent, trial state); checks that the committed state is untouched."""
-    before = committed.copy()
-    s, D, t = tresca_evaluate(np.atleast_2d(strain), prm, committed, dt=dt)
-    assert np.array_equal(committed, before)
-    return s[0], D[0], t
-
-
-def fd_tangent(strain, prm, committed, dt=0.0, rel=1e-6):
-    strain = np.asarray(strain, dtype=float)
-    h = rel * np.max(np.abs(strain))
-    ns = strain.shape[0]
-    D = np.empty((ns, ns))
-    for j in range(ns):
-        e = np.zeros(ns)
-        e[j] = h
-        D[:, j] = (evaluate(strain + e, prm, committed, dt)[0] - evaluate(strain - e, prm, committed, dt)[0]) / (2 * h)
-    return D
+evaluate, fd_tangent = point_checks(tresca_evaluate)
 
 
 def axisymmetric_path(prm, axial_path, lateral, dt=0.0):

@@ -13,6 +13,8 @@ import math
 import numpy as np
 import pytest
 
+from plasticity_checks import point_checks, rotation, strain_tensor, strain_vector, stress_tensor, stress_vector
+
 from masonrydam.errors import STATUS_NAN, STATUS_OK, NumericalError
 from masonrydam.materials.plasticity import CODE_ELASTIC, CODE_PLASTIC, STATUS_BAD_MATERIAL
 from masonrydam.materials.von_mises import (
@@ -43,63 +45,9 @@ EPS_Y = SY / E
 # helpers
 # ---------------------------------------------------------------------------------------------
 
-VOIGT = [(0, 0), (1, 1), (2, 2), (0, 1), (1, 2), (2, 0)]
 
 
-def strain_tensor(v):
-    """3x3 tensor of a 3D engineering strain vector."""
-    t = np.zeros((3, 3))
-    for i, (a, b) in enumerate(VOIGT):
-        val = v[i] if i < 3 else 0.5 * v[i]
-        t[a, b] = t[b, a] = val
-    return t
-
-
-def strain_vector(t):
-    return np.array([t[0, 0], t[1, 1], t[2, 2], 2 * t[0, 1], 2 * t[1, 2], 2 * t[2, 0]])
-
-
-def stress_tensor(v):
-    t = np.zeros((3, 3))
-    for i, (a, b) in enumerate(VOIGT):
-        t[a, b] = t[b, a] = v[i]
-    return t
-
-
-def stress_vector(t):
-    return np.array([t[0, 0], t[1, 1], t[2, 2], t[0, 1], t[1, 2], t[2, 0]])
-
-
-def rotation(seed):
-    rng = np.random.default_rng(seed)
-    q, r = np.linalg.qr(rng.normal(size=(3, 3)))
-    q = q @ np.diag(np.sign(np.diag(r)))
-    if np.linalg.det(q) < 0:
-        q[:, 0] *= -1
-    return q
-
-
-def evaluate(strain, params, committed, dt=0.0):
-    """One point: (stress, tangent, trial state); checks that the committed state is untouched."""
-    before = committed.copy()
-    s, D, t = von_mises_evaluate(np.atleast_2d(strain), params, committed, dt=dt)
-    assert np.array_equal(committed, before)
-    return s[0], D[0], t
-
-
-def fd_tangent(strain, params, committed, dt=0.0, rel=1e-6):
-    """Central finite difference of the stress update with respect to the strain."""
-    strain = np.asarray(strain, dtype=float)
-    h = rel * np.max(np.abs(strain))
-    ns = strain.shape[0]
-    D = np.empty((ns, ns))
-    for j in range(ns):
-        e = np.zeros(ns)
-        e[j] = h
-        sp = evaluate(strain + e, params, committed, dt)[0]
-        sm = evaluate(strain - e, params, committed, dt)[0]
-        D[:, j] = (sp - sm) / (2 * h)
-    return D
+evaluate, fd_tangent = point_checks(von_mises_evaluate)
 
 
 def uniaxial_stress_path(params, exx_path, dt=0.0):

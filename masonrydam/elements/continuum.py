@@ -241,6 +241,34 @@ def _strain_stress(ue, dNdx, V, D, mat, eps, sig, dim_tag):
 
 
 @numba.njit(cache=True)
+def _add_btsigma(B, sig, f, fe):
+    """``fe[c] += f sum_s B[s, c] sig[s]``: a Gauss point's internal force, B (ns, nd), sig (ns,)."""
+    for c in range(B.shape[1]):
+        acc = 0.0
+        for s in range(B.shape[0]):
+            acc += B[s, c] * sig[s]
+        fe[c] += f * acc
+
+
+@numba.njit(cache=True)
+def _add_btdb(B, D, f, DB, ke):
+    """``ke += f B^T D B`` with ``D`` (ns, ns) in full (non-symmetric tangents too); DB (ns, nd) scratch."""
+    ns, nd = B.shape
+    for s in range(ns):
+        for c in range(nd):
+            acc = 0.0
+            for t in range(ns):
+                acc += D[s, t] * B[t, c]
+            DB[s, c] = acc
+    for r in range(nd):
+        for c in range(nd):
+            acc = 0.0
+            for s in range(ns):
+                acc += B[s, r] * DB[s, c]
+            ke[r, c] += f * acc
+
+
+@numba.njit(cache=True)
 def _block_finite(block):
     """True when every entry of the array ``block`` is finite (sum trick: inf - inf = nan, nan != 0)."""
     s = 0.0

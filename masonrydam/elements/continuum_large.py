@@ -30,8 +30,8 @@ import numba
 import numpy as np
 
 from ..errors import STATUS_NAN, STATUS_OK
-from .continuum import (DETJ_RTOL, _bad_det_status, _block_finite, _dim_tag, _gather_displacements, _gather_element,
-                        _gradients, _voigt_map)
+from .continuum import (DETJ_RTOL, _add_btdb, _add_btsigma, _bad_det_status, _block_finite, _dim_tag,
+                        _gather_displacements, _gather_element, _gradients, _voigt_map)
 
 
 @numba.njit(cache=True)
@@ -123,24 +123,9 @@ def _large_impl(coords, conn, dN_ref, weights, D_table, material_index, thicknes
                         B[V[i, i], col] += F[k, i] * dNdx[i, a]
                         for j in range(i + 1, dim):
                             B[V[i, j], col] += F[k, i] * dNdx[j, a] + F[k, j] * dNdx[i, a]
-            for c in range(nd):
-                acc = 0.0
-                for s in range(ns):
-                    acc += B[s, c] * S[s]
-                fe[c] += f * acc
+            _add_btsigma(B, S, f, fe)
             if want_tangent:
-                for s in range(ns):
-                    for c in range(nd):
-                        acc = 0.0
-                        for t in range(ns):
-                            acc += D[s, t] * B[t, c]
-                        DB[s, c] = acc
-                for r in range(nd):
-                    for c in range(nd):
-                        acc = 0.0
-                        for s in range(ns):
-                            acc += B[s, r] * DB[s, c]
-                        ke[r, c] += f * acc
+                _add_btdb(B, D, f, DB, ke)
                 # initial-stress (geometric) part: delta_kl dN_a . S dN_b
                 for i in range(dim):
                     for j in range(dim):

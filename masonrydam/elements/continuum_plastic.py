@@ -25,8 +25,8 @@ from ..materials.mohr_coulomb_solid import mohr_coulomb_solid_point
 from ..materials.plasticity import WORK_SIZE
 from ..materials.tresca import tresca_point
 from ..materials.von_mises import von_mises_point
-from .continuum import (DETJ_RTOL, _bad_det_status, _block_finite, _dim_tag, _gather_displacements, _gather_element,
-                        _gradients, _voigt_map)
+from .continuum import (DETJ_RTOL, _add_btdb, _add_btsigma, _bad_det_status, _block_finite, _dim_tag,
+                        _gather_displacements, _gather_element, _gradients, _voigt_map)
 
 #: law identifiers of :func:`continuum_plastic_evaluate`
 LAW_VON_MISES = 1
@@ -104,24 +104,9 @@ def _plastic_impl(coords, conn, dN_ref, weights, thickness, u, params, param_ind
             if st != STATUS_OK:
                 info[0] = e
                 return st
-            for c in range(nd):
-                acc = 0.0
-                for s in range(ns):
-                    acc += B[s, c] * sig[s]
-                fe[c] += f * acc
+            _add_btsigma(B, sig, f, fe)
             if want_tangent:
-                for s in range(ns):
-                    for c in range(nd):
-                        acc = 0.0
-                        for t in range(ns):
-                            acc += D[s, t] * B[t, c]
-                        DB[s, c] = acc
-                for r in range(nd):
-                    for c in range(nd):
-                        acc = 0.0
-                        for s in range(ns):
-                            acc += B[s, r] * DB[s, c]
-                        ke[r, c] += f * acc
+                _add_btdb(B, D, f, DB, ke)
         if not _block_finite(fe):
             info[0] = e
             return STATUS_NAN

@@ -232,6 +232,30 @@ def _frame(xm, dN, g, dim, R, size):
     return j
 
 
+@njit(cache=True, inline="always")
+def joint_law_at(params_table, pidx, state_committed, state_trial, delta_out, traction_out, e, g, dim, C):
+    """The joint law at point ``g`` of element ``e`` from its local relative displacement
+    ``delta_out[e, g]`` and committed state: writes ``state_trial[e, g]``, ``traction_out[e, g]`` and the
+    tangent ``C`` (dim, dim); returns the law's status. Shared by the small- and large-displacement
+    interface kernels. The law runs on scalars (row views per point cost more than the law: see
+    :func:`~masonrydam.materials.mohr_coulomb.mohr_coulomb_point`)."""
+    (status, code, broken, slip1, slip2, back1, back2, tau1, tau2, t_n, C11, C12, C21, C22, C1n, C2n,
+     Cnn) = mohr_coulomb_point(
+        params_table[pidx, P_KS], params_table[pidx, P_KN], params_table[pidx, P_COHESION],
+        params_table[pidx, P_TAN_PHI], params_table[pidx, P_TENSILE_STRENGTH],
+        params_table[pidx, P_KS_RESIDUAL], params_table[pidx, P_OPEN_TANGENT], dim - 1,
+        delta_out[e, g, 0], delta_out[e, g, 1] if dim == 3 else 0.0, delta_out[e, g, dim - 1],
+        state_committed[e, g, S_CODE], state_committed[e, g, S_BOND_BROKEN],
+        state_committed[e, g, S_PLASTIC_SLIP], state_committed[e, g, S_PLASTIC_SLIP + 1],
+        state_committed[e, g, S_BACK_STRESS], state_committed[e, g, S_BACK_STRESS + 1])
+    if status != STATUS_OK:
+        return status
+    write_trial(state_trial[e, g], traction_out[e, g], dim - 1, code, broken, slip1, slip2, back1, back2,
+                tau1, tau2, t_n)
+    write_tangent(C, dim - 1, C11, C12, C21, C22, C1n, C2n, Cnn)
+    return STATUS_OK
+
+
 @njit(cache=True)
 def interface_evaluate(
     coords,
@@ -349,22 +373,11 @@ def interface_evaluate(
                     s += R[r, k] * Dug[k]
                 delta_out[e, g, r] = s
 
-            # the law on scalars (row views per point cost more than the law: see mohr_coulomb_point)
-            (status, code, broken, slip1, slip2, back1, back2, tau1, tau2, t_n, C11, C12, C21, C22, C1n, C2n,
-             Cnn) = mohr_coulomb_point(
-                params_table[pidx, P_KS], params_table[pidx, P_KN], params_table[pidx, P_COHESION],
-                params_table[pidx, P_TAN_PHI], params_table[pidx, P_TENSILE_STRENGTH],
-                params_table[pidx, P_KS_RESIDUAL], params_table[pidx, P_OPEN_TANGENT], dim - 1,
-                delta_out[e, g, 0], delta_out[e, g, 1] if dim == 3 else 0.0, delta_out[e, g, dim - 1],
-                state_committed[e, g, S_CODE], state_committed[e, g, S_BOND_BROKEN],
-                state_committed[e, g, S_PLASTIC_SLIP], state_committed[e, g, S_PLASTIC_SLIP + 1],
-                state_committed[e, g, S_BACK_STRESS], state_committed[e, g, S_BACK_STRESS + 1])
+            status = joint_law_at(params_table, pidx, state_committed, state_trial, delta_out, traction_out, e, g,
+                                  dim, C)
             if status != STATUS_OK:
                 info[0] = e
                 return status
-            write_trial(state_trial[e, g], traction_out[e, g], dim - 1, code, broken, slip1, slip2, back1, back2,
-                        tau1, tau2, t_n)
-            write_tangent(C, dim - 1, C11, C12, C21, C22, C1n, C2n, Cnn)
 
             jwh = j * weights[g] * h
             # global traction R^T t

@@ -49,10 +49,7 @@ import numpy as np
 from numba import njit
 
 from ..errors import STATUS_BAD_GEOMETRY, STATUS_NAN, STATUS_OK
-from ..materials.mohr_coulomb import (P_COHESION, P_KN, P_KS, P_KS_RESIDUAL, P_OPEN_TANGENT, P_TAN_PHI,
-                                      P_TENSILE_STRENGTH, S_BACK_STRESS, S_BOND_BROKEN, S_CODE, S_PLASTIC_SLIP,
-                                      mohr_coulomb_point, write_tangent, write_trial)
-from .interface import _GEOM_TOL, _frame, _mid_surface
+from .interface import _GEOM_TOL, _frame, _mid_surface, joint_law_at
 
 #: relative step of the central difference of B in 3D (times the element size)
 FD_STEP_3D = 1e-6
@@ -283,20 +280,11 @@ def interface_large_evaluate(coords, conn, u, N, dN, weights, thickness, params_
                 for k in range(dim):
                     s += R[r, k] * dvec[k]
                 delta_out[e, g, r] = s - delta0[r]
-            (status, code, broken, slip1, slip2, back1, back2, tau1, tau2, t_n, C11, C12, C21, C22, C1n, C2n,
-             Cnn) = mohr_coulomb_point(
-                params_table[pidx, P_KS], params_table[pidx, P_KN], params_table[pidx, P_COHESION],
-                params_table[pidx, P_TAN_PHI], params_table[pidx, P_TENSILE_STRENGTH],
-                params_table[pidx, P_KS_RESIDUAL], params_table[pidx, P_OPEN_TANGENT], dim - 1,
-                delta_out[e, g, 0], delta_out[e, g, 1] if dim == 3 else 0.0, delta_out[e, g, dim - 1],
-                state_committed[e, g, S_CODE], state_committed[e, g, S_BOND_BROKEN],
-                state_committed[e, g, S_PLASTIC_SLIP], state_committed[e, g, S_PLASTIC_SLIP + 1],
-                state_committed[e, g, S_BACK_STRESS], state_committed[e, g, S_BACK_STRESS + 1])
+            status = joint_law_at(params_table, pidx, state_committed, state_trial, delta_out, traction_out, e, g,
+                                  dim, C)
             if status != STATUS_OK:
                 info[0] = e
                 return status
-            write_trial(state_trial[e, g], traction_out[e, g], dim - 1, code, broken, slip1, slip2, back1, back2,
-                        tau1, tau2, t_n)
             jwh = j0 * weights[g] * h
             for c in range(nq):
                 s = 0.0
@@ -305,7 +293,6 @@ def interface_large_evaluate(coords, conn, u, N, dN, weights, thickness, params_
                 fe_out[e, c] += s * jwh
             if not want_tangent:
                 continue
-            write_tangent(C, dim - 1, C11, C12, C21, C22, C1n, C2n, Cnn)
             for r in range(dim):
                 for c in range(nq):
                     s = 0.0

@@ -403,3 +403,30 @@ def test_perzyna_creep_in_a_scene_with_stage_durations():
     with pytest.raises(SceneError) as err:
         masonrydam.run(scene)
     assert err.value.key == "stages[1].duration"
+
+
+def test_perzyna_creep_goes_on_in_a_dynamic_stage_at_rest():
+    """The block of the scene test above, loaded at once in a static stage, then held by a dynamic stage
+    with no ground motion for 20 s: a viscous block creeps at (sigma - sigma_y) / eta in dynamic steps
+    too, also in steps whose predictor is already in equilibrium (the law's time, not the displacement,
+    drives it). A light block (density 10 kg/m3) keeps the inertia negligible."""
+    eta = 1.25e12
+    sigma = 1.5 * SY
+    scene = {"model": {"name": "creep_dynamic", "dimension": 3, "gravity": [0.0, 0.0, 0.0]},
+             "mesh": {"generator": "blocks_3d", "parameters": {"element_size": 1.0, "blocks": [
+                 {"x0": 0, "y0": 0, "z0": 0, "x1": 1, "y1": 1, "z1": 1, "group": "solid"}]}},
+             "materials": {"solid": {"youngs_modulus": E, "poisson_ratio": NU, "density": 10.0, "law": "von_mises",
+                                     "yield_stress": SY, "viscosity": eta}},
+             "supports": [{"set": "base", "components": ["z"]}, {"set": "left", "components": ["x"]},
+                          {"set": "front", "components": ["y"]}],
+             "stages": [{"name": "load", "steps": 1, "duration": 1e-6,
+                         "loads": [{"type": "pressure", "set": "top_face", "pressure": sigma}]},
+                        {"name": "hold", "type": "dynamic", "dt": 1.0, "duration": 20.0, "integrator": "hht",
+                         "initial_velocity": {"groups": ["solid"], "velocity": [0.0, 0.0, 0.0]}}]}
+    ds = masonrydam.run(scene)
+    top = ds.z.values > 1 - 1e-9
+    dyn = ds.where(~np.isnan(ds.time), drop=True)
+    w = -dyn.displacement.sel(component="z").values[:, top].mean(axis=1)
+    t = dyn.time.values - dyn.time.values[0]
+    np.testing.assert_allclose(w - w[0], (sigma - SY) * t / eta, rtol=1e-3, atol=1e-9)
+    assert w[-1] - w[0] == pytest.approx((sigma - SY) * 20.0 / eta, rel=1e-3)

@@ -138,6 +138,14 @@ class Model:
         return any(g.large for g in self.cgroups) or any(g.kinematics == "large" for g in self.igroups)
 
     @property
+    def rate_dependent(self) -> bool:
+        """Some elasto-plastic group has Perzyna viscosity: its forces depend on :attr:`time_step`, not on the
+        displacement alone."""
+        from ..materials.plasticity import P_VISCOSITY
+
+        return any(g.plastic and (g.law_params[:, P_VISCOSITY] > 0).any() for g in self.cgroups)
+
+    @property
     def continuum_nonlinear(self) -> bool:
         """Some continuum group is evaluated at every iteration (plastic or large kinematics)."""
         return any(g.nonlinear for g in self.cgroups)
@@ -153,7 +161,7 @@ class Model:
         Venant-Kirchhoff energy of large-kinematics groups (from their last evaluation if it was at ``u``,
         else evaluated). Elasto-plastic groups are not included (their work is integrated by the caller)."""
         cached = self._continuum_force
-        if self.large and not (cached is not None and np.array_equal(cached[0], u)):
+        if self.large and not (cached is not None and np.array_equal(cached[0], u) and cached[2] == self.time_step):
             self.continuum_force(u)
         e = 0.5 * float(u @ (self.K_continuum @ u))
         return e + sum(float(g.energy.sum()) for g in self.cgroups if g.large)
@@ -234,7 +242,7 @@ class Model:
                 scatter_vector(g.fe, g.dofs, fc)
                 if want_tangent:
                     scatter_matrix(g.ke, g.scatter, data)
-        self._continuum_force = (u.copy(), fc)
+        self._continuum_force = (u.copy(), fc, self.time_step)
         f = fc.copy()
         for g in self.igroups:
             g.evaluate(self.coords, u, want_tangent)
@@ -253,7 +261,7 @@ class Model:
         instead of a sparse product), else computed (nonlinear groups evaluated, forces only). The array
         is shared: do not modify."""
         cached = self._continuum_force
-        if cached is not None and np.array_equal(cached[0], u):
+        if cached is not None and np.array_equal(cached[0], u) and cached[2] == self.time_step:
             return cached[1]
         fc = self.K_continuum @ u
         for g in self.cgroups:
@@ -282,15 +290,18 @@ class Model:
             g.revert()
 
     def far_slips(self) -> list[str]:
-        """Joint sets whose points have slid farther than the length of their element (last evaluation):
+        """Joint sets whose points have slid farther than the length of their element (committed plastic slip):
         a node-to-node joint keeps the partners it was meshed with (no contact search re-pairs them), which
         holds only approximately, and only while the faces stay on one straight (plane), rigid line. One
         text per such set."""
+        from ..materials.mohr_coulomb import S_PLASTIC_SLIP
+
         out = []
         for g in self.igroups:
             face = g.jw.sum(axis=1)  # (ne,) element length (2D) or area (3D)
             size = face if self.dim == 2 else np.sqrt(face)  # m
-            slip = np.linalg.norm(g.delta[:, :, :-1], axis=2)  # (ne, nip) m
+            # the committed plastic slip (a failed attempt's trial values do not count), (ne, nip) m
+            slip = np.linalg.norm(g.state_committed[:, :, S_PLASTIC_SLIP:S_PLASTIC_SLIP + self.dim - 1], axis=2)
             ratio = slip / size[:, None]
             if ratio.size and ratio.max() > 1.0:
                 e, i = np.unravel_index(int(np.argmax(ratio)), ratio.shape)

@@ -666,10 +666,10 @@ class EffectiveSolver:
             ref = self.refs[k]
             if ref.pinned or not isinstance(ref.fact, Factorization):
                 continue
-            if ref.fact.refactorize(self._matrix(data.copy())):
-                del self.refs[k]
-                return ref.fact
-            return None
+            # out of the cache before its factorization changes: a refactorization that raises (singular)
+            # must not leave an entry whose values no longer match its factors
+            del self.refs[k]
+            return ref.fact if ref.fact.refactorize(self._matrix(data.copy())) else None
         return None
 
     def _substitute(self, ref, b):
@@ -1660,6 +1660,8 @@ class DynamicSolver:
         f_int, Kdata = st.f_int, st.Kdata
         hint = [Kdata is None]  # the step starts with every joint sticking
         seen, stabilized, prev_sig, toggles, same = set(), False, None, 0, 0
+        if m.rate_dependent:  # viscous blocks relax over the step even where u does not move: their force
+            f_int, Kdata = evaluate(u)  # at the predictor is not the one the step started with
         kind_prev, rn_prev, allow_modified = None, math.inf, s.modified_newton
         hist, damping = [], 1.0
         e0 = None

@@ -329,11 +329,16 @@ def _stiffness_and_mass(model, u, lumped, mass):
     if model.dofmap is None:
         raise SceneError("supports", "modal analysis needs the constraints: call model.set_constraints first")
     saved = [(g.state_trial.copy(), g.delta.copy(), g.traction.copy()) for g in model.igroups]
+    plastic = [(g, g.state_trial.copy()) for g in model.cgroups if g.plastic]
+    time_step, model.time_step = model.time_step, 0.0  # the tangent of the state as it is, not of a step in time
     try:
         _, K = model.evaluate(np.zeros(model.n_dof) if u is None else np.asarray(u, dtype=np.float64), True)
     finally:
+        model.time_step = time_step
         for g, (s, d, t) in zip(model.igroups, saved):
             g.state_trial[:], g.delta[:], g.traction[:] = s, d, t
+        for g, s in plastic:
+            g.state_trial[:] = s
     K = ((K + K.T) * 0.5).tocsr()
     if mass is None:
         mass = MassMatrix(model, lumped)

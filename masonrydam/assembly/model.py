@@ -255,6 +255,16 @@ class Model:
             K = sp.csr_matrix((data, self.indices, self.indptr), shape=(n, n))
         return f, K
 
+    def tangent_product(self, x: np.ndarray) -> np.ndarray:
+        """``K x`` (n_dof,) with the full-DOF tangent of the last evaluation with tangents (the linear blocks'
+        constant stiffness, the element tangents of nonlinear blocks and joints), for any ``x`` (n_dof,),
+        prescribed DOFs included: e.g. the load a prescribed displacement increment puts on the free DOFs
+        (arc-length control)."""
+        y = self.K_continuum @ x
+        for g in [g for g in self.cgroups if g.nonlinear] + list(self.igroups):
+            scatter_vector(np.einsum("eij,ej->ei", g.ke, x[g.dofs]), g.dofs, y)
+        return y
+
     def continuum_force(self, u: np.ndarray) -> np.ndarray:
         """The blocks' internal forces (n_dof,) N at ``u`` (``K_continuum @ u`` plus the nonlinear groups'
         forces): the ones :meth:`evaluate` computed if it was called last at this very ``u`` (a comparison

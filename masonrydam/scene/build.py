@@ -360,7 +360,8 @@ def build_stages(scene: dict, mesh: Mesh, model: Model, base_dir: Path | None = 
                                                       "its duration (s), the time over which its load is applied (set "
                                                       "viscosity = 0 for a rate-independent law)")
         stages.append(StaticStage(st["name"], st["steps"], force, presc, incr, supports.copy(), water=water,
-                                  until_failure=st.get("until_failure", False), duration=st.get("duration", 0.0)))
+                                  until_failure=st.get("until_failure", False), duration=st.get("duration", 0.0),
+                                  control=st.get("control", "load")))
         held = presc.copy()
     return stages
 

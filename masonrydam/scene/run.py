@@ -613,7 +613,8 @@ def _stats_attrs(solver, t_start, dyn_solvers=()):
            "joint_space_setup_s": round(st.joint_space_setup_s, 4),
            "joint_space_flexibility_columns": st.joint_space_flexibility_columns,
            "joint_space_flexibility_s": round(st.joint_space_flexibility_s, 4),
-           "step_cuts": st.step_cuts, "solve_wall_time_s": round(st.wall_time_s, 4),
+           "step_cuts": st.step_cuts, "arc_length_steps": st.arc_length_steps,
+           "arc_length_switches": st.arc_length_switches, "solve_wall_time_s": round(st.wall_time_s, 4),
            "total_wall_time_s": round(time.perf_counter() - t_start, 4), "per_stage": json.dumps(st.per_stage)}
     far = solver.model.far_slips()
     if far:
@@ -729,6 +730,10 @@ def print_summary(sc, mesh, model, eff, solver, stats, path, ds, file=None, dyn_
                  f"[{resolve_backend(solver.s.linear_solver, n_dof=model.n_dof, dim=model.dim)}; "
                  f"{stats['symbolic_analyses']} symbolic analyses], {stats['newton_iterations']} general Newton "
                  "iterations")
+    if stats["arc_length_steps"]:
+        lines.append(f"arc length : {stats['arc_length_steps']} steps under arc-length control (Crisfield)"
+                     + (f", {stats['arc_length_switches']} stage(s) switched to it where load control stalled"
+                        if stats["arc_length_switches"] else ""))
     if stats["joint_space_size"]:
         lines.append(f"joint space: static steps on {stats['joint_space_size']} joint unknowns (set-up "
                      f"{stats['joint_space_setup_s']:.3g} s): {stats['joint_space_steps']} step attempts converged "

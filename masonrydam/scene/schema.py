@@ -54,6 +54,10 @@ def plain(value):
     return copy.deepcopy(value)
 
 
+#: static stage control: its own (load / displacement, arc-length where that stalls) or arc-length from the start
+STATIC_CONTROLS = ("load", "arc_length")
+
+
 def _model(d):
     _check_keys(d, {"name", "dimension", "hypothesis", "thickness", "gravity", "kinematics"}, "model")
     dim = _int(d.get("dimension", 2), "model.dimension")
@@ -627,7 +631,7 @@ def normalize(raw: dict) -> dict:
         if st and st[-1]["type"] in ("dynamic", "modal"):
             raise SceneError(f"{key}.type", "static stages must come before the modal and dynamic stages (they "
                                             "continue from the static state)")
-        _check_keys(s, {"name", "type", "steps", "loads", "until_failure", "duration"}, key)
+        _check_keys(s, {"name", "type", "steps", "loads", "until_failure", "duration", "control"}, key)
         loads = s.get("loads", [])
         if not isinstance(loads, list):
             raise SceneError(f"{key}.loads", "expected an array of tables [[stages.loads]]")
@@ -635,6 +639,8 @@ def normalize(raw: dict) -> dict:
                    "steps": _int(s.get("steps", 1), f"{key}.steps", 1),
                    "until_failure": _bool(s.get("until_failure", False), f"{key}.until_failure"),
                    "loads": [_load(ld, f"{key}.loads[{j}]", dim) for j, ld in enumerate(loads)]})
+        # "load" (the stage's loads and prescribed displacements, arc-length where that stalls) or "arc_length"
+        st[-1]["control"] = _choice(s.get("control", "load"), STATIC_CONTROLS, f"{key}.control")
         if "duration" in s:  # physical time, for rate-dependent (Perzyna) blocks
             st[-1]["duration"] = _positive(s["duration"], "time", f"{key}.duration")
         if st[-1]["until_failure"] and i != len(stages) - 1:

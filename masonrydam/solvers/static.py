@@ -94,6 +94,10 @@ class StaticStage:
     #: physical time of the stage (s): a load step of load-factor increment d_lambda lasts
     #: ``duration * d_lambda``, the time step of rate-dependent (Perzyna) blocks; 0: no time (instantaneous)
     duration: float = 0.0
+    #: "load": the stage's own control (loads, prescribed displacements), switching to arc-length control
+    #: where a step finds no equilibrium after its cuts; "arc_length": arc-length control from the start
+    #: (:mod:`.arc_length`)
+    control: str = "load"
 
 
 #: a static stage whose joint set is too large for the dense flexibility (JOINT_SPACE_MAX) is condensed
@@ -122,6 +126,8 @@ class SolveStats:
     step_cuts: int = 0
     line_searches: int = 0
     stabilized_steps: int = 0
+    arc_length_steps: int = 0  # steps taken under arc-length control
+    arc_length_switches: int = 0  # stages that switched to arc-length control where load control stalled
     wall_time_s: float = 0.0
     per_stage: list = field(default_factory=list)
 
@@ -451,6 +457,31 @@ class StaticSolver:
             last_energy = e
         return False, u, s.max_iterations, None
 
+    def _arc_length(self, si, st, u, u_start, f_base, lam, stage_stats, dl0, direction):
+        """The stage from ``lam`` under arc-length control (:class:`~.arc_length.ArcLengthStage`); returns
+        (u, lam) where it ended (lam >= 1: the stage is done). Every converged step is recorded."""
+        from .arc_length import ArcLengthStage
+
+        def record(u_now, lam_now, f_int, f_ext):
+            stage_stats["steps"] += 1
+            self.on_step(si, st, lam_now, u_now, f_int, f_ext)
+            if self.progress is not None:
+                self.progress(si, max(0.0, min(lam_now, 1.0)))
+
+        self._where = f"{st.name}: arc-length control from load factor {lam:.4g}"
+        arc = ArcLengthStage(self, st, u, u_start, f_base, lam, record, dl0=dl0, direction=direction)
+        u, lam, _ = arc.run()
+        if lam < 1.0 - 1e-12:  # the path peaked below 1 and came down: the stage's end is not on it
+            what = (f"arc-length control: the load factor peaked at {arc.peak:.4g} and came back to {lam:.4g} "
+                    "along the descending branch")
+            if not st.until_failure:
+                raise ConvergenceError(f"stage '{st.name}': {what} before reaching 1 (set until_failure = true "
+                                       "to record the branch and keep the peak as the limit)")
+            self.limit = {"stage": st.name, "load_factor": arc.peak, "failed_at": lam, "reason": what}
+            self.stats.per_stage.append(dict(stage_stats, iterations=self.stats.iterations
+                                             + self.stats.joint_space_iterations))
+        return u, max(lam, 1.0) if lam >= 1.0 - 1e-12 else lam
+
     def _line_search(self, u, du, r0, f_ext, max_tries=6):
         """Secant line search on g(s) = du . r(u + s du) (Crisfield 1991, sec. 9.3.1)."""
         m, free = self.model, self.model.dofmap.free
@@ -512,6 +543,11 @@ class StaticSolver:
             cuts = 0
             stage_stats = {"stage": st.name, "steps": 0, "iterations": 0, "step_cuts": 0}
             it_before = self.stats.iterations + self.stats.joint_space_iterations
+            last_du = None  # the free-DOF increment of the last converged step (arc-length's direction)
+            if st.control == "arc_length":
+                u, lam = self._arc_length(si, st, u, u_start, f_base, lam, stage_stats, None, None)
+                if self.limit is not None:
+                    return u
             while lam < 1.0 - 1e-12:
                 dl = min(dlam, 1.0 - lam)
                 target = lam + dl
@@ -533,6 +569,7 @@ class StaticSolver:
                 except SingularMatrix as exc:
                     ok, singular = False, exc
                 if ok:
+                    last_du = (u_new - u)[m.dofmap.free]
                     u = u_new
                     if state_load is not None:  # (the trial states are those of the converged solution)
                         f_ext = f_ext + state_load()
@@ -569,6 +606,21 @@ class StaticSolver:
                     self.stats.per_stage.append(dict(stage_stats, iterations=self.stats.iterations
                                                      + self.stats.joint_space_iterations - it_before))
                     return u
+                if final and not parts and st.water is None and last_du is not None \
+                        and float(np.linalg.norm(last_du)) > 0:
+                    # load control stalled (a limit point, a snap): the rest of the stage under arc-length
+                    # control from the last converged state, with the arc of its last increment
+                    try:
+                        self.stats.arc_length_switches += 1
+                        u, lam = self._arc_length(si, st, u, u_start, f_base, lam, stage_stats,
+                                                  float(np.linalg.norm(last_du)) / 2.0, last_du)
+                        if self.limit is not None:
+                            return u
+                        cuts = 0
+                        continue
+                    except (ConvergenceError, NumericalError, SingularMatrix) as exc:
+                        m.revert()
+                        hint += f"; arc-length control from load factor {lam:.4g} did not get through either ({exc})"
                 if final:
                     if parts:
                         raise MechanismError(

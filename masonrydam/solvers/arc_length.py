@@ -1,0 +1,194 @@
+"""Arc-length control of a static stage (issue 18): following a load-displacement path past limit points,
+snap-throughs and snap-backs, where load or displacement control stalls.
+
+The stage's loading is one parameter ``lambda``: external forces ``f_base + lambda F`` and prescribed
+displacements ``u_p = u_start,p + lambda Delta_p`` (a displacement-controlled stage: the pushed top of a
+wall). The unknowns are the free displacements ``u_f`` and ``lambda``; equilibrium
+``r(u_f, lambda) = f_ext(lambda) - f_int(u) = 0`` on the free DOFs is closed by Crisfield's cylindrical
+arc-length constraint ``|Delta u_f|^2 = Delta l^2`` on the increment of the step (Crisfield 1981,
+Comput. Struct. 13:55-62; Crisfield, *Non-linear Finite Element Analysis of Solids and Structures*,
+vol. 1, 1991, sec. 9.3):
+
+- every iteration solves ``K du_r = r`` and ``K du_q = q`` with one factorization, ``q = dr/dlambda
+  = F_f - K_fp Delta_p`` (the prescribed part through the element tangents, :meth:`Model.tangent_product`);
+- the predictor takes ``dlambda = +- Delta l / |du_q|``, its sign following the previous step
+  (``Delta u_prev . du_q``; the first step loads);
+- a corrector ``du = du_r + dlambda du_q`` puts the increment back on the cylinder: the root of
+  ``a dlambda^2 + b dlambda + c = 0`` whose increment makes the smallest angle with the one before
+  (Crisfield's root choice); no real root halves ``Delta l``;
+- ``Delta l`` follows the iterations (``sqrt(target / iterations)``, within [1/2, 2]) between the stage's
+  first increment (``Delta l_0``) / 2^max_step_cuts and ``DL_MAX_FACTOR Delta l_0``.
+
+The stage ends at ``lambda = 1`` (the last step is a load- or displacement-controlled one onto it), or
+when ``lambda`` has come back below 0 (the structure unloaded completely), or after
+``MAX_STEPS_PER_NOMINAL`` times the stage's steps (an error unless the stage runs ``until_failure``: then the
+descending branch is recorded and the peak is the limit). Joint states commit and revert as in load control.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..errors import ConvergenceError, NumericalError
+from .linear import SingularMatrix
+
+#: an arc-length stage may take this many times its nominal steps before it gives up
+MAX_STEPS_PER_NOMINAL = 20
+#: the arc may grow to this many times the first one (a stiff structure's elastic increment is tiny next to
+#: the rotation or sliding of a mechanism that follows its peak)
+DL_MAX_FACTOR = 1e6
+#: iterations an arc-length step aims at (Delta l grows or shrinks with sqrt(target / iterations))
+TARGET_ITERATIONS = 6
+
+
+class ArcLengthStage:
+    """One static stage run under arc-length control by ``solver`` (a :class:`~.static.StaticSolver`)
+    from ``u`` at ``lam0``: ``run()`` returns (u, lam, steps). ``f_base``: the loads of the earlier
+    stages (N, full DOF); ``u_start``: the displacements at the start of the stage (the prescribed
+    increments are measured from it); ``dl0``: the first arc length (m), or None to take that of one
+    nominal increment; ``record(u, lam, f_int, f_ext)``: called after every converged step."""
+
+    def __init__(self, solver, stage, u, u_start, f_base, lam0, record, dl0=None, direction=None):
+        self.solver, self.st = solver, stage
+        self.m = solver.model
+        self.u, self.u_start, self.f_base, self.lam = u.copy(), u_start, f_base, lam0
+        self.record = record
+        self.free = self.m.dofmap.free
+        self.delta_p = np.where(stage.prescribed, stage.increment, 0.0)
+        self.dl0 = dl0
+        self.prev = direction  # the last converged increment of u_f (its direction steers the predictor)
+
+    def _state(self, u_f, lam):
+        u = self.u.copy()
+        u[self.free] = u_f
+        st = self.st
+        u[st.prescribed] = self.u_start[st.prescribed] + lam * st.increment[st.prescribed]
+        return u, self.f_base + lam * st.force
+
+    def _q(self):
+        """dr/dlambda on the free DOFs at the last evaluation (its tangents)."""
+        q = self.st.force.copy()
+        if self.st.prescribed.any():
+            q -= self.m.tangent_product(self.delta_p)
+        return q[self.free]
+
+    def _first_arc(self):
+        """The length of one nominal increment: the free-DOF part of a tangent (elastic) step."""
+        u, f_ext = self._state(self.u[self.free], self.lam)
+        _, K = self.m.evaluate(u, want_tangent=True)
+        dq = self.solver._factorize(K).solve(self._q())
+        self.m.revert()
+        return float(np.linalg.norm(dq)) / self.st.steps, dq
+
+    def run(self):
+        s, m, free = self.solver.s, self.m, self.free
+        if self.dl0 is None:
+            self.dl0, dq = self._first_arc()
+            if self.prev is None:
+                self.prev = dq
+        if not self.dl0 > 0:
+            raise NumericalError(f"stage '{self.st.name}': arc-length control found no displacement to follow")
+        dl = self.dl0
+        dl_min, dl_max = self.dl0 / 2.0 ** s.max_step_cuts, DL_MAX_FACTOR * self.dl0
+        steps = 0
+        self.peak = self.lam
+        while self.lam < 1.0 - 1e-12:
+            if steps >= MAX_STEPS_PER_NOMINAL * self.st.steps:
+                if self.st.until_failure:
+                    break
+                raise ConvergenceError(f"stage '{self.st.name}': arc-length control took {steps} steps and reached "
+                                       f"load factor {self.lam:.4g} of 1; the path winds back (a snap-back "
+                                       "cascade) or the arc is too short")
+            ok, u_f, lam, its, f_int, f_ext = self._step(dl)
+            if not ok:
+                m.revert()
+                dl /= 2.0
+                self.solver.stats.step_cuts += 1
+                if dl < dl_min:
+                    raise ConvergenceError(f"stage '{self.st.name}': arc-length control found no equilibrium "
+                                           f"beyond load factor {self.lam:.4g} (arc {dl * 2:.3g} m after "
+                                           f"{s.max_step_cuts} cuts)")
+                continue
+            if lam > 1.0:  # past the end of the stage: the last step onto lambda = 1, controlled
+                m.revert()
+                ok, u1, its1, f_int1, f_ext1 = self._controlled(1.0)
+                if ok:
+                    u_f, lam, its, f_int, f_ext = u1[free], 1.0, its1, f_int1, f_ext1
+                else:
+                    m.revert()
+                    dl /= 2.0
+                    continue
+            steps += 1
+            self.prev = u_f - self.u[free]
+            self.u, _ = self._state(u_f, lam)
+            self.lam = lam
+            self.peak = max(self.peak, lam)
+            m.commit()
+            self.solver.stats.steps += 1
+            self.solver.stats.arc_length_steps += 1
+            self.record(self.u, lam, f_int, f_ext)
+            dl = float(np.clip(dl * math.sqrt(TARGET_ITERATIONS / max(its, 1)), dl / 2.0, 2.0 * dl))
+            dl = min(max(dl, dl_min), dl_max)
+            if lam < 0.0:  # unloaded completely: the rest of the stage is not on this path
+                break
+        return self.u, self.lam, steps
+
+    def _controlled(self, lam):
+        """A step onto ``lam`` under the stage's own (load or displacement) control."""
+        u, f_ext = self._state(self.u[self.free], lam)
+        ok, u_new, its, f_int = self.solver._newton_iterations(u, f_ext)
+        return ok, u_new, its, f_int, f_ext
+
+    def _step(self, dl):
+        """One arc-length step of length ``dl``: (ok, u_f, lambda, iterations, f_int, f_ext)."""
+        s, m, free = self.solver.s, self.m, self.free
+        u0_f = self.u[free].copy()
+        u_f, lam = u0_f.copy(), self.lam
+        Du = np.zeros_like(u0_f)
+        ref0 = None
+        for it in range(s.max_iterations + 1):
+            u, f_ext = self._state(u_f, lam)
+            f_int, K = m.evaluate(u, want_tangent=True)
+            r = (f_ext - f_int)[free]
+            if not np.isfinite(r).all():
+                raise NumericalError("NaN or infinity in the residual (check loads and stiffnesses)")
+            rn = float(np.linalg.norm(r))
+            ref = max(float(np.linalg.norm(f_ext)), float(np.linalg.norm(f_int)), 1e-30)
+            ref0 = rn if ref0 is None else ref0
+            if it > 0 and rn <= s.force_tolerance * max(ref, ref0):
+                return True, u_f, lam, it, f_int, f_ext
+            if it == s.max_iterations:
+                break
+            try:
+                fact = self.solver._factorize(K)
+                du_r = fact.solve(r)
+                du_q = fact.solve(self._q())
+            except SingularMatrix:
+                return False, None, None, it, None, None
+            self.solver.stats.iterations += 1
+            if it == 0:
+                nq = float(np.linalg.norm(du_q))
+                if not nq > 0:
+                    return False, None, None, it, None, None
+                sign = 1.0 if self.prev is None or float(self.prev @ du_q) >= 0.0 else -1.0
+                dlam = sign * dl / nq
+                du = dlam * du_q  # (r = 0 at a converged start)
+                du += du_r
+            else:
+                w = Du + du_r
+                a = float(du_q @ du_q)
+                b = 2.0 * float(du_q @ w)
+                c = float(w @ w) - dl * dl
+                disc = b * b - 4.0 * a * c
+                if not (a > 0 and disc >= 0.0):
+                    return False, None, None, it, None, None
+                root = math.sqrt(disc)
+                cands = [(-b + root) / (2.0 * a), (-b - root) / (2.0 * a)]
+                # Crisfield's choice: the new increment closest in direction to the one before
+                dlam = max(cands, key=lambda x: float((w + x * du_q) @ Du))
+                du = du_r + dlam * du_q
+            Du = Du + du
+            u_f = u_f + du
+            lam = lam + dlam
+        return False, None, None, s.max_iterations, None, None

@@ -122,6 +122,20 @@ def _cmd_plot(args):
     from ..results.files import check_output_path, open_result
 
     path = Path(args.result)
+    if args.pushover and args.mode is not None:
+        raise MasonrydamError("--pushover and --mode draw different figures: give one of them")
+    if args.pushover:
+        for opt in ("nodes", "joints", "scale"):
+            if getattr(args, opt) is not None:
+                raise MasonrydamError(f"--{opt} does not apply to a pushover curve (--pushover)")
+        from ..results.files import check_output_path, open_result
+        from ..results.pushover import pushover_figure
+
+        out = check_output_path(args.output or f"{path.stem}_pushover.png", "-o")
+        fig = pushover_figure(open_result(path), args.component or "x", title=path.name)
+        fig.savefig(out, dpi=110)
+        print(f"wrote {out}")
+        return 0
     if args.mode is None and args.scale is not None:
         raise MasonrydamError("--scale applies to a mode shape; give --mode N as well")
     if args.mode is not None:
@@ -289,6 +303,9 @@ def main(argv=None) -> int:
                     help="draw mode shape N (1-based, as the file's mode coordinate) of a result with a modal "
                          "stage instead of the histories: undeformed nodes and joints grey, deformed nodes "
                          "coloured; 3D results in a 3D view")
+    pl.add_argument("--pushover", action="store_true",
+                    help="draw the pushover curve of a static result: the force on the DOFs a stage drives by "
+                         "prescribed displacements against their displacement (--component, default x)")
     pl.add_argument("--scale", type=float, metavar="S",
                     help="with --mode: drawn displacement = S x mass-normalised shape (default: the largest "
                          "displacement is 10 %% of the model's largest extent)")

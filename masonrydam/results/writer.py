@@ -106,7 +106,7 @@ class ResultWriter:
     def __init__(self, path, coords, nodes, joint_points, dim, attrs: dict, dynamic: bool = False,
                  options: OutputOptions | None = None, sections: dict | None = None, water: bool = False,
                  pore_pressure: bool = False, elements: dict | None = None, modes: int | None = None,
-                 hydrodynamic: dict | None = None):
+                 hydrodynamic: dict | None = None, driven: np.ndarray | None = None):
         self.path = str(path)
         self.dim = dim
         self.dynamic = bool(dynamic)
@@ -133,6 +133,10 @@ class ResultWriter:
         for k, c in enumerate(comps):
             v = self._var(c, "f8", ("node",), "m", f"{c} coordinate of the node (undeformed)")
             v[:] = coords[nodes, k]
+        if driven is not None:  # (n_nodes, dim) stage index + 1 of the last static stage driving the DOF, 0: none
+            self._var("driven", "i4", ("node", "component"), "1",
+                      "1 + index of the last static stage that prescribes a displacement increment of the DOF "
+                      "(0: none): the actuator DOFs of a pushover")[:] = driven[nodes]
         jp = joint_points
         self._var("joint_point", "i8", ("joint_point",), "1", "joint integration point index")[:] = \
             np.arange(len(jp["element"]))

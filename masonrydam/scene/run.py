@@ -207,7 +207,8 @@ def run(scene, output: str | os.PathLike | None = None, progress: bool = False, 
                               elements=_element_info(model) if s["output"]["stress"] == "element" else None,
                               modes=None if modal_stage is None else modal_stage.modes,
                               hydrodynamic=None if moving is None or not dyn_stages else
-                              {"nodes": moving.nodes, "coords": model.coords[moving.nodes]})
+                              {"nodes": moving.nodes, "coords": model.coords[moving.nodes]},
+                              driven=_driven(static_stages, model))
     except OSError as exc:  # e.g. another run holds the working file (HDF5 file lock), disk full
         if target is None:
             os.unlink(work)
@@ -331,6 +332,15 @@ def _end_early(exc, stopper, writer, work, target, stats):
         where = (f"; the earlier result in {target} is unchanged" if kept != target else "")
         exc.add_note(f"results of {steps} converged step(s) were kept in {kept} (completed = false){where}")
     return None
+
+
+def _driven(static_stages, model):
+    """(n_nodes, dim) int: 1 + the index of the last static stage that prescribes a non-zero displacement
+    increment of each DOF (0: none), the actuator of a pushover; None when no stage does."""
+    out = np.zeros(model.n_dof, dtype=np.int32)
+    for i, st in enumerate(static_stages):
+        out[st.prescribed & (st.increment != 0.0)] = i + 1
+    return out.reshape(-1, model.dim) if out.any() else None
 
 
 def _dynamic_attrs(stages) -> dict:

@@ -1,0 +1,67 @@
+"""Pushover curves of static results: the force of the actuator against its displacement (issue 18).
+
+The actuator is the set of DOFs a static stage drives by prescribed displacements (the result's
+``driven`` variable, 1 + the stage index). Its force is the sum of the reactions at those DOFs along the
+chosen component (N, the force the actuator applies to the structure), its displacement their mean
+(m). ``masonrydam plot OUT.nc --pushover`` draws it; :func:`pushover_data` gives the numbers.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import MasonrydamError
+
+
+def pushover_data(ds, component: str = "x", stage: int | None = None):
+    """``(displacement (n,), force (n,), steps (n,))`` of the actuator in ``component``: the steps of the
+    driving stage (default: the last stage that drives this component), from the step before it (the state
+    it starts from). Raises MasonrydamError naming what is missing."""
+    if "driven" not in ds:
+        raise MasonrydamError("the result has no prescribed-displacement stage (variable 'driven'): a pushover "
+                              "curve needs a static stage with a load of type \"displacement\"")
+    comps = list(ds.component.values)
+    if component not in comps:
+        raise MasonrydamError(f"--component {component!r}: the result has components {comps}")
+    driven = ds.driven.sel(component=component).values  # (node,)
+    stages = sorted(set(int(v) for v in driven if v > 0))
+    if not stages:
+        raise MasonrydamError(f"no static stage drives component {component!r} (variable 'driven')")
+    s = stages[-1] if stage is None else int(stage) + 1
+    if s not in stages:
+        raise MasonrydamError(f"stage {s - 1} does not drive component {component!r}; stages that do: "
+                              f"{[k - 1 for k in stages]}")
+    nodes = driven == s
+    steps = np.flatnonzero(ds.stage.values == s - 1)
+    if len(steps) == 0:
+        raise MasonrydamError(f"the result has no converged step of stage {s - 1}")
+    if steps[0] > 0:
+        steps = np.concatenate([[steps[0] - 1], steps])
+    d = ds.displacement.sel(component=component).values[steps][:, nodes].mean(axis=1)
+    f = ds.reaction.sel(component=component).values[steps][:, nodes].sum(axis=1)
+    return d, f, steps
+
+
+def pushover_figure(ds, component: str = "x", title: str | None = None):
+    """The pushover curve (force in kN against displacement in mm) of :func:`pushover_data` as a
+    matplotlib Figure; the peak is marked and labelled."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    d, f, _ = pushover_data(ds, component)
+    fig, ax = plt.subplots(figsize=(6.0, 4.2))
+    sign = 1.0 if abs(f.max()) >= abs(f.min()) else -1.0  # draw the pushing direction upwards
+    sd = 1.0 if abs(d.max()) >= abs(d.min()) else -1.0
+    ax.plot(sd * d * 1e3, sign * f / 1e3, "-o", ms=2.5, lw=1.2, color="C0", label="actuator force")
+    k = int(np.argmax(sign * f))
+    ax.plot(sd * d[k] * 1e3, sign * f[k] / 1e3, "v", color="C3",
+            label=f"peak {sign * f[k] / 1e3:.3g} kN at {sd * d[k] * 1e3:.3g} mm")
+    ax.set_xlabel(f"displacement of the driven DOFs, {component} (mm)")
+    ax.set_ylabel(f"force on the driven DOFs, {component} (kN)")
+    ax.grid(True, alpha=0.3)
+    ax.legend(loc="best", fontsize=8)
+    if title:
+        ax.set_title(title)
+    fig.tight_layout()
+    return fig

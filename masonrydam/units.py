@@ -29,9 +29,10 @@ _UNITS = {
     "N": ("force", 1.0), "kN": ("force", 1e3), "MN": ("force", 1e6),
     "deg": ("angle", 1.0), "degree": ("angle", 1.0), "degrees": ("angle", 1.0),
     "m/s2": ("acceleration", 1.0), "g": ("acceleration", 9.80665),
+    "N/m": ("fracture_energy", 1.0), "J/m2": ("fracture_energy", 1.0), "N/mm": ("fracture_energy", 1e3),
 }
 SI_UNIT = {"stress": "Pa", "stiffness": "N/m3", "length": "m", "density": "kg/m3", "force": "N",
-           "angle": "deg", "acceleration": "m/s2", "time": "s"}
+           "angle": "deg", "acceleration": "m/s2", "time": "s", "fracture_energy": "N/m"}
 _NUM = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([A-Za-z/0-9.]+)?\s*$")
 
 

@@ -207,7 +207,14 @@ class InterfaceGroup:
         # trial / commit / revert: ``state_committed`` is the last converged state; ``state_base`` is
         # what the kernel reads in this step: the committed state plus bonds latched broken in
         # earlier iterations of the step (see :meth:`latch_broken_bonds`); ``state_trial`` is written.
-        self.state_committed = np.zeros((ne, self.nip, mc.N_JOINT_STATE))
+        self.law_id = ik.JOINT_LAW_IDS[law]
+        if law == "composite":
+            from ..materials import composite_interface as ci
+
+            n_state, self.open_tangent_column = ci.N_COMPOSITE_STATE, ci.P_OPEN_TANGENT
+        else:
+            n_state, self.open_tangent_column = mc.N_JOINT_STATE, mc.P_OPEN_TANGENT
+        self.state_committed = np.zeros((ne, self.nip, n_state))
         self.state_base = np.zeros_like(self.state_committed)
         self.state_trial = np.zeros_like(self.state_committed)
         self.delta = np.zeros((ne, self.nip, dim))
@@ -228,7 +235,7 @@ class InterfaceGroup:
 
     @property
     def nonlinear(self) -> bool:
-        return self.law == "mohr_coulomb"
+        return self.law in ("mohr_coulomb", "composite")
 
     def evaluate(self, coords, u, want_tangent=True):
         """Evaluate tractions, nodal forces and (optionally) tangents from the committed state."""
@@ -238,9 +245,9 @@ class InterfaceGroup:
         if self.kinematics == "large":
             from ..elements.interface_large import interface_large_evaluate
 
-            st = interface_large_evaluate(*args, 0.0 if self.frame_surface == "bottom" else 0.5)
+            st = interface_large_evaluate(*args, 0.0 if self.frame_surface == "bottom" else 0.5, self.law_id)
         else:
-            st = ik.interface_evaluate(*args)
+            st = ik.interface_evaluate(*args, self.law_id)
         raise_for_status(st, self.info, self.name, "joint evaluation")
 
     def commit(self):
@@ -259,6 +266,8 @@ class InterfaceGroup:
         when a point opens; letting an iteration "un-break" a bond makes Newton chatter between the
         two sides of that jump. Returns the number of newly latched points.
         """
+        if self.law != "mohr_coulomb":  # (softening laws have no bond jump to latch)
+            return 0
         col = mc.S_BOND_BROKEN
         new = (self.state_trial[:, :, col] != 0) & (self.state_base[:, :, col] == 0)
         n = int(new.sum())

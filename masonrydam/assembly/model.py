@@ -138,6 +138,12 @@ class Model:
         return any(g.large for g in self.cgroups) or any(g.kinematics == "large" for g in self.igroups)
 
     @property
+    def joint_space_capable(self) -> bool:
+        """Every nonlinear joint set follows the seed's Mohr-Coulomb law, the one the joint-space kernels
+        carry (:mod:`masonrydam.solvers.joint_space_kernels`)."""
+        return all(g.law != "composite" for g in self.igroups)
+
+    @property
     def rate_dependent(self) -> bool:
         """Some elasto-plastic group has Perzyna viscosity: its forces depend on :attr:`time_step`, not on the
         displacement alone."""
@@ -282,10 +288,8 @@ class Model:
 
     def set_open_tangent(self, factor: float) -> None:
         """Tangent factor of open joint points (0: consistent; 1: initial stiffness). Residuals unchanged."""
-        from ..materials.mohr_coulomb import P_OPEN_TANGENT
-
         for g in self.igroups:
-            g.params_table[:, P_OPEN_TANGENT] = factor
+            g.params_table[:, g.open_tangent_column] = factor
 
     def commit(self) -> None:
         for g in self.cgroups:

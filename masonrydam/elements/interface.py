@@ -44,6 +44,7 @@ from ..errors import STATUS_BAD_GEOMETRY, STATUS_NAN, STATUS_OK
 from ..materials.mohr_coulomb import (P_COHESION, P_KN, P_KS, P_KS_RESIDUAL, P_OPEN_TANGENT, P_TAN_PHI,
                                       P_TENSILE_STRENGTH, S_BACK_STRESS, S_BOND_BROKEN, S_CODE, S_PLASTIC_SLIP,
                                       mohr_coulomb_point, write_tangent, write_trial)
+from ..materials.composite_interface import composite_point
 from .quadrature import QUADRATURE_SCHEMES, line_rule, tensor_rule, triangle_rule
 from .shapes import ELEMENT_TYPES, reference_nodes, shape_functions
 
@@ -232,13 +233,22 @@ def _frame(xm, dN, g, dim, R, size):
     return j
 
 
+#: joint laws of the interface kernels (argument ``law``): the seed's Mohr-Coulomb (and the linear joint, a
+#: Mohr-Coulomb joint that cannot break), and the composite masonry law of
+#: :mod:`masonrydam.materials.composite_interface`
+JOINT_LAW_IDS = {"mohr_coulomb": 0, "linear": 0, "composite": 1}
+
+
 @njit(cache=True, inline="always")
-def joint_law_at(params_table, pidx, state_committed, state_trial, delta_out, traction_out, e, g, dim, C):
+def joint_law_at(params_table, pidx, state_committed, state_trial, delta_out, traction_out, e, g, dim, C, law=0):
     """The joint law at point ``g`` of element ``e`` from its local relative displacement
     ``delta_out[e, g]`` and committed state: writes ``state_trial[e, g]``, ``traction_out[e, g]`` and the
     tangent ``C`` (dim, dim); returns the law's status. Shared by the small- and large-displacement
     interface kernels. The law runs on scalars (row views per point cost more than the law: see
-    :func:`~masonrydam.materials.mohr_coulomb.mohr_coulomb_point`)."""
+    :func:`~masonrydam.materials.mohr_coulomb.mohr_coulomb_point`). ``law``: :data:`JOINT_LAW_IDS`."""
+    if law == 1:
+        return composite_point(params_table, pidx, delta_out, dim - 1, state_committed, state_trial, e, g,
+                               traction_out, C)
     (status, code, broken, slip1, slip2, back1, back2, tau1, tau2, t_n, C11, C12, C21, C22, C1n, C2n,
      Cnn) = mohr_coulomb_point(
         params_table[pidx, P_KS], params_table[pidx, P_KN], params_table[pidx, P_COHESION],
@@ -275,6 +285,7 @@ def interface_evaluate(
     ke_out,
     want_tangent,
     info,
+    law=0,
 ):
     """Internal forces, tangent stiffness and joint state of a group of interface elements.
 
@@ -374,7 +385,7 @@ def interface_evaluate(
                 delta_out[e, g, r] = s
 
             status = joint_law_at(params_table, pidx, state_committed, state_trial, delta_out, traction_out, e, g,
-                                  dim, C)
+                                  dim, C, law)
             if status != STATUS_OK:
                 info[0] = e
                 return status

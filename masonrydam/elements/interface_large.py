@@ -198,7 +198,7 @@ def _b_matrix_2d(xm, gap, N, dN, g, top_weight, B, R, dvec, P, A, Gt, Gn):
 @njit(cache=True)
 def interface_large_evaluate(coords, conn, u, N, dN, weights, thickness, params_table, param_index, state_committed,
                              state_trial, delta_out, traction_out, fe_out, ke_out, want_tangent, info,
-                             top_weight=0.5):
+                             top_weight=0.5, law=0):
     """Co-rotational interface elements: the arguments, outputs and status codes of
     :func:`masonrydam.elements.interface.interface_evaluate` (shapes, units), with the frame of the
     current mid-surface (module docstring). ``delta_out`` holds ``[slip(s), opening]`` in that frame."""
@@ -281,7 +281,7 @@ def interface_large_evaluate(coords, conn, u, N, dN, weights, thickness, params_
                     s += R[r, k] * dvec[k]
                 delta_out[e, g, r] = s - delta0[r]
             status = joint_law_at(params_table, pidx, state_committed, state_trial, delta_out, traction_out, e, g,
-                                  dim, C)
+                                  dim, C, law)
             if status != STATUS_OK:
                 info[0] = e
                 return status

@@ -39,8 +39,34 @@ def build_mesh(scene: dict, base_dir: Path) -> Mesh:
     return read_mesh(path, spec["joints"], scene["model"]["dimension"])
 
 
-def joint_param_vector(spec: dict) -> np.ndarray:
-    """Parameter vector of :func:`mohr_coulomb_update` for a normalised joint spec."""
+def joint_param_vector(spec: dict, key: str = "joints") -> np.ndarray:
+    """Parameter vector of the joint law (:func:`mohr_coulomb_update`, or
+    :func:`~masonrydam.materials.composite_interface.composite_params`) for a normalised joint spec."""
+    if spec["law"] == "composite":
+        from ..materials import composite_interface as ci
+
+        names = ("dilatancy_confinement", "dilatancy_decay", "compressive_strength", "cap_shear_factor",
+                 "cap_fracture_energy", "cap_peak_plastic_strain", "shear_stiffness_2", "residual_friction_angle",
+                 "dilatancy_angle")
+        try:
+            row = ci.composite_params(spec["normal_stiffness"], spec["shear_stiffness"], spec["tensile_strength"],
+                                      spec["mode_I_fracture_energy"], spec["cohesion"], spec["friction_angle"],
+                                      mode_II_fracture_energy=spec["mode_II_fracture_energy"],
+                                      **{k: spec[k] for k in names if k in spec})
+            if spec["tensile_strength"] > 0 and spec["mode_I_fracture_energy"] < spec["tensile_strength"] ** 2 / \
+                    spec["normal_stiffness"]:
+                raise ValueError(f"mode_I_fracture_energy = {spec['mode_I_fracture_energy']:g} N/m is below "
+                                 f"ft^2 / kn = {spec['tensile_strength'] ** 2 / spec['normal_stiffness']:g} N/m: the "
+                                 "joint alone would snap back (its elastic energy at the peak exceeds what its "
+                                 "softening dissipates)")
+            if spec["cohesion"] > 0 and spec["mode_II_fracture_energy"] < spec["cohesion"] ** 2 / \
+                    spec["shear_stiffness"]:
+                raise ValueError(f"mode_II_fracture_energy = {spec['mode_II_fracture_energy']:g} N/m is below "
+                                 f"c^2 / ks = {spec['cohesion'] ** 2 / spec['shear_stiffness']:g} N/m: the joint "
+                                 "alone would snap back in shear")
+        except ValueError as exc:
+            raise SceneError(key, str(exc)) from None
+        return row
     if spec["law"] == "linear":
         return mc.joint_params(spec["normal_stiffness"], spec["shear_stiffness"], cohesion=_UNBREAKABLE,
                                friction_angle_deg=0.0, tensile_strength=_UNBREAKABLE)
@@ -99,8 +125,9 @@ def build_model(scene: dict, mesh: Mesh) -> Model:
         scheme = spec["integration"]
         if j.type == "interface_quad8" and scheme == "lumped" and not spec.get("integration_given", True):
             scheme = "lobatto"  # 3x3 Newton-Cotes: the lumped corner weights of quad8 are negative
+        params = joint_param_vector(spec, f"joints.{j.name}")
         try:
-            igroups.append(InterfaceGroup(j.name, j.type, j.cells, mesh.points, dim, joint_param_vector(spec),
+            igroups.append(InterfaceGroup(j.name, j.type, j.cells, mesh.points, dim, params,
                                           np.full(len(j.cells), t), spec["law"], scheme, spec.get("points"),
                                           kinematics=kinematics, frame=spec.get("frame", "mid_surface")))
         except ValueError as exc:
@@ -410,6 +437,17 @@ def effects(scene: dict, model: Model) -> list[str]:
         out.append("Mohr-Coulomb joints with slip, opening and re-contact (seed sec. 3.4): " + ", ".join(sorted(set(mc_sets))))
     if lin_sets:
         out.append("linear elastic joints: " + ", ".join(sorted(set(lin_sets))))
+    comp_sets = [g.name for g in model.igroups if g.law == "composite"]
+    if comp_sets:
+        out.append("composite masonry joints (Lourenco & Rots 1997): tension cut-off with exponential softening "
+                   "(GfI), Coulomb friction with cohesion softening (GfII) and dilatancy, compression cap where "
+                   "given: " + ", ".join(sorted(set(comp_sets))))
+    controls = sorted({st.get("control", "load") for st in scene["stages"] if st["type"] == "static"} - {"load"})
+    if controls:
+        out.append("static path following: " + ", ".join(
+            {"arc_length": "arc-length control (Crisfield's cylindrical)",
+             "opening": "indirect displacement control on the opening of the cracking joints (de Borst 1987)"}[c]
+            for c in controls))
     from ..effects import simulated
 
     return out + simulated(scene, model)

@@ -80,7 +80,8 @@ def _joint_results(groups, dim):
                 "t_normal": z, "t_shear": z.reshape(0, dim - 1), "state": z.astype(np.int8)}
     d = np.concatenate([g.delta.reshape(-1, dim) for g in groups])
     t = np.concatenate([g.traction.reshape(-1, dim) for g in groups])
-    st = np.concatenate([g.state_committed.reshape(-1, mc.N_JOINT_STATE) for g in groups])
+    # (the laws share the code and plastic-slip columns; the composite law has more after them)
+    st = np.concatenate([g.state_committed[:, :, :mc.N_JOINT_STATE].reshape(-1, mc.N_JOINT_STATE) for g in groups])
     return {"opening": d[:, -1], "slip": d[:, :-1], "plastic_slip": st[:, mc.S_PLASTIC_SLIP:mc.S_PLASTIC_SLIP + dim - 1],
             "t_normal": t[:, -1], "t_shear": t[:, :-1], "state": st[:, mc.S_CODE].astype(np.int8)}
 

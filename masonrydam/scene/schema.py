@@ -28,7 +28,14 @@ from ..units import quantity
 from ..effects.large_kinematics import JOINT_FRAMES, KINEMATICS
 from ..effects.plasticity import CONTINUUM_LAWS, material_law
 
-JOINT_LAWS = ("mohr_coulomb", "linear")
+JOINT_LAWS = ("mohr_coulomb", "linear", "composite")
+#: keys of the composite (masonry) joint law with their dimensions; None: a plain number
+_COMPOSITE_KEYS = {"tensile_strength": "stress", "mode_I_fracture_energy": "fracture_energy", "cohesion": "stress",
+                   "friction_angle": "angle", "residual_friction_angle": "angle", "dilatancy_angle": "angle",
+                   "dilatancy_confinement": "stress", "dilatancy_decay": None,
+                   "mode_II_fracture_energy": "fracture_energy", "compressive_strength": "stress",
+                   "cap_shear_factor": None, "cap_fracture_energy": "fracture_energy",
+                   "cap_peak_plastic_strain": "length", "shear_stiffness_2": "stiffness"}
 HYPOTHESES = ("plane_stress", "plane_strain")
 G_STANDARD = 9.80665
 
@@ -55,7 +62,7 @@ def plain(value):
 
 
 #: static stage control: its own (load / displacement, arc-length where that stalls) or arc-length from the start
-STATIC_CONTROLS = ("load", "arc_length")
+STATIC_CONTROLS = ("load", "arc_length", "opening")
 
 
 def _model(d):
@@ -154,7 +161,7 @@ def _material(name, d):
 def _joint(name, d):
     key = f"joints.{name}"
     _check_keys(d, {"law", "normal_stiffness", "shear_stiffness", "cohesion", "friction_angle", "tensile_strength",
-                    "residual_shear_stiffness", "integration", "points", "frame"}, key)
+                    "residual_shear_stiffness", "integration", "points", "frame"} | set(_COMPOSITE_KEYS), key)
     law = _choice(d.get("law", "mohr_coulomb"), JOINT_LAWS, f"{key}.law")
     for req in ("normal_stiffness", "shear_stiffness"):
         if req not in d:
@@ -162,7 +169,22 @@ def _joint(name, d):
     kn = _positive(d["normal_stiffness"], "stiffness", f"{key}.normal_stiffness")
     ks = _positive(d["shear_stiffness"], "stiffness", f"{key}.shear_stiffness")
     out = {"law": law, "normal_stiffness": kn, "shear_stiffness": ks}
-    if law == "mohr_coulomb":
+    if law != "composite":
+        for k in _COMPOSITE_KEYS:
+            if k in d and k not in ("cohesion", "friction_angle", "tensile_strength"):
+                raise SceneError(f"{key}.{k}", f"is a parameter of the composite law; law is \"{law}\"")
+    if law == "composite":  # Lourenco & Rots (1997): checked by materials.composite_interface.composite_params
+        for req in ("tensile_strength", "mode_I_fracture_energy", "cohesion", "friction_angle",
+                    "mode_II_fracture_energy"):
+            if req not in d:
+                raise SceneError(f"{key}.{req}", "is required for the composite law")
+        for k, dim_ in _COMPOSITE_KEYS.items():
+            if k in d:
+                out[k] = _number(d[k], f"{key}.{k}") if dim_ is None else quantity(d[k], dim_, f"{key}.{k}")
+        if "residual_shear_stiffness" in d:
+            raise SceneError(f"{key}.residual_shear_stiffness", "has no meaning for the composite law (its shear "
+                                                                "softens with mode_II_fracture_energy)")
+    elif law == "mohr_coulomb":
         if "friction_angle" not in d:
             raise SceneError(f"{key}.friction_angle", "is required for the Mohr-Coulomb law (degrees)")
         phi = quantity(d["friction_angle"], "angle", f"{key}.friction_angle")

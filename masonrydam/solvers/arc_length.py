@@ -19,6 +19,12 @@ vol. 1, 1991, sec. 9.3):
 - ``Delta l`` follows the iterations (``sqrt(target / iterations)``, within [1/2, 2]) between the stage's
   first increment (``Delta l_0``) / 2^max_step_cuts and ``DL_MAX_FACTOR Delta l_0``.
 
+With ``mode = "opening"`` the constraint is indirect displacement control instead: the area-weighted
+opening of the joint points that crack, slip or are in tension grows by ``Delta l`` per step (a linear
+constraint, ``dlambda`` in closed form; de Borst 1987). Through a sharp snap-back, where the cylindrical
+constraint also admits the elastic unloading branch and Newton wavers between the two, the opening of
+the softening joints still grows monotonically.
+
 The stage ends at ``lambda = 1`` (the last step is a load- or displacement-controlled one onto it), or
 when ``lambda`` has come back below 0 (the structure unloaded completely), or after
 ``MAX_STEPS_PER_NOMINAL`` times the stage's steps (an error unless the stage runs ``until_failure``: then the
@@ -49,7 +55,8 @@ class ArcLengthStage:
     increments are measured from it); ``dl0``: the first arc length (m), or None to take that of one
     nominal increment; ``record(u, lam, f_int, f_ext)``: called after every converged step."""
 
-    def __init__(self, solver, stage, u, u_start, f_base, lam0, record, dl0=None, direction=None):
+    def __init__(self, solver, stage, u, u_start, f_base, lam0, record, dl0=None, direction=None,
+                 mode="cylindrical"):
         self.solver, self.st = solver, stage
         self.m = solver.model
         self.u, self.u_start, self.f_base, self.lam = u.copy(), u_start, f_base, lam0
@@ -58,6 +65,10 @@ class ArcLengthStage:
         self.delta_p = np.where(stage.prescribed, stage.increment, 0.0)
         self.dl0 = dl0
         self.prev = direction  # the last converged increment of u_f (its direction steers the predictor)
+        #: "cylindrical" (|Delta u_f| = Delta l) or "opening" (indirect displacement control: the opening of
+        #: the joints that crack grows by Delta l per step, :meth:`_opening_vector`)
+        self.mode = mode
+        self.c = None
 
     def _state(self, u_f, lam):
         u = self.u.copy()
@@ -73,6 +84,36 @@ class ArcLengthStage:
             q -= self.m.tangent_product(self.delta_p)
         return q[self.free]
 
+    def _opening_vector(self, all_points=False):
+        """``c`` (free DOFs): ``c . u`` is the area-weighted normal opening (m^3 per m of thickness in 2D) of
+        the joint points that are cracking or slipping, or else in tension, in the last converged state:
+        the quantity indirect displacement control makes grow (de Borst 1987, Comput. Struct. 25:211-224;
+        the crack opening of a softening joint grows monotonically through a snap-back, where the global
+        displacement norm turns back). ``all_points``: every point of the nonlinear joints where none
+        qualifies (a stage that starts unloaded). None when there is none."""
+        m, dim = self.m, self.m.dim
+        c = np.zeros(m.n_dof)
+        found = False
+        for g in m.igroups:
+            if not g.nonlinear:
+                continue
+            codes = g.state_committed[:, :, 0]
+            active = (codes != 0) | (g.traction[:, :, dim - 1] > 0.0)
+            if not active.any():
+                if not all_points:
+                    continue
+                active = np.ones_like(active)
+            found = True
+            ns = g.conn.shape[1] // 2
+            w = g.jw * g.thickness[:, None]  # (ne, nip) m2
+            for e, q in zip(*np.nonzero(active)):
+                n = g.frame[e, q, dim - 1]
+                for a in range(ns):
+                    coef = w[e, q] * g.N[q, a] * n
+                    c[g.conn[e, ns + a] * dim:(g.conn[e, ns + a] + 1) * dim] += coef
+                    c[g.conn[e, a] * dim:(g.conn[e, a] + 1) * dim] -= coef
+        return c[self.free] if found else None
+
     def _first_arc(self):
         """The length of one nominal increment: the free-DOF part of a tangent (elastic) step."""
         u, f_ext = self._state(self.u[self.free], self.lam)
@@ -87,6 +128,14 @@ class ArcLengthStage:
             self.dl0, dq = self._first_arc()
             if self.prev is None:
                 self.prev = dq
+        if self.mode == "opening":
+            self.c = self._opening_vector(all_points=True)
+            if self.c is None:
+                raise NumericalError(f"stage '{self.st.name}': indirect displacement control found no joint "
+                                     "point cracking, slipping or in tension to follow")
+            grow = abs(float(self.c @ self.prev)) if self.prev is not None else 0.0
+            area = float(np.abs(self.c).sum()) / 2.0
+            self.dl0 = grow if grow > 0 else 1e-6 * area  # the last step's opening, or 1 um over the points
         if not self.dl0 > 0:
             raise NumericalError(f"stage '{self.st.name}': arc-length control found no displacement to follow")
         dl = self.dl0
@@ -100,6 +149,8 @@ class ArcLengthStage:
                 raise ConvergenceError(f"stage '{self.st.name}': arc-length control took {steps} steps and reached "
                                        f"load factor {self.lam:.4g} of 1; the path winds back (a snap-back "
                                        "cascade) or the arc is too short")
+            if self.mode == "opening" and steps:  # the points that crack now
+                self.c = self._opening_vector() if self._opening_vector() is not None else self.c
             ok, u_f, lam, its, f_int, f_ext = self._step(dl)
             if not ok:
                 m.revert()
@@ -167,7 +218,14 @@ class ArcLengthStage:
             except SingularMatrix:
                 return False, None, None, it, None, None
             self.solver.stats.iterations += 1
-            if it == 0:
+            if self.mode == "opening":  # linear constraint c . Delta u = dl: dlambda in closed form
+                cq = float(self.c @ du_q)
+                if cq == 0.0:
+                    return False, None, None, it, None, None
+                target = dl if it == 0 else dl - float(self.c @ Du)
+                dlam = (target - float(self.c @ du_r)) / cq
+                du = du_r + dlam * du_q
+            elif it == 0:
                 nq = float(np.linalg.norm(du_q))
                 if not nq > 0:
                     return False, None, None, it, None, None

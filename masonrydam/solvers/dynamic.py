@@ -891,6 +891,12 @@ class DynamicSolver:
     # ------------------------------------------------------------------------------------------
     def _setup(self, stage):
         m, s = self.model, self.s
+        composite = [g.name for g in m.igroups if g.law == "composite"]
+        if composite:
+            raise SceneError(f"joints.{composite[0]}.law", "the composite (softening) joint law is available in static "
+                                                           "stages only so far (its energy split and joint-space "
+                                                           "kernels are not written); use law = \"mohr_coulomb\" for a "
+                                                           "dynamic analysis")
         m.set_constraints(stage.supports)
         self.free = free = m.dofmap.free
         self.n = m.dofmap.n_eq

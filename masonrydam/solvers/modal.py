@@ -271,16 +271,18 @@ def _elastic_joint_parts(model):
     parts = []
     for g in model.igroups:
         params = g.params_table.copy()
-        params[:, mc.P_COHESION] = 1e300
-        params[:, mc.P_TENSILE_STRENGTH] = 1e300
-        params[:, mc.P_OPEN_TANGENT] = 0.0
+        if g.law != "composite":  # (the composite law is elastic at zero displacement from a virgin state)
+            params[:, mc.P_COHESION] = 1e300
+            params[:, mc.P_TENSILE_STRENGTH] = 1e300
+        params[:, g.open_tangent_column] = 0.0
         zeros = np.zeros_like(g.state_committed)
         trial = np.zeros_like(g.state_committed)
         delta, traction = np.zeros_like(g.delta), np.zeros_like(g.traction)
         fe, ke = np.zeros_like(g.fe), np.zeros_like(g.ke)
         info = np.zeros(1, dtype=np.int64)
         st = ik.interface_evaluate(model.coords, g.conn, np.zeros(model.n_dof), g.N, g.dN, g.weights, g.thickness,
-                                   params, g.param_index, zeros, trial, delta, traction, fe, ke, True, info)
+                                   params, g.param_index, zeros, trial, delta, traction, fe, ke, True, info,
+                                   g.law_id)
         raise_for_status(st, info, g.name, "elastic joint stiffness")
         parts.append((g, ke))
     return parts

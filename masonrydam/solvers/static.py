@@ -96,7 +96,7 @@ class StaticStage:
     duration: float = 0.0
     #: "load": the stage's own control (loads, prescribed displacements), switching to arc-length control
     #: where a step finds no equilibrium after its cuts; "arc_length": arc-length control from the start
-    #: (:mod:`.arc_length`)
+    #: (:mod:`.arc_length`); "opening": indirect displacement control on the opening of the cracking joints
     control: str = "load"
 
 
@@ -306,7 +306,8 @@ class StaticSolver:
         from .joint_space import JointSpace, joint_space_size
 
         m, s = self.model, self.s
-        if s.joint_space == "off" or s.method != "newton" or not m.nonlinear or not m.condensable:
+        if s.joint_space == "off" or s.method != "newton" or not m.nonlinear or not m.condensable \
+                or not m.joint_space_capable:
             return None  # (elasto-plastic blocks, large kinematics: the condensation needs linear blocks)
         if self._js_dofmap is m.dofmap:
             return self._js
@@ -457,7 +458,7 @@ class StaticSolver:
             last_energy = e
         return False, u, s.max_iterations, None
 
-    def _arc_length(self, si, st, u, u_start, f_base, lam, stage_stats, dl0, direction):
+    def _arc_length(self, si, st, u, u_start, f_base, lam, stage_stats, dl0, direction, mode="cylindrical"):
         """The stage from ``lam`` under arc-length control (:class:`~.arc_length.ArcLengthStage`); returns
         (u, lam) where it ended (lam >= 1: the stage is done). Every converged step is recorded."""
         from .arc_length import ArcLengthStage
@@ -469,7 +470,7 @@ class StaticSolver:
                 self.progress(si, max(0.0, min(lam_now, 1.0)))
 
         self._where = f"{st.name}: arc-length control from load factor {lam:.4g}"
-        arc = ArcLengthStage(self, st, u, u_start, f_base, lam, record, dl0=dl0, direction=direction)
+        arc = ArcLengthStage(self, st, u, u_start, f_base, lam, record, dl0=dl0, direction=direction, mode=mode)
         u, lam, _ = arc.run()
         if lam < 1.0 - 1e-12:  # the path peaked below 1 and came down: the stage's end is not on it
             what = (f"arc-length control: the load factor peaked at {arc.peak:.4g} and came back to {lam:.4g} "
@@ -544,8 +545,9 @@ class StaticSolver:
             stage_stats = {"stage": st.name, "steps": 0, "iterations": 0, "step_cuts": 0}
             it_before = self.stats.iterations + self.stats.joint_space_iterations
             last_du = None  # the free-DOF increment of the last converged step (arc-length's direction)
-            if st.control == "arc_length":
-                u, lam = self._arc_length(si, st, u, u_start, f_base, lam, stage_stats, None, None)
+            if st.control in ("arc_length", "opening"):
+                u, lam = self._arc_length(si, st, u, u_start, f_base, lam, stage_stats, None, None,
+                                          "cylindrical" if st.control == "arc_length" else "opening")
                 if self.limit is not None:
                     return u
             while lam < 1.0 - 1e-12:
@@ -610,17 +612,25 @@ class StaticSolver:
                         and float(np.linalg.norm(last_du)) > 0:
                     # load control stalled (a limit point, a snap): the rest of the stage under arc-length
                     # control from the last converged state, with the arc of its last increment
-                    try:
-                        self.stats.arc_length_switches += 1
-                        u, lam = self._arc_length(si, st, u, u_start, f_base, lam, stage_stats,
-                                                  float(np.linalg.norm(last_du)) / 2.0, last_du)
+                    self.stats.arc_length_switches += 1
+                    tried = []
+                    for mode in ("cylindrical", "opening"):  # the global arc first, then the cracks' opening
+                        try:
+                            u, lam = self._arc_length(si, st, u, u_start, f_base, lam, stage_stats,
+                                                      float(np.linalg.norm(last_du)) / 2.0, last_du, mode)
+                            break
+                        except (ConvergenceError, NumericalError, SingularMatrix) as exc:
+                            m.revert()
+                            tried.append(f"{mode}: {exc}")
+                    else:
+                        hint += (f"; arc-length control from load factor {lam:.4g} did not get through either ("
+                                 + "; ".join(tried) + ")")
+                        tried = None
+                    if tried is not None:
                         if self.limit is not None:
                             return u
                         cuts = 0
                         continue
-                    except (ConvergenceError, NumericalError, SingularMatrix) as exc:
-                        m.revert()
-                        hint += f"; arc-length control from load factor {lam:.4g} did not get through either ({exc})"
                 if final:
                     if parts:
                         raise MechanismError(

@@ -200,7 +200,12 @@ class ArcLengthStage:
         ref0 = None
         for it in range(s.max_iterations + 1):
             u, f_ext = self._state(u_f, lam)
-            f_int, K = m.evaluate(u, want_tangent=True)
+            try:
+                f_int, K = m.evaluate(u, want_tangent=True)
+            except NumericalError:
+                if it == 0:
+                    raise
+                return False, None, None, it, None, None  # an iterate far off the path: the arc is cut
             r = (f_ext - f_int)[free]
             if not np.isfinite(r).all():
                 raise NumericalError("NaN or infinity in the residual (check loads and stiffnesses)")

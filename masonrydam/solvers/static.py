@@ -392,7 +392,14 @@ class StaticSolver:
         toggles = same = 0
         for it in range(s.max_iterations + 1):
             want_K = s.method == "newton" or self._initial is None
-            f_int, K = m.evaluate(u, want_tangent=want_K)
+            try:
+                f_int, K = m.evaluate(u, want_tangent=want_K)
+            except NumericalError:
+                if it == 0:
+                    raise  # (the step's start: not an iterate that went astray)
+                # an iterate far off the path (e.g. metres of slip) where a law's return mapping gives up:
+                # the attempt failed, and the step is cut like one that does not converge
+                return False, u, it, None
             if stabilized:
                 m.latch_broken_bonds()
             f_now = self._with_state_load(f_ext)

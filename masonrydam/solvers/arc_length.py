@@ -16,7 +16,7 @@ vol. 1, 1991, sec. 9.3):
 - a corrector ``du = du_r + dlambda du_q`` puts the increment back on the cylinder: the root of
   ``a dlambda^2 + b dlambda + c = 0`` whose increment makes the smallest angle with the one before
   (Crisfield's root choice); no real root halves ``Delta l``;
-- ``Delta l`` follows the iterations (``sqrt(target / iterations)``, within [1/2, 2]) between the stage's
+- ``Delta l`` follows the iterations (``sqrt(target / iterations)``, within [1/2, 2]; :data:`TARGET_ITERATIONS`) between the stage's
   first increment (``Delta l_0``) / 2^max_step_cuts and ``DL_MAX_FACTOR Delta l_0``.
 
 With ``mode = "opening"`` the constraint is indirect displacement control instead: the area-weighted
@@ -41,11 +41,15 @@ from .linear import SingularMatrix
 
 #: an arc-length stage may take this many times its nominal steps before it gives up
 MAX_STEPS_PER_NOMINAL = 20
+#: joint state codes of opening points: OPEN of the seed's law and TENSION of the composite law (2), and the
+#: composite law's tension-shear corner (4)
+OPENING_CODE, OPENING_SHEAR_CODE = 2, 4
 #: the arc may grow to this many times the first one (a stiff structure's elastic increment is tiny next to
 #: the rotation or sliding of a mechanism that follows its peak)
 DL_MAX_FACTOR = 1e6
-#: iterations an arc-length step aims at (Delta l grows or shrinks with sqrt(target / iterations))
-TARGET_ITERATIONS = 6
+#: iterations an arc-length step aims at (Delta l grows or shrinks with sqrt(target / iterations)); indirect
+#: displacement control of many softening joints takes more per step and aims higher, or its steps stall
+TARGET_ITERATIONS = {"cylindrical": 6, "opening": 10}
 
 
 class ArcLengthStage:
@@ -85,20 +89,22 @@ class ArcLengthStage:
         return q[self.free]
 
     def _opening_vector(self, all_points=False):
-        """``c`` (free DOFs): ``c . u`` is the area-weighted normal opening (m^3 per m of thickness in 2D) of
-        the joint points that are cracking or slipping, or else in tension, in the last converged state:
+        """``c`` (free DOFs): ``c . u`` is the area-weighted mean normal opening (m) of the joint points that
+        are opening (cracking), or else in tension, in the last converged state:
         the quantity indirect displacement control makes grow (de Borst 1987, Comput. Struct. 25:211-224;
         the crack opening of a softening joint grows monotonically through a snap-back, where the global
         displacement norm turns back). ``all_points``: every point of the nonlinear joints where none
         qualifies (a stage that starts unloaded). None when there is none."""
         m, dim = self.m, self.m.dim
         c = np.zeros(m.n_dof)
-        found = False
+        found, total = False, 0.0
         for g in m.igroups:
             if not g.nonlinear:
                 continue
             codes = g.state_committed[:, :, 0]
-            active = (codes != 0) | (g.traction[:, :, dim - 1] > 0.0)
+            active = (codes == OPENING_CODE) | (codes == OPENING_SHEAR_CODE)  # cracking points
+            if not active.any():
+                active = g.traction[:, :, dim - 1] > 0.0  # else those in tension
             if not active.any():
                 if not all_points:
                     continue
@@ -107,12 +113,15 @@ class ArcLengthStage:
             ns = g.conn.shape[1] // 2
             w = g.jw * g.thickness[:, None]  # (ne, nip) m2
             for e, q in zip(*np.nonzero(active)):
+                total += w[e, q]
                 n = g.frame[e, q, dim - 1]
                 for a in range(ns):
                     coef = w[e, q] * g.N[q, a] * n
                     c[g.conn[e, ns + a] * dim:(g.conn[e, ns + a] + 1) * dim] += coef
                     c[g.conn[e, a] * dim:(g.conn[e, a] + 1) * dim] -= coef
-        return c[self.free] if found else None
+        if not found:
+            return None
+        return c[self.free] / total
 
     def _first_arc(self):
         """The length of one nominal increment: the free-DOF part of a tangent (elastic) step."""
@@ -134,8 +143,7 @@ class ArcLengthStage:
                 raise NumericalError(f"stage '{self.st.name}': indirect displacement control found no joint "
                                      "point cracking, slipping or in tension to follow")
             grow = abs(float(self.c @ self.prev)) if self.prev is not None else 0.0
-            area = float(np.abs(self.c).sum()) / 2.0
-            self.dl0 = grow if grow > 0 else 1e-6 * area  # the last step's opening, or 1 um over the points
+            self.dl0 = grow if grow > 0 else 1e-6  # the last step's mean opening, or 1 um
         if not self.dl0 > 0:
             raise NumericalError(f"stage '{self.st.name}': arc-length control found no displacement to follow")
         dl = self.dl0
@@ -179,7 +187,7 @@ class ArcLengthStage:
             self.solver.stats.steps += 1
             self.solver.stats.arc_length_steps += 1
             self.record(self.u, lam, f_int, f_ext)
-            dl = float(np.clip(dl * math.sqrt(TARGET_ITERATIONS / max(its, 1)), dl / 2.0, 2.0 * dl))
+            dl = float(np.clip(dl * math.sqrt(TARGET_ITERATIONS[self.mode] / max(its, 1)), dl / 2.0, 2.0 * dl))
             dl = min(max(dl, dl_min), dl_max)
             if lam < 0.0:  # unloaded completely: the rest of the stage is not on this path
                 break

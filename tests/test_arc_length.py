@@ -18,7 +18,7 @@ import pytest
 
 import masonrydam
 from masonrydam.errors import ConvergenceError, SceneError
-from test_large_kinematics import G, _tilt_scene
+from test_large_kinematics import _tilt_scene
 
 ALPHA = math.atan(0.25)
 

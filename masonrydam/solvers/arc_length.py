@@ -125,7 +125,7 @@ class ArcLengthStage:
 
     def _first_arc(self):
         """The length of one nominal increment: the free-DOF part of a tangent (elastic) step."""
-        u, f_ext = self._state(self.u[self.free], self.lam)
+        u, _ = self._state(self.u[self.free], self.lam)
         _, K = self.m.evaluate(u, want_tangent=True)
         dq = self.solver._factorize(K).solve(self._q())
         self.m.revert()
@@ -158,7 +158,8 @@ class ArcLengthStage:
                                        f"load factor {self.lam:.4g} of 1; the path winds back (a snap-back "
                                        "cascade) or the arc is too short")
             if self.mode == "opening" and steps:  # the points that crack now
-                self.c = self._opening_vector() if self._opening_vector() is not None else self.c
+                c = self._opening_vector()
+                self.c = self.c if c is None else c
             ok, u_f, lam, its, f_int, f_ext = self._step(dl)
             if not ok:
                 m.revert()

@@ -142,7 +142,7 @@ import numpy as np
 from numba import njit
 
 from ..errors import STATUS_NAN, STATUS_OK, NumericalError
-from .plasticity import STATUS_BAD_MATERIAL
+from .plasticity import STATUS_BAD_MATERIAL, real_parameter
 
 # ---- parameter columns
 P_KS = 0
@@ -902,13 +902,7 @@ def composite_evaluate(delta, params, state_committed):
 
 
 def _real(name, value):
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"composite interface parameter {name} must be a real number, got {value!r}") from None
-    if not math.isfinite(v):
-        raise ValueError(f"composite interface parameter {name} must be finite, got {value!r}")
-    return v
+    return real_parameter("composite interface", name, value)
 
 
 def composite_params(

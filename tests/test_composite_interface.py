@@ -602,3 +602,18 @@ def test_snap_back_length():
     assert snap_back_length(frictional, E, G) == (math.inf, math.inf)
     with pytest.raises(ValueError, match="youngs_modulus"):
         snap_back_length(p, -1.0, G)
+
+
+@pytest.mark.xfail(strict=True, raises=NumericalError,
+                   reason="known defect (issue 18): from a virgin state, a trial far beyond the cap and the shear "
+                          "surface at once (tau 22 MPa, sigma -57 MPa against fc 10.5 MPa) finds no converged return; "
+                          "met at the start of a push step of the Eindhoven J4D draft (docs/masonry_softening.md)")
+def test_virgin_trial_far_beyond_cap_and_shear_returns():
+    """The joint parameters of reference problem 6 (bed joints with the cap) and the relative displacement
+    of the failing point: a return must exist (the surfaces are closed and convex in compression)."""
+    prm = composite_params(82e9, 36e9, 0.25e6, 18.0, 0.35e6, 36.87, mode_II_fracture_energy=125.0,
+                           compressive_strength=10.5e6, cap_shear_factor=9.0, cap_fracture_energy=5000.0,
+                           cap_peak_plastic_strain=9e-5)
+    t, C, st = composite_evaluate(np.array([[6.169130510534884e-4, -6.911825475172781e-4]]), prm,
+                                  composite_initial_state(1))
+    assert np.isfinite(t).all()

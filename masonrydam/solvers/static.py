@@ -394,11 +394,11 @@ class StaticSolver:
             want_K = s.method == "newton" or self._initial is None
             try:
                 f_int, K = m.evaluate(u, want_tangent=want_K)
-            except NumericalError:
-                if it == 0:
-                    raise  # (the step's start: not an iterate that went astray)
-                # an iterate far off the path (e.g. metres of slip) where a law's return mapping gives up:
-                # the attempt failed, and the step is cut like one that does not converge
+            except NumericalError as exc:
+                # a state where a law's return mapping gives up (an iterate far off the path, or a trial
+                # increment too large for it): the attempt failed and the step is cut like one that does
+                # not converge; the last such message goes into the error if the cuts do not help
+                self._law_failure = str(exc)
                 return False, u, it, None
             if stabilized:
                 m.latch_broken_bonds()
@@ -500,7 +500,10 @@ class StaticSolver:
         for k in range(max_tries):
             trial = u.copy()
             trial[free] += s * du
-            f_int, _ = m.evaluate(trial, want_tangent=False)
+            try:
+                f_int, _ = m.evaluate(trial, want_tangent=False)
+            except NumericalError:  # a law gave up at this trial point: a shorter step
+                return 0.5 if k == 0 else s_prev if s_prev > 0 else 0.1
             g = float(du @ (self._with_state_load(f_ext) - f_int)[free])
             if not np.isfinite(g):
                 return 0.5
@@ -604,6 +607,8 @@ class StaticSolver:
                                                              for t in joint_mechanisms(m))
                 if final and st.water is not None:
                     hint += st.water.failure_hint()
+                if final and getattr(self, "_law_failure", None):
+                    hint += f"; in an attempt the joint or block law gave up: {self._law_failure}"
                 m.revert()
                 if final and st.until_failure:
                     what = ("a part lost every support" if parts else "singular stiffness" if singular is not None

@@ -218,6 +218,7 @@ class StaticSolver:
         self._initial = None  # modified Newton: initial stiffness factorization per constraint set
         self._initial_dofmap = None
         self._state_load = None  # forces that follow the joint states in the current step (see _newton)
+        self._law_failure = None  # the last message of a law that gave up in an attempt of the current step
         #: where a stage with ``until_failure`` found no equilibrium: dict stage, load_factor (the last
         #: converged), failed_at (the load factor tried), reason; None if none did
         self.limit = None
@@ -594,6 +595,7 @@ class StaticSolver:
                         self.progress(si, lam)
                     dlam = min(nominal, 2.0 * dlam)
                     cuts = 0
+                    self._law_failure = None
                     continue
                 # failure: cut the step, after reverting the trial state and latched bonds
                 self.stats.step_cuts += 1
@@ -607,7 +609,7 @@ class StaticSolver:
                                                              for t in joint_mechanisms(m))
                 if final and st.water is not None:
                     hint += st.water.failure_hint()
-                if final and getattr(self, "_law_failure", None):
+                if final and self._law_failure:
                     hint += f"; in an attempt the joint or block law gave up: {self._law_failure}"
                 m.revert()
                 if final and st.until_failure:

@@ -63,6 +63,20 @@ def _green_lagrange(F, V, E):
 
 
 @numba.njit(cache=True)
+def _svk_point(ue, dNdx, V, D, F, E, S):
+    """At one Gauss point: F (dim, dim), the Green-Lagrange strain E (ns,) and the St. Venant-Kirchhoff
+    second Piola-Kirchhoff stress S = D E (ns,)."""
+    _deformation_gradient(ue, dNdx, F)
+    _green_lagrange(F, V, E)
+    ns = E.shape[0]
+    for s in range(ns):
+        acc = 0.0
+        for t in range(ns):
+            acc += D[s, t] * E[t]
+        S[s] = acc
+
+
+@numba.njit(cache=True)
 def _large_impl(coords, conn, dN_ref, weights, D_table, material_index, thickness, u, want_tangent, fe_out, ke_out,
                 energy_out, info, dim_tag):
     n_elem = conn.shape[0]
@@ -102,13 +116,7 @@ def _large_impl(coords, conn, dN_ref, weights, D_table, material_index, thicknes
             if not (det > tol):
                 return _bad_det_status(det, e, info)
             f = weights[g] * det * t_e
-            _deformation_gradient(ue, dNdx, F)
-            _green_lagrange(F, V, E)
-            for s in range(ns):
-                acc = 0.0
-                for t in range(ns):
-                    acc += D[s, t] * E[t]
-                S[s] = acc
+            _svk_point(ue, dNdx, V, D, F, E, S)
             en = 0.0
             for s in range(ns):
                 en += E[s] * S[s]
@@ -184,13 +192,7 @@ def _cauchy_impl(coords, conn, dN_ref, D_table, material_index, u, stress_out, i
             det = _gradients(xe, dN_ref, g, tol, J, dNdx, dim_tag)
             if not (det > tol):
                 return _bad_det_status(det, e, info)
-            _deformation_gradient(ue, dNdx, F)
-            _green_lagrange(F, V, E)
-            for s in range(ns):
-                acc = 0.0
-                for t in range(ns):
-                    acc += D[s, t] * E[t]
-                S[s] = acc
+            _svk_point(ue, dNdx, V, D, F, E, S)
             if dim == 2:
                 detF = F[0, 0] * F[1, 1] - F[0, 1] * F[1, 0]
             else:

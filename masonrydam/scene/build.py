@@ -53,14 +53,15 @@ def joint_param_vector(spec: dict, key: str = "joints") -> np.ndarray:
                                       spec["mode_I_fracture_energy"], spec["cohesion"], spec["friction_angle"],
                                       mode_II_fracture_energy=spec["mode_II_fracture_energy"],
                                       **{k: spec[k] for k in names if k in spec})
-            if spec["tensile_strength"] > 0 and spec["mode_I_fracture_energy"] < spec["tensile_strength"] ** 2 / \
-                    spec["normal_stiffness"]:
+            # the longest elastic bar in series without a snap-back is 0: the joint alone would snap back
+            # (its sign does not depend on the bar's moduli, so unit moduli serve)
+            l_one, l_two = ci.snap_back_length(row, 1.0, 1.0)
+            if l_one == 0.0:
                 raise ValueError(f"mode_I_fracture_energy = {spec['mode_I_fracture_energy']:g} N/m is below "
                                  f"ft^2 / kn = {spec['tensile_strength'] ** 2 / spec['normal_stiffness']:g} N/m: the "
                                  "joint alone would snap back (its elastic energy at the peak exceeds what its "
                                  "softening dissipates)")
-            if spec["cohesion"] > 0 and spec["mode_II_fracture_energy"] < spec["cohesion"] ** 2 / \
-                    spec["shear_stiffness"]:
+            if l_two == 0.0:
                 raise ValueError(f"mode_II_fracture_energy = {spec['mode_II_fracture_energy']:g} N/m is below "
                                  f"c^2 / ks = {spec['cohesion'] ** 2 / spec['shear_stiffness']:g} N/m: the joint "
                                  "alone would snap back in shear")

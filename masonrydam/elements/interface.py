@@ -233,20 +233,24 @@ def _frame(xm, dN, g, dim, R, size):
     return j
 
 
-#: joint laws of the interface kernels (argument ``law``): the seed's Mohr-Coulomb (and the linear joint, a
-#: Mohr-Coulomb joint that cannot break), and the composite masonry law of
-#: :mod:`masonrydam.materials.composite_interface`
-JOINT_LAW_IDS = {"mohr_coulomb": 0, "linear": 0, "composite": 1}
+#: joint laws of the interface kernels (argument ``law``): None, the seed's Mohr-Coulomb (and the linear joint, a
+#: Mohr-Coulomb joint that cannot break), or 1, the composite masonry law of
+#: :mod:`masonrydam.materials.composite_interface` (see :func:`joint_law_at` for why None)
+JOINT_LAW_IDS = {"mohr_coulomb": None, "linear": None, "composite": 1}
 
 
 @njit(cache=True, inline="always")
-def joint_law_at(params_table, pidx, state_committed, state_trial, delta_out, traction_out, e, g, dim, C, law=0):
+def joint_law_at(params_table, pidx, state_committed, state_trial, delta_out, traction_out, e, g, dim, C, law):
     """The joint law at point ``g`` of element ``e`` from its local relative displacement
     ``delta_out[e, g]`` and committed state: writes ``state_trial[e, g]``, ``traction_out[e, g]`` and the
     tangent ``C`` (dim, dim); returns the law's status. Shared by the small- and large-displacement
     interface kernels. The law runs on scalars (row views per point cost more than the law: see
-    :func:`~masonrydam.materials.mohr_coulomb.mohr_coulomb_point`). ``law``: :data:`JOINT_LAW_IDS`."""
-    if law == 1:
+    :func:`~masonrydam.materials.mohr_coulomb.mohr_coulomb_point`).
+
+    ``law``: None for the seed's Mohr-Coulomb law, an int (:data:`JOINT_LAW_IDS`) for another. Why None:
+    numba prunes the ``law is not None`` branch of a None argument before typing, so the Mohr-Coulomb
+    kernels never compile the composite law (it doubled the first, compiling run of the default scene)."""
+    if law is not None:
         return composite_point(params_table, pidx, delta_out, dim - 1, state_committed, state_trial, e, g,
                                traction_out, C)
     (status, code, broken, slip1, slip2, back1, back2, tau1, tau2, t_n, C11, C12, C21, C22, C1n, C2n,
@@ -285,7 +289,7 @@ def interface_evaluate(
     ke_out,
     want_tangent,
     info,
-    law=0,
+    law=None,
 ):
     """Internal forces, tangent stiffness and joint state of a group of interface elements.
 

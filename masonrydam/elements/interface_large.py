@@ -198,7 +198,7 @@ def _b_matrix_2d(xm, gap, N, dN, g, top_weight, B, R, dvec, P, A, Gt, Gn):
 @njit(cache=True)
 def interface_large_evaluate(coords, conn, u, N, dN, weights, thickness, params_table, param_index, state_committed,
                              state_trial, delta_out, traction_out, fe_out, ke_out, want_tangent, info,
-                             top_weight=0.5, law=0):
+                             top_weight=0.5, law=None):
     """Co-rotational interface elements: the arguments, outputs and status codes of
     :func:`masonrydam.elements.interface.interface_evaluate` (shapes, units), with the frame of the
     current mid-surface (module docstring). ``delta_out`` holds ``[slip(s), opening]`` in that frame."""

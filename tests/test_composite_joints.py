@@ -21,7 +21,7 @@ from masonrydam.errors import SceneError
 E, KN, FT, GF = 10e9, 1e11, 0.25e6, 18.0
 
 
-def bar(L, u, steps=20, control="load", width=0.1, joint=None):
+def bar(L, u, steps=20, control="load", width=0.1, joint=None, duration=None):
     spec = {"law": "composite", "normal_stiffness": KN, "shear_stiffness": KN / 2, "tensile_strength": FT,
             "mode_I_fracture_energy": GF, "cohesion": 0.35e6, "friction_angle": 36.87, "mode_II_fracture_energy": 125.0}
     spec.update(joint or {})
@@ -33,7 +33,8 @@ def bar(L, u, steps=20, control="load", width=0.1, joint=None):
             "joints": {"joints": spec},
             "supports": [{"set": "base", "components": ["x", "y"]}, {"set": "top", "components": ["x"]}],
             "stages": [{"name": "pull", "steps": steps, "control": control, "loads": [
-                {"type": "displacement", "set": "top", "components": ["y"], "value": [u]}]}]}
+                {"type": "displacement", "set": "top", "components": ["y"], "value": [u]}],
+                **({} if duration is None else {"duration": duration})}]}
 
 
 def end_curve(ds, top_y, width):
@@ -76,6 +77,32 @@ def test_snap_back_followed_by_indirect_displacement_control(control):
     assert ds.attrs["arc_length_steps"] > 0
     if control == "load":
         assert ds.attrs["arc_length_switches"] == 1
+
+
+def test_viscous_regularisation_converges_to_the_inviscid_softening_curve():
+    """Duvaut-Lions relaxation (``relaxation_time``; Simo & Hughes 1998 sec. 2.7): pulled at a finite rate the
+    joint carries an overstress above ft at the peak, and the softening branch departs from the inviscid closed
+    form ``t = ft exp(-(ft/GfI) w_p)`` by an amount of order tau / dt: ten times smaller tau, about ten times
+    smaller departure."""
+    errors, peaks = [], []
+    for tau in (1e-3, 1e-4):
+        ds = masonrydam.run(bar(0.1, 5e-4, steps=200, duration=1.0, joint={"relaxation_time": tau}))
+        u, sigma = end_curve(ds, 0.2, 0.1)
+        w = ds.joint_opening.values.mean(axis=1)
+        soft = (sigma < 0.9 * FT) & (np.arange(len(u)) > np.argmax(sigma)) & (sigma > 0.05 * FT)
+        assert soft.sum() > 20
+        closed = FT * np.exp(-FT / GF * (w[soft] - sigma[soft] / KN))
+        errors.append(np.abs(sigma[soft] - closed).max() / FT)
+        peaks.append(sigma.max() / FT)
+        assert ds.attrs["completed"] == "true"
+    assert peaks[0] > peaks[1] > 1.0
+    assert errors[1] == pytest.approx(0.1 * errors[0], rel=0.3) and errors[1] < 0.03  # first order in tau
+    with pytest.raises(SceneError) as err:  # a relaxation time needs the stage's time
+        masonrydam.run(bar(0.1, 5e-4, joint={"relaxation_time": 1e-3}))
+    assert err.value.key == "stages[0].duration"
+    with pytest.raises(SceneError) as err:
+        masonrydam.run(bar(0.1, 5e-4, duration=1.0, joint={"relaxation_time": "1 hour"}))
+    assert err.value.key == "joints.joints.relaxation_time"
 
 
 def test_bad_composite_joints():

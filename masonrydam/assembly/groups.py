@@ -237,8 +237,22 @@ class InterfaceGroup:
     def nonlinear(self) -> bool:
         return self.law in ("mohr_coulomb", "composite")
 
-    def evaluate(self, coords, u, want_tangent=True):
-        """Evaluate tractions, nodal forces and (optionally) tangents from the committed state."""
+    @property
+    def relaxation_time(self) -> float:
+        """Relaxation time (s) of the composite law's viscous regularisation (0: none, or another law)."""
+        if self.law != "composite":
+            return 0.0
+        from ..materials.composite_interface import P_RELAXATION_TIME
+
+        return float(self.params_table[:, P_RELAXATION_TIME].max())
+
+    def evaluate(self, coords, u, want_tangent=True, dt=0.0):
+        """Evaluate tractions, nodal forces and (optionally) tangents from the committed state; ``dt`` (s):
+        the step's time, seen by a composite law with a relaxation time."""
+        if self.law == "composite":
+            from ..materials.composite_interface import P_TIME_STEP
+
+            self.params_table[:, P_TIME_STEP] = dt
         args = (coords, self.conn, u, self.N, self.dN, self.weights, self.thickness, self.params_table,
                 self.param_index, self.state_base, self.state_trial, self.delta, self.traction, self.fe, self.ke,
                 want_tangent, self.info)
@@ -278,3 +292,12 @@ class InterfaceGroup:
     def state_codes(self, trial=True) -> np.ndarray:
         s = self.state_trial if trial else self.state_committed
         return s[:, :, mc.S_CODE].astype(np.int8)
+
+    def result_states(self) -> np.ndarray:
+        """(ne, nip) int8 committed state in the result's terms (``joint_state``): 0 stick, 1 slip, 2 open, 3
+        crush. The Mohr-Coulomb codes are these; the composite law's (elastic, shear, tension, cap,
+        tension-shear, shear-cap) map to stick, slip, open, crush, open, crush."""
+        codes = self.state_codes(trial=False)
+        if self.law != "composite":
+            return codes
+        return np.array([0, 1, 2, 3, 2, 3], dtype=np.int8)[codes]

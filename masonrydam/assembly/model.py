@@ -117,6 +117,8 @@ class Model:
         #: node sets whose DOFs are coupled all to all beyond the elements (e.g. the wetted face under a
         #: reservoir condensed on it): (1, n_nodes * dim) DOF arrays, part of the sparsity pattern
         self.couplings: list[np.ndarray] = []
+        #: tied node sets (:meth:`add_tie`): ((1, n_tie_dofs) DOFs, (1, n_tie_dofs, n_tie_dofs) penalty stiffness)
+        self.ties: list[tuple[np.ndarray, np.ndarray]] = []
         #: time (s) of the step being solved, seen by rate-dependent (Perzyna) laws of elasto-plastic
         #: groups; 0 is a rate-independent step (the solvers set it: the dynamic step, a static stage's
         #: time per load step)
@@ -149,7 +151,8 @@ class Model:
         displacement alone."""
         from ..materials.plasticity import P_VISCOSITY
 
-        return any(g.plastic and (g.law_params[:, P_VISCOSITY] > 0).any() for g in self.cgroups)
+        return (any(g.plastic and (g.law_params[:, P_VISCOSITY] > 0).any() for g in self.cgroups)
+                or any(g.relaxation_time > 0 for g in self.igroups))
 
     @property
     def continuum_nonlinear(self) -> bool:
@@ -183,6 +186,37 @@ class Model:
         self.couplings.append(dofs)
         self.dofmap = None
 
+    def add_tie(self, nodes: np.ndarray, components, stiffness: float | None = None) -> float:
+        """Make ``nodes`` share one displacement in each of ``components`` (indices 0..dim-1), free to
+        translate together: a rigid loading beam guided to stay level. Penalty: the energy
+        ``k/2 sum_i (u_i - mean(u))^2`` per component, i.e. the stiffness ``k (I - 1 1^T / n)`` on the
+        component's DOFs of the nodes, which resists no common translation. ``k`` (N/m, default 1e4 times
+        the largest diagonal of the blocks' stiffness at those DOFs) keeps the relative differences of the
+        tied displacements near 1e-4 of the blocks' own deformation there. A constant linear term: it goes
+        into ``K_continuum`` (forces) and into the tangent pattern (a coupling, :meth:`add_coupling`).
+        Returns ``k``."""
+        nodes = np.unique(np.asarray(nodes, dtype=np.int64))
+        n, dim = len(nodes), self.dim
+        if n < 2:
+            raise ValueError("a tie needs at least two nodes")
+        comps = sorted(set(int(c) for c in components))
+        dofs = (nodes[:, None] * dim + np.arange(dim)).ravel()
+        if stiffness is None:
+            diag = self.K_continuum.diagonal()
+            stiffness = 1e4 * float(max(diag[nodes * dim + c].max() for c in comps))
+        block = np.zeros((n * dim, n * dim))
+        share = np.eye(n) - np.full((n, n), 1.0 / n)
+        for c in comps:
+            idx = np.arange(n) * dim + c
+            block[np.ix_(idx, idx)] += stiffness * share
+        self.K_continuum = (self.K_continuum + sp.csr_matrix(
+            (block.ravel(), (np.repeat(dofs, len(dofs)), np.tile(dofs, len(dofs)))), shape=(self.n_dof, self.n_dof)
+        )).tocsr()
+        self._K_elastic_full = None
+        self.ties.append((dofs.reshape(1, -1), block[None]))
+        self.add_coupling(nodes)
+        return stiffness
+
     def set_constraints(self, constrained: np.ndarray) -> None:
         """Build the DOF map, sparsity pattern and scatter maps for a set of constrained DOFs."""
         if self.dofmap is not None and np.array_equal(self.dofmap.constrained, constrained):
@@ -193,7 +227,10 @@ class Model:
                                                             dm.n_eq, dim=self.dim)
         for g, s in zip(groups, scatters):
             g.scatter = s
+        coupling_scatter = dict(zip((c.tobytes() for c in self.couplings), scatters[len(groups):]))
         self.K_linear_data = np.zeros(len(self.indices))
+        for dofs, block in self.ties:  # (each tie's DOFs are one of the couplings)
+            scatter_matrix(block, coupling_scatter[dofs.tobytes()], self.K_linear_data)
         for g in self.cgroups:
             if not g.nonlinear:
                 scatter_matrix(g.stiffness(self.coords), g.scatter, self.K_linear_data)
@@ -251,7 +288,7 @@ class Model:
         self._continuum_force = (u.copy(), fc, self.time_step)
         f = fc.copy()
         for g in self.igroups:
-            g.evaluate(self.coords, u, want_tangent)
+            g.evaluate(self.coords, u, want_tangent, self.time_step)
             scatter_vector(g.fe, g.dofs, f)
             if want_tangent:
                 scatter_matrix(g.ke, g.scatter, data)

@@ -8,6 +8,7 @@
     masonrydam records show NAME [-o PNG]    a record's measures (PGA, PGV, PGD, Arias, D5-95, CAV) and plot
     masonrydam plot OUT.nc [--nodes N ..] [--joints J ..] -o PNG   histories from a result file
     masonrydam plot OUT.nc --mode N [--scale S] -o PNG   mode shape N of a result with a modal stage
+    masonrydam plot OUT.nc --deformed [--step N] [--scale S] -o PNG   deformed blocks and joint states (2D)
     masonrydam assess OUT.nc [--step N] [--condition C] [--csv F]  stability of the joint lines (dams)
 """
 from __future__ import annotations
@@ -36,9 +37,11 @@ def _cmd_run(args):
     from ..results.files import check_output_path
     from ..scene.run import run
 
+    from ..scene.scene import with_overrides
+
     scene = _scene_arg(args)
     out = check_output_path(args.output or (scene.stem + ".nc"), "-o")
-    run(scene, output=out, progress=not args.no_progress, summary=True)
+    run(with_overrides(scene, args.set), output=out, progress=not args.no_progress, summary=True)
     return 0
 
 
@@ -118,10 +121,27 @@ def _cmd_records(args):
 def _cmd_plot(args):
     """Time histories (dynamic results) or step histories (static results) of a result file, as PNG
     (:func:`history_figure`); with ``--mode N`` the mode shape N of a result with a modal stage
-    (:func:`masonrydam.results.mode_plot.mode_figure`)."""
+    (:func:`masonrydam.results.mode_plot.mode_figure`); with ``--deformed`` the deformed blocks and joint
+    states of one step (:func:`masonrydam.results.deformed.deformed_figure`)."""
     from ..results.files import check_output_path, open_result
 
     path = Path(args.result)
+    if args.deformed:
+        for opt, given in (("pushover", args.pushover), ("mode", args.mode is not None)):
+            if given:
+                raise MasonrydamError(f"--deformed and --{opt} draw different figures: give one of them")
+        for opt in ("nodes", "joints", "component"):
+            if getattr(args, opt) is not None:
+                raise MasonrydamError(f"--{opt} applies to histories, not to the deformed shape (--deformed)")
+        from ..results.deformed import deformed_figure
+
+        out = check_output_path(args.output or f"{path.stem}_deformed.png", "-o")
+        fig = deformed_figure(open_result(path), step=args.step, scale=args.scale, title=path.name)
+        fig.savefig(out, dpi=110)
+        print(f"wrote {out}")
+        return 0
+    if args.step is not None:
+        raise MasonrydamError("--step applies to the deformed shape; give --deformed as well")
     if args.pushover and args.mode is not None:
         raise MasonrydamError("--pushover and --mode draw different figures: give one of them")
     if args.pushover:
@@ -137,7 +157,8 @@ def _cmd_plot(args):
         print(f"wrote {out}")
         return 0
     if args.mode is None and args.scale is not None:
-        raise MasonrydamError("--scale applies to a mode shape; give --mode N as well")
+        raise MasonrydamError("--scale applies to a mode shape or the deformed shape; give --mode N or --deformed "
+                              "as well")
     if args.mode is not None:
         for opt in ("nodes", "joints", "component"):
             if getattr(args, opt) is not None:
@@ -267,6 +288,9 @@ def main(argv=None) -> int:
     r.add_argument("--default", action="store_true", help="run the bundled default scene")
     r.add_argument("-o", "--output", help="output netCDF file (default: SCENE.nc in the current folder)")
     r.add_argument("--no-progress", action="store_true", help="no progress bar")
+    r.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="change a scene key for this run, e.g. --set 'stages[0].loads[1].pressure=1.21 MPa' "
+                        "(dotted names, list indices from 0; repeatable)")
     r.set_defaults(func=_cmd_run)
     c = sub.add_parser("check", help="validate a scene and build its model without solving")
     c.add_argument("scene", nargs="?")
@@ -293,8 +317,8 @@ def main(argv=None) -> int:
     rs.add_argument("--column", type=int, help="which value column of a text file with several, counted from 0 "
                                                "without the time column (or which trace of a SAC/MiniSEED file)")
     rc.set_defaults(func=_cmd_records)
-    pl = sub.add_parser("plot", help="plot histories (or, with --mode, a mode shape) from a result file (netCDF) "
-                                     "to PNG")
+    pl = sub.add_parser("plot", help="plot histories (or, with --mode, a mode shape; with --pushover, the pushover "
+                                     "curve; with --deformed, the deformed shape) from a result file (netCDF) to PNG")
     pl.add_argument("result", help="result file written by `masonrydam run`")
     pl.add_argument("--nodes", type=int, nargs="+", help="node numbers, as in the file's node coordinate (default: the recorded node that moves most)")
     pl.add_argument("--joints", type=int, nargs="+", help="joint point indices along joint_point (default: the one that slips most)")
@@ -306,11 +330,18 @@ def main(argv=None) -> int:
     pl.add_argument("--pushover", action="store_true",
                     help="draw the pushover curve of a static result: the force on the DOFs a stage drives by "
                          "prescribed displacements against their displacement (--component, default x)")
+    pl.add_argument("--deformed", action="store_true",
+                    help="draw the deformed blocks and the joints of one step (2D results): stick grey, slip "
+                         "orange, open red (wider the more open), with the count of each state")
+    pl.add_argument("--step", type=int, metavar="N",
+                    help="with --deformed: step, as in the file's step coordinate; negative: from the end "
+                         "(default: the last step)")
     pl.add_argument("--scale", type=float, metavar="S",
                     help="with --mode: drawn displacement = S x mass-normalised shape (default: the largest "
-                         "displacement is 10 %% of the model's largest extent)")
+                         "displacement is 10 %% of the model's largest extent); with --deformed: drawn "
+                         "displacement = S x displacement (default: the largest is 5 %% of the extent)")
     pl.add_argument("-o", "--output", help="PNG file (default: RESULT.png, with --mode N RESULT_modeN.png, "
-                                           "in the current folder)")
+                                           "with --deformed RESULT_deformed.png, in the current folder)")
     pl.set_defaults(func=_cmd_plot)
     a = sub.add_parser("assess", help="stability of a dam's joint lines (sliding, resultant, cracking) at one step",
                        description="Table of the stability sections (base and lift joints) of a result whose "

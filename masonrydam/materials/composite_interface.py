@@ -8,6 +8,9 @@ References
        ch. 4 (interface cap model).
 [SH98] J. C. Simo, T. J. R. Hughes (1998), Computational Inelasticity, Springer, sec. 5.2
        (multisurface return mapping, active-set search by the signs of the multipliers).
+[GB04] Y. F. Gao, A. F. Bower (2004), "A simple technique for avoiding convergence problems in finite
+       element simulations of crack nucleation and growth on cohesive interfaces", Modelling Simul.
+       Mater. Sci. Eng. 12, 453-463 (viscous regularisation of softening interfaces).
 [MSA03] J. R. R. A. Martins, P. Sturdza, J. J. Alonso (2003), "The complex-step derivative
        approximation", ACM TOMS 29(3), 245-262 (derivatives exact to rounding, used for the Jacobian of
        the local Newton iteration and for the consistent tangent).
@@ -162,7 +165,12 @@ P_CSS = 13
 P_GF_C = 14
 P_KAPPA_P = 15
 P_OPEN_TANGENT = 16
-N_COMPOSITE_PARAMS = 17
+P_RELAXATION_TIME = 17
+#: the time step (s) of the evaluation: not a material constant but a per-step input the assembly writes
+#: into the row before each evaluation (:meth:`masonrydam.assembly.groups.InterfaceGroup.evaluate`), so that
+#: the interface kernels keep one law-agnostic signature; 0 is a rate-independent step
+P_TIME_STEP = 18
+N_COMPOSITE_PARAMS = 19
 
 PARAM_NAMES = {
     P_KS: "shear_stiffness",
@@ -182,6 +190,8 @@ PARAM_NAMES = {
     P_GF_C: "cap_fracture_energy",
     P_KAPPA_P: "cap_peak_plastic_strain",
     P_OPEN_TANGENT: "open_tangent",
+    P_RELAXATION_TIME: "relaxation_time",
+    P_TIME_STEP: "time_step",
 }
 
 # ---- state columns
@@ -528,6 +538,10 @@ def _bad_column(params, p):
             return P_GF_C
         if not params[p, P_KAPPA_P] > 0.0:
             return P_KAPPA_P
+    if not params[p, P_RELAXATION_TIME] >= 0.0:
+        return P_RELAXATION_TIME
+    if not params[p, P_TIME_STEP] >= 0.0:
+        return P_TIME_STEP
     return -1
 
 
@@ -539,6 +553,43 @@ def _fail(state_committed, state_trial, e, g, traction_out, C, ns):
         traction_out[e, g, i] = np.nan
         for j in range(ns + 1):
             C[i, j] = 0.0
+
+
+@njit(cache=True)
+def _duvaut_lions(ratio, delta, e, g, ns, ks1, ks2, kn, tau1_tr, tau2_tr, tn_tr, state_committed, state_trial,
+                  traction_out, C):
+    """Viscous regularisation of Duvaut and Lions ([SH98] sec. 2.7; for cohesive interfaces
+    [GB04]): over a step ``dt`` the tractions and internal variables relax towards the inviscid return
+    (already in ``traction_out``, ``state_trial`` and ``C``) with the relaxation time ``tau``, by
+    backward Euler::
+
+        t = (t_trial + r t_inf) / (1 + r),   kappa = (kappa_n + r kappa_inf) / (1 + r),   r = dt / tau
+        C = (K + r C_inf) / (1 + r)
+
+    (``C`` is exact: ``t_trial = K (delta - delta_p,n)``). The plastic displacements follow from the
+    tractions, ``delta_p = delta - K^-1 t``. As ``tau / dt -> 0`` this is the inviscid law; for a finite
+    ``tau`` the tangent tends to the elastic one as ``dt`` shrinks, so a step cut makes the joint stable
+    where a softening point would make the structure's tangent singular. The code and the cracked flag
+    are the inviscid return's (the surface the point is flowing to)."""
+    a = 1.0 / (1.0 + ratio)
+    b = ratio * a
+    k = (ks1, ks2, kn)
+    t1 = a * tau1_tr + b * traction_out[e, g, 0]
+    traction_out[e, g, 0] = t1
+    state_trial[e, g, S_PLASTIC_SLIP] = delta[e, g, 0] - t1 / ks1
+    if ns == 2:
+        t2 = a * tau2_tr + b * traction_out[e, g, 1]
+        traction_out[e, g, 1] = t2
+        state_trial[e, g, S_PLASTIC_SLIP + 1] = delta[e, g, 1] - t2 / ks2
+    tn = a * tn_tr + b * traction_out[e, g, ns]
+    traction_out[e, g, ns] = tn
+    state_trial[e, g, S_PLASTIC_OPENING] = delta[e, g, ns] - tn / kn
+    for col in (S_KAPPA1, S_KAPPA2, S_KAPPA3):
+        state_trial[e, g, col] = a * state_committed[e, g, col] + b * state_trial[e, g, col]
+    for i in range(ns + 1):
+        for j in range(ns + 1):
+            C[i, j] *= b
+        C[i, i] += a * (kn if i == ns else k[i])
 
 
 @njit(cache=True)
@@ -802,6 +853,11 @@ def composite_point(params, p, delta, ns, state_committed, state_trial, e, g, tr
             if ns == 2:
                 C[1, j] = tau[1].imag / h * kj
             C[ns, j] = dx[0] / h * kj
+    tau_relax = params[p, P_RELAXATION_TIME]
+    dt = params[p, P_TIME_STEP]
+    if tau_relax > 0.0 and dt > 0.0:
+        _duvaut_lions(dt / tau_relax, delta, e, g, ns, ks1, ks2, kn, tau1_tr, tau2_tr, tn_tr,
+                      state_committed, state_trial, traction_out, C)
     for i in range(n):
         if not math.isfinite(traction_out[e, g, i]):
             _fail(state_committed, state_trial, e, g, traction_out, C, ns)
@@ -923,6 +979,7 @@ def composite_params(
     cap_fracture_energy: float | None = None,
     cap_peak_plastic_strain: float | None = None,
     shear_stiffness_2: float | None = None,
+    relaxation_time: float = 0.0,
 ) -> np.ndarray:
     """Validated parameter row (N_COMPOSITE_PARAMS,) of the composite interface law.
 
@@ -946,6 +1003,8 @@ def composite_params(
     cap_peak_plastic_strain : kp (m) > 0, plastic relative displacement at the cap peak, required
         with a cap.
     shear_stiffness_2 : ks2 (Pa/m) > 0 of the second shear direction (3D); None: ks.
+    relaxation_time : tau (s) >= 0 of the Duvaut-Lions viscous regularisation (:func:`_duvaut_lions`);
+        0: the inviscid law. It acts only in steps with a time step (``P_TIME_STEP`` > 0).
 
     Raises
     ------
@@ -963,6 +1022,7 @@ def composite_params(
     psi = _real("dilatancy_angle", dilatancy_angle)
     dd = _real("dilatancy_decay", dilatancy_decay)
     css = _real("cap_shear_factor", cap_shear_factor)
+    tau_relax = _real("relaxation_time", relaxation_time)
 
     def bad(name, value, rule):
         raise ValueError(f"composite interface parameter {name} {rule}, got {value!r}")
@@ -1001,6 +1061,8 @@ def composite_params(
         inv_su = 1.0 / su
     if dd < 0.0:
         bad("dilatancy_decay", dd, "must be >= 0 (1/m)")
+    if tau_relax < 0.0:
+        bad("relaxation_time", tau_relax, "must be >= 0 (s)")
     fc = 0.0
     gfc = 0.0
     kp = 0.0
@@ -1043,6 +1105,7 @@ def composite_params(
     row[P_GF_C] = gfc
     row[P_KAPPA_P] = kp
     row[P_OPEN_TANGENT] = 0.0
+    row[P_RELAXATION_TIME] = tau_relax
     return row
 
 

@@ -14,8 +14,10 @@ from ..errors import MasonrydamError
 
 def pushover_data(ds, component: str = "x", stage: int | None = None):
     """``(displacement (n,), force (n,), steps (n,))`` of the actuator in ``component``: the steps of the
-    driving stage (default: the last stage that drives this component), from the step before it (the state
-    it starts from). Raises MasonrydamError naming what is missing."""
+    driving stage, from the step before it (the state it starts from). Default: the last stage that drives
+    this component, with every earlier stage that drives the same DOFs (attribute ``pushover_stages``: the
+    successive pushes of a cyclic test, whose curve is the hysteresis). Raises MasonrydamError naming what is
+    missing."""
     if "driven" not in ds:
         raise MasonrydamError("the result has no prescribed-displacement stage (variable 'driven'): a pushover "
                               "curve needs a static stage with a load of type \"displacement\"")
@@ -31,7 +33,12 @@ def pushover_data(ds, component: str = "x", stage: int | None = None):
         raise MasonrydamError(f"stage {s - 1} does not drive component {component!r}; stages that do: "
                               f"{[k - 1 for k in stages]}")
     nodes = driven == s
-    steps = np.flatnonzero(ds.stage.values == s - 1)
+    stages_used = [s - 1]
+    if stage is None and "pushover_stages" in ds.attrs:
+        import json
+
+        stages_used = json.loads(ds.attrs["pushover_stages"]).get(component, stages_used)
+    steps = np.flatnonzero(np.isin(ds.stage.values, stages_used))
     if len(steps) == 0:
         raise MasonrydamError(f"the result has no converged step of stage {s - 1}")
     if steps[0] > 0:
@@ -51,8 +58,13 @@ def pushover_figure(ds, component: str = "x", title: str | None = None):
 
     d, f, _ = pushover_data(ds, component)
     fig, ax = plt.subplots(figsize=(6.0, 4.2))
-    sign = 1.0 if abs(f.max()) >= abs(f.min()) else -1.0  # draw the pushing direction upwards
-    sd = 1.0 if abs(d.max()) >= abs(d.min()) else -1.0
+    # draw the first push to the right and its force upwards (a hysteresis keeps the orientation of its first
+    # excursion; the force on the driven DOFs does positive work on the way out)
+    moved = np.flatnonzero(np.abs(d - d[0]) > 1e-3 * max(np.abs(d - d[0]).max(), 1e-300))
+    k1 = moved[0] if len(moved) else len(d) - 1
+    sd = -1.0 if d[k1] < d[0] else 1.0
+    sign = -1.0 if (f[k1] - f[0]) * (d[k1] - d[0]) < 0 else 1.0
+    sign *= sd
     ax.plot(sd * d * 1e3, sign * f / 1e3, "-o", ms=2.5, lw=1.2, color="C0", label="actuator force")
     k = int(np.argmax(sign * f))
     ax.plot(sd * d[k] * 1e3, sign * f[k] / 1e3, "v", color="C3",

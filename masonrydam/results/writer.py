@@ -12,6 +12,12 @@ file goes (a working file beside the target, renamed over it when the run comple
 :mod:`masonrydam.results.files`. ``xarray.open_dataset`` reads it; every variable carries ``units``
 and ``long_name``.
 
+The mesh is written once, as static variables: the continuum elements' corner nodes
+(``block_cell_nodes``, model node indices, -1 padding) and groups (``block_cell_group``), and for each
+joint point the faces of its interface element with the shape functions at the point
+(``joint_point_nodes``, ``joint_point_shape``), so that a step can be drawn deformed
+(:mod:`masonrydam.results.deformed`).
+
 Time histories (scenes with a dynamic stage, ``dynamic=True``): the same unlimited ``step``
 dimension carries static and dynamic steps; ``time`` (s, on ``step``) is the time since the start
 of the first dynamic stage, NaN for static steps, and is listed as an auxiliary coordinate of every
@@ -37,7 +43,8 @@ import numpy as np
 
 from .._version import __version__
 
-STATE_FLAGS = {"flag_values": np.array([0, 1, 2], dtype=np.int8), "flag_meanings": "stick slip open"}
+#: joint states (``InterfaceGroup.result_states``); 3 (crush: on the compression cap) only with composite joints
+STATE_FLAGS = {"flag_values": np.array([0, 1, 2, 3], dtype=np.int8), "flag_meanings": "stick slip open crush"}
 #: energies of a dynamic analysis (J, cumulative since the start of the first dynamic stage)
 ENERGY_VARIABLES = {
     "input": "work of the ground motion (effective earthquake forces -M iota a_g on the relative displacements, or "
@@ -95,7 +102,11 @@ class ResultWriter:
 
     nodes: (n_out,) node indices recorded; coords: (n_nodes, dim);
     joint_points: dict with 'x' (n_jp, dim), 'set' (n_jp,) int, 'set_names', 'element' (n_jp,),
-    'point' (n_jp,), 'normal' (n_jp, dim), 'shear_axes' (n_jp, dim-1, dim), 'weight' (n_jp,) (tributary length*thickness or area, m2).
+    'point' (n_jp,), 'normal' (n_jp, dim), 'shear_axes' (n_jp, dim-1, dim), 'weight' (n_jp,) (tributary length*thickness or area, m2),
+    optionally 'nodes' (n_jp, 2, n_face) int (model node indices of the element's bottom and top face, -1
+    padding) and 'shape' (n_jp, n_face) (face shape functions at the point, 0 padding);
+    blocks: dict with 'nodes' (n_cells, n_corners) int (model node indices of the corner nodes of each
+    continuum element, -1 padding), 'group' (n_cells,) int, 'group_names', 'group_types' (per group).
     """
 
     #: step variables of time-history files that static steps leave NaN
@@ -106,7 +117,7 @@ class ResultWriter:
     def __init__(self, path, coords, nodes, joint_points, dim, attrs: dict, dynamic: bool = False,
                  options: OutputOptions | None = None, sections: dict | None = None, water: bool = False,
                  pore_pressure: bool = False, elements: dict | None = None, modes: int | None = None,
-                 hydrodynamic: dict | None = None, driven: np.ndarray | None = None):
+                 hydrodynamic: dict | None = None, driven: np.ndarray | None = None, blocks: dict | None = None):
         self.path = str(path)
         self.dim = dim
         self.dynamic = bool(dynamic)
@@ -153,6 +164,10 @@ class ResultWriter:
         v[:] = jp["shear_axes"]
         self._var("joint_weight", "f8", ("joint_point",), "m2",
                   "joint area represented by the integration point (length x thickness in 2D)")[:] = jp["weight"]
+        if "nodes" in jp:
+            self._joint_interpolation(jp["nodes"], jp["shape"])
+        if blocks is not None:
+            self._block_variables(blocks)
         self._var("displacement", "f8", ("step", "node", "component"), "m",
                   "nodal displacement relative to the moving ground" if self.dynamic else "nodal displacement")
         self._var("reaction", "f8", ("step", "node", "component"), "N",
@@ -167,7 +182,7 @@ class ResultWriter:
                   "normal traction on the joint (tension positive)")
         self._var("joint_traction_shear", "f8", ("step", "joint_point", "shear_direction"), "Pa",
                   "shear traction on the joint")
-        v = self._var("joint_state", "i1", ("step", "joint_point"), "1", "joint state: 0 stick, 1 slip, 2 open")
+        v = self._var("joint_state", "i1", ("step", "joint_point"), "1", "joint state: 0 stick, 1 slip, 2 open, 3 crush")
         v.flag_values = STATE_FLAGS["flag_values"]
         v.flag_meanings = STATE_FLAGS["flag_meanings"]
         if pore_pressure:
@@ -212,6 +227,39 @@ class ResultWriter:
         self._in_buffer = 0  # steps in the buffers, not yet in the file
         self._last_flush = time.monotonic()
         self._fast_append = hasattr(netCDF4.Variable, "_put")
+
+    def _block_variables(self, blocks):
+        """The continuum elements (static, for drawing the deformed blocks): dimension ``block_cell`` (every
+        continuum element, element group after group: the order of ``element`` where stress is written),
+        ``block_cell_nodes`` (block_cell, block_cell_node) the model node indices (values of the ``node``
+        coordinate) of the element's corner nodes in the element's order (in 2D the boundary order), -1
+        padding, and ``block_cell_group`` (block_cell) the index of its element group."""
+        nodes = np.asarray(blocks["nodes"])
+        self.nc.createDimension("block_cell", len(nodes))
+        self.nc.createDimension("block_cell_node", nodes.shape[1])
+        self._var("block_cell_nodes", "i4", ("block_cell", "block_cell_node"), "1",
+                  "model node index (as the node coordinate) of each corner node of the continuum element, "
+                  "in the element's corner order (-1: padding)")[:] = nodes
+        v = self._var("block_cell_group", "i4", ("block_cell",), "1",
+                      "element group index of the continuum element (see attributes group_names, group_types)")
+        v[:] = blocks["group"]
+        v.group_names = json.dumps(list(blocks["group_names"]))
+        v.group_types = json.dumps(list(blocks["group_types"]))
+
+    def _joint_interpolation(self, nodes, shape):
+        """Where a joint point takes its displacement from: ``joint_point_nodes`` (joint_point, joint_side,
+        joint_face_node) the model node indices of the bottom and top face of its interface element (-1
+        padding) and ``joint_point_shape`` (joint_point, joint_face_node) the face shape functions at the
+        point, so that the displacement of side s at point p is sum_k shape[p, k] u[nodes[p, s, k]]."""
+        self.nc.createDimension("joint_side", 2)
+        self.nc.createDimension("joint_face_node", np.shape(nodes)[2])
+        self._string_coord("joint_side", ("joint_side",), ["bottom", "top"], "face of the interface element")
+        self._var("joint_point_nodes", "i4", ("joint_point", "joint_side", "joint_face_node"), "1",
+                  "model node index (as the node coordinate) of each node of the bottom and top face of the "
+                  "joint point's interface element (-1: padding)")[:] = nodes
+        self._var("joint_point_shape", "f8", ("joint_point", "joint_face_node"), "1",
+                  "face shape function of each face node at the joint point (interpolation weight of the "
+                  "face displacement; 0: padding)")[:] = shape
 
     def _section_variables(self, sec):
         """The joint lines assessed for stability (:mod:`masonrydam.results.assess`): dimension ``section``

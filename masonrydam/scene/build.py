@@ -47,7 +47,7 @@ def joint_param_vector(spec: dict, key: str = "joints") -> np.ndarray:
 
         names = ("dilatancy_confinement", "dilatancy_decay", "compressive_strength", "cap_shear_factor",
                  "cap_fracture_energy", "cap_peak_plastic_strain", "shear_stiffness_2", "residual_friction_angle",
-                 "dilatancy_angle")
+                 "dilatancy_angle", "relaxation_time")
         try:
             row = ci.composite_params(spec["normal_stiffness"], spec["shear_stiffness"], spec["tensile_strength"],
                                       spec["mode_I_fracture_energy"], spec["cohesion"], spec["friction_angle"],
@@ -133,7 +133,15 @@ def build_model(scene: dict, mesh: Mesh) -> Model:
                                           kinematics=kinematics, frame=spec.get("frame", "mid_surface")))
         except ValueError as exc:
             raise SceneError(f"joints.{j.name}.integration", str(exc)) from None
-    return Model(mesh.points, cgroups, igroups)
+    model = Model(mesh.points, cgroups, igroups)
+    for i, s in enumerate(scene["supports"]):
+        if s["kind"] == "tied":  # the set moves as one in these components (a loading beam kept level)
+            nodes = _node_set(mesh, s["set"], f"supports[{i}].set")
+            if len(np.unique(nodes)) < 2:
+                raise SceneError(f"supports[{i}].set", f"set '{s['set']}' has {len(np.unique(nodes))} node: a tie "
+                                                       "needs at least two")
+            model.add_tie(nodes, ["xyz".index(c) for c in s["components"]])
+    return model
 
 
 def _node_set(mesh: Mesh, name: str, key: str) -> np.ndarray:
@@ -300,6 +308,8 @@ def build_stages(scene: dict, mesh: Mesh, model: Model, base_dir: Path | None = 
     dim = mesh.dim
     supports = np.zeros(model.n_dof, dtype=bool)
     for i, s in enumerate(scene["supports"]):
+        if s["kind"] != "fixed":
+            continue
         nodes = _node_set(mesh, s["set"], f"supports[{i}].set")
         for c in s["components"]:
             supports[nodes * dim + "xyz".index(c)] = True
@@ -387,6 +397,11 @@ def build_stages(scene: dict, mesh: Mesh, model: Model, base_dir: Path | None = 
             raise SceneError(f"stages[{i}].duration", f"blocks {viscous} have Perzyna viscosity: a static stage needs "
                                                       "its duration (s), the time over which its load is applied (set "
                                                       "viscosity = 0 for a rate-independent law)")
+        relaxing = [g.name for g in model.igroups if g.relaxation_time > 0]
+        if relaxing and "duration" not in st:
+            raise SceneError(f"stages[{i}].duration", f"joint sets {relaxing} have a relaxation_time (viscous "
+                                                      "regularisation): a static stage needs its duration (s), the "
+                                                      "time over which its load is applied")
         stages.append(StaticStage(st["name"], st["steps"], force, presc, incr, supports.copy(), water=water,
                                   until_failure=st.get("until_failure", False), duration=st.get("duration", 0.0),
                                   control=st.get("control", "load")))

@@ -67,10 +67,20 @@ def _joint_points(groups, set_names, dim):
     if not groups:
         z = np.zeros((0, dim))
         return {"x": z, "set": np.zeros(0, int), "set_names": set_names, "element": np.zeros(0, int),
-                "point": np.zeros(0, int), "normal": z, "shear_axes": np.zeros((0, dim - 1, dim)), "weight": np.zeros(0)}
+                "point": np.zeros(0, int), "normal": z, "shear_axes": np.zeros((0, dim - 1, dim)), "weight": np.zeros(0),
+                "nodes": np.zeros((0, 2, 1), int), "shape": np.zeros((0, 1))}
+    n_face = max(g.conn.shape[1] // 2 for g in groups)
+    nodes = np.full((sum(g.n_elem * g.nip for g in groups), 2, n_face), -1, dtype=np.int64)
+    shape = np.zeros((len(nodes), n_face))
+    k = 0
+    for g in groups:  # each point: the faces of its element (conn: bottom face nodes, then top face nodes)
+        ns, n = g.conn.shape[1] // 2, g.n_elem * g.nip
+        nodes[k:k + n, :, :ns] = np.repeat(g.conn.reshape(g.n_elem, 2, ns), g.nip, axis=0)
+        shape[k:k + n, :ns] = np.tile(g.N, (g.n_elem, 1))
+        k += n
     return {"x": np.vstack(xs), "set": np.concatenate(sets), "set_names": set_names, "element": np.concatenate(elems),
             "point": np.concatenate(pts), "normal": np.vstack(normals), "shear_axes": np.concatenate(axes),
-            "weight": np.concatenate(weights)}
+            "weight": np.concatenate(weights), "nodes": nodes, "shape": shape}
 
 
 def _joint_results(groups, dim):
@@ -83,7 +93,7 @@ def _joint_results(groups, dim):
     # (the laws share the code and plastic-slip columns; the composite law has more after them)
     st = np.concatenate([g.state_committed[:, :, :mc.N_JOINT_STATE].reshape(-1, mc.N_JOINT_STATE) for g in groups])
     return {"opening": d[:, -1], "slip": d[:, :-1], "plastic_slip": st[:, mc.S_PLASTIC_SLIP:mc.S_PLASTIC_SLIP + dim - 1],
-            "t_normal": t[:, -1], "t_shear": t[:, :-1], "state": st[:, mc.S_CODE].astype(np.int8)}
+            "t_normal": t[:, -1], "t_shear": t[:, :-1], "state": np.concatenate([g.result_states().ravel() for g in groups])}
 
 
 class _Progress:
@@ -201,6 +211,7 @@ def run(scene, output: str | os.PathLike | None = None, progress: bool = False, 
                 "with [foundation] mass = true and an outcrop motion the ground motion enters as free-field forces "
                 "at the compliant base: displacement, velocity and acceleration of the dynamic steps are total, not "
                 "relative to the ground (acceleration_absolute = acceleration)")
+    attrs["pushover_stages"] = _pushover_stages(static_stages, model)
     try:
         writer = ResultWriter(work, mesh.points, nodes, _joint_points(jgroups, set_names, dim), dim, attrs,
                               dynamic=bool(dyn_stages), options=options, sections=water.section_info(),
@@ -209,7 +220,7 @@ def run(scene, output: str | os.PathLike | None = None, progress: bool = False, 
                               modes=None if modal_stage is None else modal_stage.modes,
                               hydrodynamic=None if moving is None or not dyn_stages else
                               {"nodes": moving.nodes, "coords": model.coords[moving.nodes]},
-                              driven=_driven(static_stages, model))
+                              driven=_driven(static_stages, model), blocks=_block_cells(model))
     except OSError as exc:  # e.g. another run holds the working file (HDF5 file lock), disk full
         if target is None:
             os.unlink(work)
@@ -333,6 +344,24 @@ def _end_early(exc, stopper, writer, work, target, stats):
         where = (f"; the earlier result in {target} is unchanged" if kept != target else "")
         exc.add_note(f"results of {steps} converged step(s) were kept in {kept} (completed = false){where}")
     return None
+
+
+def _pushover_stages(static_stages, model) -> str:
+    """JSON ``{component: [stage indices]}``: for each component, the static stages that prescribe a non-zero
+    displacement increment of a DOF the last driving stage drives (a cyclic test's successive pushes), in
+    order: the steps of a pushover or hysteresis curve (:func:`masonrydam.results.pushover.pushover_data`)."""
+    driven = _driven(static_stages, model)
+    out = {}
+    if driven is None:
+        return json.dumps(out)
+    for c in range(model.dim):
+        last = int(driven[:, c].max())
+        if last == 0:
+            continue
+        dofs = np.flatnonzero(driven[:, c] == last) * model.dim + c
+        out["xyz"[c]] = [i for i, st in enumerate(static_stages)
+                         if (st.prescribed[dofs] & (st.increment[dofs] != 0.0)).any()]
+    return json.dumps(out)
 
 
 def _driven(static_stages, model):
@@ -513,6 +542,21 @@ def _run_modal(model, stage, u, writer, nodes, dim, moving=None, massless=()):
                                                                                      massless))
     writer.write_modes(res.frequencies, res.periods, res.modes.T.reshape(len(res.frequencies), -1, dim)[:, nodes],
                        res.effective_mass, res.effective_mass_ratio)
+
+
+def _block_cells(model) -> dict:
+    """Corner nodes of every continuum element (element group after group), -1 padded to the largest
+    count, with each element's group: the connectivity of the result file (``block_cell_nodes``)."""
+    from ..elements.shapes import ELEMENT_TYPES
+
+    corners = [g.conn[:, :ELEMENT_TYPES[g.type].corner_nodes] for g in model.cgroups]
+    nodes = np.full((sum(len(c) for c in corners), max((c.shape[1] for c in corners), default=1)), -1, np.int64)
+    k = 0
+    for c in corners:
+        nodes[k:k + len(c), :c.shape[1]] = c
+        k += len(c)
+    return {"nodes": nodes, "group": np.repeat(np.arange(len(corners)), [len(c) for c in corners]),
+            "group_names": [g.name for g in model.cgroups], "group_types": [g.type for g in model.cgroups]}
 
 
 def _element_info(model) -> dict:
@@ -790,8 +834,9 @@ def print_summary(sc, mesh, model, eff, solver, stats, path, ds, file=None, dyn_
                      f"{100 * stats['energy_contact_relative']:.3g} %")
     if "joint_state" in ds and ds.sizes.get("joint_point", 0):
         last = ds.joint_state.isel(step=-1).values
+        crushed = int((last == 3).sum())
         lines.append(f"joints end : {int((last == 0).sum())} stick, {int((last == 1).sum())} slip, "
-                     f"{int((last == 2).sum())} open")
+                     f"{int((last == 2).sum())} open" + (f", {crushed} crushed" if crushed else ""))
     if "limit_state" in stats:
         lines.append(f"limit      : {stats['limit_state']}")
     if "frequency" in ds:

@@ -57,6 +57,74 @@ class Scene:
         return h.hexdigest()
 
 
+def _path_parts(path: str) -> list:
+    """``"stages[1].loads[0].pressure"`` -> ``["stages", 1, "loads", 0, "pressure"]``."""
+    import re
+
+    parts = []
+    for piece in path.split("."):
+        m = re.fullmatch(r"([A-Za-z_][A-Za-z0-9_]*)((?:\[\d+\])*)", piece)
+        if m is None:
+            raise SceneError(path, "cannot read the key: write dotted names with list indices, e.g. "
+                                   "stages[1].loads[0].pressure")
+        parts.append(m.group(1))
+        parts += [int(i) for i in re.findall(r"\[(\d+)\]", m.group(2))]
+    return parts
+
+
+def set_key(data: dict, path: str, value) -> None:
+    """Set the scene key ``path`` (dotted, with list indices: ``stages[1].loads[0].pressure``) of the raw
+    scene ``data`` to ``value``, in place. Tables along the path that do not exist are created; a list index
+    must exist. Raises SceneError naming the path where it does not lead anywhere."""
+    parts = _path_parts(path)
+    node = data
+    for part, nxt in zip(parts[:-1], parts[1:]):
+        if isinstance(part, int):
+            if not isinstance(node, list) or part >= len(node):
+                raise SceneError(path, f"index [{part}] is not in the scene (a list of {len(node) if isinstance(node, list) else 0})")
+            node = node[part]
+        else:
+            if not isinstance(node, dict):
+                raise SceneError(path, f"'{part}' is not under a table")
+            if part not in node:
+                if isinstance(nxt, int):
+                    raise SceneError(path, f"the scene has no list '{part}'")
+                node[part] = {}
+            node = node[part]
+    last = parts[-1]
+    if isinstance(last, int):
+        if not isinstance(node, list) or last >= len(node):
+            raise SceneError(path, f"index [{last}] is not in the scene")
+    elif not isinstance(node, dict):
+        raise SceneError(path, f"'{last}' is not under a table")
+    node[last] = value
+
+
+def parse_assignment(text: str):
+    """``"KEY=VALUE"`` -> ``(key, value)``; VALUE is read as a TOML value where it is one (a number, a
+    boolean, a quoted string, an array), otherwise taken as a string (``1.21 MPa``)."""
+    if "=" not in text:
+        raise SceneError("--set", f"expected KEY=VALUE, got {text!r}")
+    key, raw = (x.strip() for x in text.split("=", 1))
+    try:
+        value = tomllib.loads(f"v = {raw}")["v"]
+    except tomllib.TOMLDecodeError:
+        value = raw
+    return key, value
+
+
+def with_overrides(scene, assignments) -> "Scene":
+    """The scene (path, dict or Scene) with ``assignments`` (``"KEY=VALUE"`` strings, :func:`parse_assignment`)
+    applied to its raw data, validated again."""
+    sc = as_scene(scene)
+    if not assignments:
+        return sc
+    data = plain(sc.data)
+    for text in assignments:
+        set_key(data, *parse_assignment(text))
+    return Scene(data, base_dir=sc.base_dir, source=f"{sc.source} with {' '.join(assignments)}")
+
+
 def as_scene(scene) -> Scene:
     if isinstance(scene, Scene):
         return scene

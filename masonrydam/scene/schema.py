@@ -35,8 +35,10 @@ _COMPOSITE_KEYS = {"tensile_strength": "stress", "mode_I_fracture_energy": "frac
                    "dilatancy_confinement": "stress", "dilatancy_decay": None,
                    "mode_II_fracture_energy": "fracture_energy", "compressive_strength": "stress",
                    "cap_shear_factor": None, "cap_fracture_energy": "fracture_energy",
-                   "cap_peak_plastic_strain": "length", "shear_stiffness_2": "stiffness"}
+                   "cap_peak_plastic_strain": "length", "shear_stiffness_2": "stiffness",
+                   "relaxation_time": "time"}
 HYPOTHESES = ("plane_stress", "plane_strain")
+SUPPORT_KINDS = ("fixed", "tied")
 G_STANDARD = 9.80665
 
 
@@ -180,7 +182,8 @@ def _joint(name, d):
                 raise SceneError(f"{key}.{req}", "is required for the composite law")
         for k, dim_ in _COMPOSITE_KEYS.items():
             if k in d:
-                out[k] = _number(d[k], f"{key}.{k}") if dim_ is None else quantity(d[k], dim_, f"{key}.{k}")
+                out[k] = (_number(d[k], f"{key}.{k}") if dim_ is None else _time(d[k], f"{key}.{k}") if dim_ == "time"
+                          else quantity(d[k], dim_, f"{key}.{k}"))
         if "residual_shear_stiffness" in d:
             raise SceneError(f"{key}.residual_shear_stiffness", "has no meaning for the composite law (its shear "
                                                                 "softens with mode_II_fracture_energy)")
@@ -624,11 +627,14 @@ def normalize(raw: dict) -> dict:
         raise SceneError("supports", "expected an array of tables [[supports]]")
     sup = []
     for i, s in enumerate(supports):
-        _check_keys(s, {"set", "components"}, f"supports[{i}]")
+        _check_keys(s, {"set", "components", "kind"}, f"supports[{i}]")
         if "set" not in s:
             raise SceneError(f"supports[{i}].set", "is required")
+        # "fixed": the components are held at zero; "tied": the set's nodes share one displacement in them (free to
+        # translate together: a rigid loading beam kept level, Model.add_tie)
         sup.append({"set": str(s["set"]), "components": _components(s.get("components", list(COMPONENT_NAMES[:dim])),
-                                                                      f"supports[{i}].components", dim)})
+                                                                      f"supports[{i}].components", dim),
+                    "kind": _choice(s.get("kind", "fixed"), SUPPORT_KINDS, f"supports[{i}].kind")})
     stages = raw["stages"]
     if not isinstance(stages, list) or not stages:
         raise SceneError("stages", "give at least one stage as [[stages]]")

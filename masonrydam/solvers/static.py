@@ -478,6 +478,9 @@ class StaticSolver:
                 self.progress(si, max(0.0, min(lam_now, 1.0)))
 
         self._where = f"{st.name}: arc-length control from load factor {lam:.4g}"
+        # the pseudo-time of an arc step (rate-dependent laws): the stage's nominal step, whatever the arc's
+        # load-factor increment (which is an unknown of the step and may be negative past a peak)
+        self.model.time_step = st.duration / st.steps
         arc = ArcLengthStage(self, st, u, u_start, f_base, lam, record, dl0=dl0, direction=direction, mode=mode)
         u, lam, _ = arc.run()
         if lam < 1.0 - 1e-12:  # the path peaked below 1 and came down: the stage's end is not on it

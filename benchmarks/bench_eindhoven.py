@@ -1,0 +1,110 @@
+"""The Eindhoven wall J4D (examples/eindhoven_J4D.toml, reference problem 6): what its curve costs and how
+it converges (issue 18): the relaxation time of the joints' viscous regularisation, the number of push
+steps and the mesh, for both vertical conditions of the top beam:
+
+- ``held``: the reference loading (PROBLEMS.md; Lourenco & Rots 1997): the top beam kept level and at its
+  height, so the vertical force grows as the wall rocks;
+- ``constant``: the top beam kept level but free to rise, the vertical load constant (0.30 MPa): the wall
+  peaks and slides on a bed joint at H = tan(phi) N (22.9 kN here).
+
+Each case is the example with ``--set`` style changes: ``relaxation_time`` of the three composite joint sets
+(0: the inviscid law), the push's ``steps`` and the generator's ``elements_per_unit``. The first case runs
+once before the timings (numba compilation and cache).
+
+    python benchmarks/bench_eindhoven.py [--cases held constant] [--taus 0.25 0.025 0.0025 0]
+        [--steps 40 80] [--elements 2 4]
+
+Prints per case: the peak force and its displacement, the force at 1, 2, 3 and 4 mm, how far the run got,
+the wall time of the run, and the peak's change against the case with the smallest relaxation time of the
+same steps and mesh. One process, one thread. A benchmark, not a test: it never fails on a slow figure.
+"""
+from __future__ import annotations
+
+from _common import pin_one_thread  # benchmarks/ is sys.path[0] when run as a script
+
+pin_one_thread()
+
+import argparse
+import contextlib
+import io
+import itertools
+import os
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+import masonrydam
+from masonrydam.results.pushover import pushover_data
+from masonrydam.scene.scene import Scene, set_key
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "eindhoven_J4D.toml"
+JOINT_SETS = ("bed_joints", "head_joints", "unit_cracks")
+
+
+def scene(case: str, tau_ms: float, steps: int, elements: int) -> dict:
+    data = Scene.from_toml(EXAMPLE).data
+    for name in JOINT_SETS:
+        if tau_ms > 0:
+            set_key(data, f"joints.{name}.relaxation_time", f"{tau_ms:g} ms")
+        else:
+            data["joints"][name].pop("relaxation_time", None)
+    set_key(data, "stages[1].steps", steps)
+    set_key(data, "mesh.parameters.elements_per_unit", elements)
+    if case == "constant":
+        set_key(data, "stages[1].loads[0].components", ["x"])
+        set_key(data, "stages[1].loads[0].value", ["4 mm"])
+    return data
+
+
+def run_case(data: dict, folder: str) -> dict:
+    out = os.path.join(folder, "j4d.nc")
+    t0 = time.perf_counter()
+    status = "completed"
+    try:
+        with contextlib.redirect_stdout(io.StringIO()):
+            masonrydam.run(data, output=out)
+    except masonrydam.MasonrydamError as exc:
+        status = type(exc).__name__
+        out = out.replace(".nc", ".partial.nc") if os.path.exists(out.replace(".nc", ".partial.nc")) else out
+    wall = time.perf_counter() - t0
+    import xarray as xr
+
+    with xr.open_dataset(out) as ds:
+        d, f, _ = pushover_data(ds)
+    k = int(np.argmax(f))
+    at = [np.interp(x, d, f) if d[-1] >= x - 1e-9 else np.nan for x in (1e-3, 2e-3, 3e-3, 4e-3)]
+    return {"peak": f[k], "d_peak": d[k], "at": at, "reached": d[-1], "wall": wall, "status": status}
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--cases", nargs="+", default=["constant", "held"], choices=["constant", "held"])
+    ap.add_argument("--taus", nargs="+", type=float, default=[0.25, 0.025, 0.0025, 0.0], help="relaxation times, ms")
+    ap.add_argument("--steps", nargs="+", type=int, default=[40])
+    ap.add_argument("--elements", nargs="+", type=int, default=[2])
+    args = ap.parse_args(argv)
+    with tempfile.TemporaryDirectory() as folder:
+        warm = scene(args.cases[0], 0.025, 4, 2)
+        set_key(warm, "stages[1].loads[0].value", ["0.4 mm"] if args.cases[0] == "constant" else ["0.4 mm", "0 mm"])
+        run_case(warm, folder)
+        print(f"{'case':9s} {'tau ms':>7s} {'steps':>5s} {'el/unit':>7s} {'peak kN':>8s} {'at mm':>6s} "
+              f"{'F(1) kN':>8s} {'F(2)':>6s} {'F(3)':>6s} {'F(4)':>6s} {'reached':>8s} {'wall s':>7s} "
+              f"{'peak vs smallest tau':>21s}  status")
+        for case, steps, elements in itertools.product(args.cases, args.steps, args.elements):
+            rows = []
+            for tau in sorted(args.taus, reverse=True):
+                r = run_case(scene(case, tau, steps, elements), folder)
+                rows.append((tau, r))
+            ref = rows[-1][1]["peak"]
+            for tau, r in rows:
+                at = " ".join(f"{v / 1e3:6.2f}" for v in r["at"])
+                print(f"{case:9s} {tau:7.4g} {steps:5d} {elements:7d} {r['peak'] / 1e3:8.2f} {r['d_peak'] * 1e3:6.2f} "
+                      f"{at:>29s} {r['reached'] * 1e3:6.2f}mm {r['wall']:7.1f} {100 * (r['peak'] / ref - 1):+20.2f}%  "
+                      f"{r['status']}", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -105,6 +105,23 @@ def test_viscous_regularisation_converges_to_the_inviscid_softening_curve():
     assert err.value.key == "joints.joints.relaxation_time"
 
 
+def test_result_states_of_composite_points():
+    """``joint_state`` (and what uplift, stability and mechanism checks count): the composite codes elastic,
+    shear, tension, cap, tension-shear, shear-cap are stick, slip, open, crush, open, crush; a relaxation time
+    of 0 is the inviscid law."""
+    from masonrydam.scene.build import build_mesh, build_model
+    from masonrydam.scene.scene import Scene
+
+    sc = Scene(bar(0.1, 1e-4, joint={"relaxation_time": 0}))
+    g = build_model(sc.normalized, build_mesh(sc.normalized, sc.base_dir)).igroups[0]
+    assert g.relaxation_time == 0.0
+    codes = np.resize(np.arange(6.0), g.state_committed.shape[:2])
+    g.state_committed[:, :, 0] = codes
+    g.state_trial[:, :, 0] = codes[::-1, ::-1] if codes.ndim == 2 else codes
+    np.testing.assert_array_equal(g.result_states(), np.array([0, 1, 2, 3, 2, 3])[codes.astype(int)])
+    np.testing.assert_array_equal(g.result_states(trial=True), np.array([0, 1, 2, 3, 2, 3])[g.state_trial[:, :, 0].astype(int)])
+
+
 def test_bad_composite_joints():
     for joint, key in (({"mode_I_fracture_energy": -1.0}, "joints.joints"),
                        ({"mode_I_fracture_energy": 0.1}, "joints.joints"),  # below ft^2 / kn = 0.625 N/m

@@ -5,7 +5,7 @@ examples/eindhoven_J4D_cyclic.py.
 Closed form checked (PROBLEMS.md, problem 6): under a constant vertical load, once a bed joint has lost its
 cohesion and slides (no dilatancy), the horizontal force is Coulomb's, H = tan(phi) N, N the vertical force
 on that joint: the precompression p A (0.30 MPa x 99 000 mm2 = 29.7 kN; 22.3 kN of friction) plus the
-weight above it (top beam and courses). In a cyclic push the loop is then the rectangle H = +/- tan(phi) N.
+weight above it (top beam and courses). In a cyclic push the loop is then a parallelogram between the plateaus H = +/- tan(phi) N.
 """
 from __future__ import annotations
 
@@ -71,7 +71,7 @@ def test_constant_load_j4d_slides_at_coulomb_friction():
     assert np.ptp(uy) <= 1e-4 * np.abs(uy).max()
 
 
-def test_cyclic_j4d_hysteresis_is_the_coulomb_rectangle():
+def test_cyclic_j4d_hysteresis_plateaus_are_coulomb_friction():
     spec = importlib.util.spec_from_file_location("cyclic", EXAMPLES / "eindhoven_J4D_cyclic.py")
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)

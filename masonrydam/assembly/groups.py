@@ -293,11 +293,12 @@ class InterfaceGroup:
         s = self.state_trial if trial else self.state_committed
         return s[:, :, mc.S_CODE].astype(np.int8)
 
-    def result_states(self) -> np.ndarray:
-        """(ne, nip) int8 committed state in the result's terms (``joint_state``): 0 stick, 1 slip, 2 open, 3
-        crush. The Mohr-Coulomb codes are these; the composite law's (elastic, shear, tension, cap,
-        tension-shear, shear-cap) map to stick, slip, open, crush, open, crush."""
-        codes = self.state_codes(trial=False)
+    def result_states(self, trial=False) -> np.ndarray:
+        """(ne, nip) int8 state (committed, or the trial one) in the result's terms (``joint_state``, and what
+        uplift, stability and mechanism checks count as open or sliding): 0 stick, 1 slip, 2 open, 3 crush. The
+        Mohr-Coulomb codes are these; the composite law's (elastic, shear, tension, cap, tension-shear,
+        shear-cap) map to stick, slip, open, crush, open, crush."""
+        codes = self.state_codes(trial=trial)
         if self.law != "composite":
             return codes
         return np.array([0, 1, 2, 3, 2, 3], dtype=np.int8)[codes]

@@ -191,10 +191,12 @@ class Model:
         translate together: a rigid loading beam guided to stay level. Penalty: the energy
         ``k/2 sum_i (u_i - mean(u))^2`` per component, i.e. the stiffness ``k (I - 1 1^T / n)`` on the
         component's DOFs of the nodes, which resists no common translation. ``k`` (N/m, default 1e4 times
-        the largest diagonal of the blocks' stiffness at those DOFs) keeps the relative differences of the
-        tied displacements near 1e-4 of the blocks' own deformation there. A constant linear term: it goes
-        into ``K_continuum`` (forces) and into the tangent pattern (a coupling, :meth:`add_coupling`).
-        Returns ``k``."""
+        the largest diagonal of the blocks' initial elastic stiffness at those DOFs, nonlinear groups
+        included) keeps the relative differences of the tied displacements near 1e-4 of the blocks' own
+        deformation there. A constant linear term: it goes into ``K_continuum`` (forces) and into the
+        tangent pattern (a coupling, :meth:`add_coupling`). In a dynamic stage it also enters
+        stiffness-proportional Rayleigh damping and the explicit stability limit, as any stiff part does.
+        Returns ``k``; ValueError for fewer than two nodes or a stiffness that is not positive."""
         nodes = np.unique(np.asarray(nodes, dtype=np.int64))
         n, dim = len(nodes), self.dim
         if n < 2:
@@ -202,8 +204,11 @@ class Model:
         comps = sorted(set(int(c) for c in components))
         dofs = (nodes[:, None] * dim + np.arange(dim)).ravel()
         if stiffness is None:
-            diag = self.K_continuum.diagonal()
+            diag = self.K_continuum_elastic.diagonal()
             stiffness = 1e4 * float(max(diag[nodes * dim + c].max() for c in comps))
+        if not (np.isfinite(stiffness) and stiffness > 0):
+            raise ValueError(f"the tie's penalty stiffness must be positive, got {stiffness!r} (do the nodes belong "
+                             "to blocks?)")
         block = np.zeros((n * dim, n * dim))
         share = np.eye(n) - np.full((n, n), 1.0 / n)
         for c in comps:
@@ -213,8 +218,11 @@ class Model:
             (block.ravel(), (np.repeat(dofs, len(dofs)), np.tile(dofs, len(dofs)))), shape=(self.n_dof, self.n_dof)
         )).tocsr()
         self._K_elastic_full = None
+        self._elastic_data = None
+        self._continuum_force = None
         self.ties.append((dofs.reshape(1, -1), block[None]))
         self.add_coupling(nodes)
+        self.dofmap = None  # (the tangent pattern and K_linear_data are rebuilt with the tie)
         return stiffness
 
     def set_constraints(self, constrained: np.ndarray) -> None:

@@ -332,7 +332,7 @@ def main(argv=None) -> int:
                          "prescribed displacements against their displacement (--component, default x)")
     pl.add_argument("--deformed", action="store_true",
                     help="draw the deformed blocks and the joints of one step (2D results): stick grey, slip "
-                         "orange, open red (wider the more open), with the count of each state")
+                         "orange, open red (wider the more open), crushed purple, with the count of each state")
     pl.add_argument("--step", type=int, metavar="N",
                     help="with --deformed: step, as in the file's step coordinate; negative: from the end "
                          "(default: the last step)")

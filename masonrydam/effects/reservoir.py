@@ -286,7 +286,7 @@ class StageWater:
         total = np.bincount(L.line, weights=w, minlength=L.n_lines)
         words = []
         for trial in (False, True):
-            codes = L.gather([g.state_codes(trial=trial) for g in L.groups])
+            codes = L.gather([g.result_states(trial=trial) for g in L.groups])
             words.append((np.bincount(L.line, weights=w * (codes == OPEN), minlength=L.n_lines) / total,
                           np.bincount(L.line, weights=w * (codes == SLIP), minlength=L.n_lines) / total))
         (open0, _), (open1, slip1) = words

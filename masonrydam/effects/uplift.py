@@ -228,7 +228,7 @@ class Uplift:
         h_up, h_tail = self._heads(level, tail)
         tip = cracked = None
         if rule != "unchanged":
-            codes = L.gather([g.state_codes(trial=trial) for g in L.groups])
+            codes = L.gather([g.result_states(trial=trial) for g in L.groups])
             cracked, tip = L.leading_open(codes == OPEN)
             if trial and step is not None:
                 if step == self._latch_step:

@@ -122,6 +122,9 @@ Parameter row (float64, ``N_COMPOSITE_PARAMS``; built by :func:`composite_params
     P_OPEN_TANGENT         16  solver control as mohr_coulomb.P_OPEN_TANGENT: the tangent of a point
                                whose tractions are zero (fully softened and open) is
                                ``open_tangent * K``; 0 (default) is the consistent tangent (zero)
+    P_RELAXATION_TIME  17  tau (s) of the Duvaut-Lions regularisation, 0: inviscid (:func:`_duvaut_lions`)
+    P_TIME_STEP        18  the evaluation's time step dt (s), written by the assembly before each
+                               evaluation (not a material constant)
 
 State row (float64, ``N_COMPOSITE_STATE``)::
 
@@ -855,7 +858,7 @@ def composite_point(params, p, delta, ns, state_committed, state_trial, e, g, tr
             C[ns, j] = dx[0] / h * kj
     tau_relax = params[p, P_RELAXATION_TIME]
     dt = params[p, P_TIME_STEP]
-    if tau_relax > 0.0 and dt > 0.0:
+    if tau_relax > 0.0:  # (dt = 0: no time to relax, the elastic trial, as Perzyna blocks do)
         _duvaut_lions(dt / tau_relax, delta, e, g, ns, ks1, ks2, kn, tau1_tr, tau2_tr, tn_tr,
                       state_committed, state_trial, traction_out, C)
     for i in range(n):
@@ -1004,7 +1007,8 @@ def composite_params(
         with a cap.
     shear_stiffness_2 : ks2 (Pa/m) > 0 of the second shear direction (3D); None: ks.
     relaxation_time : tau (s) >= 0 of the Duvaut-Lions viscous regularisation (:func:`_duvaut_lions`);
-        0: the inviscid law. It acts only in steps with a time step (``P_TIME_STEP`` > 0).
+        0: the inviscid law. A step without time (``P_TIME_STEP`` = 0, e.g. a modal stage's tangent) is then
+        the elastic trial from the committed state (no time to relax).
 
     Raises
     ------

@@ -91,7 +91,7 @@ class SectionAssessment:
         L, dim = self.lines, self.dim
         t = L.gather([g.traction.reshape(g.n_elem, g.nip, dim) for g in L.groups]) if L.n_points else np.zeros(0)
         t = t.reshape(-1, dim)
-        state = L.gather([g.state_committed[:, :, mc.S_CODE] for g in L.groups])
+        state = L.gather([g.result_states() for g in L.groups])
         broken = L.gather([g.state_committed[:, :, mc.S_BOND_BROKEN] for g in L.groups]) != 0
         w = L.weight
         tn = t[:, -1]
@@ -253,26 +253,11 @@ def select_step(ds, step: int | None, label: str = "result", option: str = "--st
     ``step`` coordinate (0 or more), or a negative index from the end (-1: the last step, the default
     for None). Errors (:class:`~masonrydam.errors.MasonrydamError`) for a result without sections or
     steps, or a step that is not in it, naming ``option``."""
-    from ..errors import MasonrydamError
-
     if "section" not in ds.dims or "sliding_safety_factor" not in ds.variables:
         raise _no_sections_error(ds, label)
-    n = int(ds.sizes.get("step", 0))
-    if n == 0:
-        raise MasonrydamError(f"'{label}' has no steps (status '{ds.attrs.get('status', '?')}': the run stopped "
-                              "before its first converged step)")
-    if step is None:
-        return n - 1
-    steps = np.asarray(ds["step"].values).astype(int)
-    if step < 0:
-        if -step > n:
-            raise MasonrydamError(f"{option} {step}: the result has {n} steps (-1 to {-n} from the end)")
-        return n + step
-    hit = np.nonzero(steps == step)[0]
-    if not len(hit):
-        raise MasonrydamError(f"{option} {step}: not a step of the result (steps {int(steps.min())} to "
-                              f"{int(steps.max())}, or -1 to {-n} from the end)")
-    return int(hit[0])
+    from .files import step_position
+
+    return step_position(ds, step, option, f"'{label}'")
 
 
 def stage_name(ds, i: int) -> str:

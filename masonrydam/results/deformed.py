@@ -31,7 +31,7 @@ from ..errors import MasonrydamError
 
 #: the automatic scale makes the largest drawn nodal displacement this fraction of the model's largest extent
 AUTO_FRACTION = 0.05
-#: joint states as in ``joint_state`` (flag_values 0, 1, 2) and how they are drawn: colour, line width (pt)
+#: joint states as in ``joint_state`` (flag_values 0, 1, 2, 3; 3 only with composite joints) and how they are drawn: colour, line width (pt)
 STATE_NAMES = ("stick", "slip", "open", "crush")
 STATE_COLOURS = ("0.6", "tab:orange", "tab:red", "tab:purple")
 STATE_WIDTHS = (0.6, 1.6, 1.6, 1.6)
@@ -48,7 +48,7 @@ class DeformedShape:
     along ``node`` of the corner nodes of the drawn blocks (-1 padding); cell_group (n_cell,): their
     ``block_cell_group``; joint_point (n_seg,): the joint points drawn (positions along ``joint_point``);
     joint_segments (n_seg, 3, 2): their polylines on the deformed shape, m; joint_state (n_seg,): 0 stick,
-    1 slip, 2 open; joint_opening (n_seg,): m; counts: drawn points per state name.
+    1 slip, 2 open, 3 crush; joint_opening (n_seg,): m; counts: drawn points per state name.
     """
 
     step: int
@@ -70,23 +70,10 @@ class DeformedShape:
 
 
 def select_step(ds, step: int | None, option: str = "--step") -> int:
-    """Position along ``step`` of ``step``: a value of the ``step`` coordinate, or a negative index from the
-    end (None: the last step). Errors name ``option``, the step and the range."""
-    n = int(ds.sizes.get("step", 0))
-    if n == 0:
-        raise MasonrydamError(f"the result has no steps (status '{ds.attrs.get('status', '?')}': the run stopped "
-                              "before its first converged step)")
-    if step is None:
-        return n - 1
-    if step < 0:
-        if -step > n:
-            raise MasonrydamError(f"{option} {step}: the result has {n} steps (0 to {n - 1}, or -1 to {-n} from "
-                                  "the end)")
-        return n + step
-    hit = np.flatnonzero(np.asarray(ds["step"].values).astype(int) == step)
-    if not len(hit):
-        raise MasonrydamError(f"{option} {step}: not a step of the result (0 to {n - 1}, or -1 to {-n} from the end)")
-    return int(hit[0])
+    """Position along ``step`` of ``step`` (:func:`masonrydam.results.files.step_position`)."""
+    from .files import step_position
+
+    return step_position(ds, step, option)
 
 
 def _positions(ds, model_nodes: np.ndarray) -> np.ndarray:
@@ -104,7 +91,7 @@ def deformed_data(ds, step: int | None = -1, scale: float | None = None) -> Defo
     drawn as :data:`AUTO_FRACTION` of the model's largest extent). Errors
     (:class:`~masonrydam.errors.MasonrydamError`): a 3D result, a file without connectivity, a step not in
     the file, a bad scale, a result that records none of the blocks' nodes."""
-    from .mode_plot import model_extent, node_coordinates
+    from .mode_plot import auto_scale, node_coordinates
 
     comps = [str(c) for c in ds.component.values]
     if len(comps) != 2:
@@ -118,8 +105,7 @@ def deformed_data(ds, step: int | None = -1, scale: float | None = None) -> Defo
     coords = node_coordinates(ds)
     u = np.asarray(ds.displacement.isel(step=k).transpose("node", "component").values, dtype=float)
     if scale is None:
-        peak = float(np.linalg.norm(u, axis=1).max(initial=0.0))
-        scale = AUTO_FRACTION * model_extent(coords) / peak if peak > 0 else 1.0
+        scale = auto_scale(coords, u, AUTO_FRACTION)
     elif not (np.isfinite(scale) and scale > 0):
         raise MasonrydamError(f"--scale must be a positive finite number, got {scale!r}")
     scale = float(scale)
@@ -173,8 +159,8 @@ def deformed_figure(ds, step: int | None = -1, scale: float | None = None, title
     """The figure of ``masonrydam plot OUT.nc --deformed`` (a matplotlib Figure, not drawn to screen): the
     data of :func:`deformed_data` in an x-y axes with equal scales: the undeformed blocks faint
     (``gid="undeformed"``), the deformed blocks (``gid="deformed"``), and the joint points of each state
-    on them (``gid="joints_stick"``, ``"joints_slip"``, ``"joints_open"``: stick thin grey, slip orange,
-    open red; the line width grows with the opening, by up to :data:`OPENING_WIDTH` pt for the most open
+    on them (``gid="joints_stick"``, ``"joints_slip"``, ``"joints_open"``, ``"joints_crush"``: stick thin grey, slip
+    orange, open red, crushed (on a composite joint's compression cap) purple; the line width grows with the opening, by up to :data:`OPENING_WIDTH` pt for the most open
     point). The legend gives the number of points in each state, the title the step, its stage and load
     factor and the scale. ``title``: an optional first line of the title (the file name on the command
     line)."""

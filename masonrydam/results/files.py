@@ -136,3 +136,30 @@ def open_result(path, load: bool = True):
     if note is not None:
         warnings.warn(note, IncompleteResultWarning, stacklevel=2)
     return ds
+
+
+def step_position(ds, step: int | None, option: str = "--step", label: str = "the result") -> int:
+    """Position along ``step`` of ``step``: a value of the ``step`` coordinate (0 or more), or a negative index
+    from the end (None: the last step). MasonrydamError for a result without steps or a step not in it, naming
+    ``option``, the step and the range."""
+    import numpy as np
+
+    from ..errors import MasonrydamError
+
+    n = int(ds.sizes.get("step", 0))
+    if n == 0:
+        raise MasonrydamError(f"{label} has no steps (status '{ds.attrs.get('status', '?')}': the run stopped "
+                              "before its first converged step)")
+    if step is None:
+        return n - 1
+    steps = np.asarray(ds["step"].values).astype(int)
+    if step < 0:
+        if -step > n:
+            raise MasonrydamError(f"{option} {step}: the result has {n} steps ({int(steps.min())} to "
+                                  f"{int(steps.max())}, or -1 to {-n} from the end)")
+        return n + step
+    hit = np.flatnonzero(steps == step)
+    if not len(hit):
+        raise MasonrydamError(f"{option} {step}: not a step of the result ({int(steps.min())} to "
+                              f"{int(steps.max())}, or -1 to {-n} from the end)")
+    return int(hit[0])

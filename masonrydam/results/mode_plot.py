@@ -50,14 +50,14 @@ def model_extent(coords: np.ndarray) -> float:
     return ext if ext > 0 else 1.0
 
 
-def auto_scale(coords: np.ndarray, shape: np.ndarray) -> float:
-    """The scale of a mode shape ``shape`` (n_node, dim; kg^-0.5) that makes its largest nodal
-    displacement (Euclidean norm over the components) :data:`AUTO_FRACTION` of the largest extent of
-    ``coords`` (n_node, dim; m): ``AUTO_FRACTION * extent / max |phi|`` (kg^0.5 m); 1.0 for a nil shape."""
+def auto_scale(coords: np.ndarray, shape: np.ndarray, fraction: float = AUTO_FRACTION) -> float:
+    """The scale of a shape ``shape`` (n_node, dim; a mode in kg^-0.5, or displacements in m) that makes its
+    largest nodal displacement (Euclidean norm over the components) ``fraction`` of the largest extent of
+    ``coords`` (n_node, dim; m): ``fraction * extent / max |phi|``; 1.0 for a nil shape."""
     peak = float(np.max(np.linalg.norm(shape, axis=1))) if len(shape) else 0.0
     if not peak > 0:
         return 1.0
-    return AUTO_FRACTION * model_extent(coords) / peak
+    return fraction * model_extent(coords) / peak
 
 
 def mode_data(ds, mode: int, where: str = "the result"):

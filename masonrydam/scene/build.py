@@ -140,7 +140,10 @@ def build_model(scene: dict, mesh: Mesh) -> Model:
             if len(np.unique(nodes)) < 2:
                 raise SceneError(f"supports[{i}].set", f"set '{s['set']}' has {len(np.unique(nodes))} node: a tie "
                                                        "needs at least two")
-            model.add_tie(nodes, ["xyz".index(c) for c in s["components"]])
+            try:
+                model.add_tie(nodes, ["xyz".index(c) for c in s["components"]])
+            except ValueError as exc:
+                raise SceneError(f"supports[{i}]", str(exc)) from None
     return model
 
 
@@ -458,6 +461,13 @@ def effects(scene: dict, model: Model) -> list[str]:
         out.append("composite masonry joints (Lourenco & Rots 1997): tension cut-off with exponential softening "
                    "(GfI), Coulomb friction with cohesion softening (GfII) and dilatancy, compression cap where "
                    "given: " + ", ".join(sorted(set(comp_sets))))
+    relaxing = [f"{g.name} {g.relaxation_time * 1e3:g} ms" for g in model.igroups if g.relaxation_time > 0]
+    if relaxing:
+        out.append("viscous regularisation of the composite joints (Duvaut-Lions; an approximation of the "
+                   "inviscid law, to be converged in the relaxation time): " + ", ".join(relaxing))
+    tied = [f"{s['set']} ({', '.join(s['components'])})" for s in scene["supports"] if s["kind"] == "tied"]
+    if tied:
+        out.append("tied supports (the set moves as one in these components): " + ", ".join(tied))
     controls = sorted({st.get("control", "load") for st in scene["stages"] if st["type"] == "static"} - {"load"})
     if controls:
         out.append("static path following: " + ", ".join(

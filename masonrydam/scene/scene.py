@@ -63,7 +63,7 @@ def _path_parts(path: str) -> list:
 
     parts = []
     for piece in path.split("."):
-        m = re.fullmatch(r"([A-Za-z_][A-Za-z0-9_]*)((?:\[\d+\])*)", piece)
+        m = re.fullmatch(r"([A-Za-z0-9_-]+)((?:\[\d+\])*)", piece)
         if m is None:
             raise SceneError(path, "cannot read the key: write dotted names with list indices, e.g. "
                                    "stages[1].loads[0].pressure")
@@ -80,8 +80,11 @@ def set_key(data: dict, path: str, value) -> None:
     node = data
     for part, nxt in zip(parts[:-1], parts[1:]):
         if isinstance(part, int):
-            if not isinstance(node, list) or part >= len(node):
-                raise SceneError(path, f"index [{part}] is not in the scene (a list of {len(node) if isinstance(node, list) else 0})")
+            if not isinstance(node, list):
+                raise SceneError(path, f"index [{part}] applies to a list; the key before it is a "
+                                       f"{type(node).__name__}")
+            if part >= len(node):
+                raise SceneError(path, f"index [{part}] is not in the scene (a list of {len(node)})")
             node = node[part]
         else:
             if not isinstance(node, dict):

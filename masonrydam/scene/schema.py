@@ -182,8 +182,11 @@ def _joint(name, d):
                 raise SceneError(f"{key}.{req}", "is required for the composite law")
         for k, dim_ in _COMPOSITE_KEYS.items():
             if k in d:
-                out[k] = (_number(d[k], f"{key}.{k}") if dim_ is None else _time(d[k], f"{key}.{k}") if dim_ == "time"
-                          else quantity(d[k], dim_, f"{key}.{k}"))
+                if dim_ == "time":  # relaxation_time: 0 is the inviscid law
+                    zero = d[k] == 0 or (isinstance(d[k], str) and d[k].split()[:1] in (["0"], ["0.0"]))
+                    out[k] = 0.0 if zero and not isinstance(d[k], bool) else _time(d[k], f"{key}.{k}")
+                else:
+                    out[k] = _number(d[k], f"{key}.{k}") if dim_ is None else quantity(d[k], dim_, f"{key}.{k}")
         if "residual_shear_stiffness" in d:
             raise SceneError(f"{key}.residual_shear_stiffness", "has no meaning for the composite law (its shear "
                                                                 "softens with mode_II_fracture_energy)")

@@ -170,7 +170,7 @@ def joint_mechanisms(model, limit: int = 4) -> list[str]:
         if not g.nonlinear:
             continue
         ns = g.conn.shape[1] // 2
-        codes = g.state_codes(trial=True)  # (ne, nip)
+        codes = g.result_states(trial=True)  # (ne, nip)
         below, above = owner[g.conn[:, 0]], owner[g.conn[:, ns]]
         for b, a in sorted(set(zip(below.tolist(), above.tolist()))):
             elems = (below == b) & (above == a)

@@ -4,9 +4,11 @@
     masonrydam run --default -o OUT.nc       run the bundled default scene
     masonrydam check SCENE.toml              validate a scene and build its model, without solving
     masonrydam export-mesh SCENE.toml -o M.vtu   write the scene's mesh (units and joints) for ParaView
+    masonrydam export-results OUT.nc -o R.xdmf|R.pvd [--joints V] [--every K]   results as a ParaView time series
     masonrydam records list                  the bundled ground-motion records
     masonrydam records show NAME [-o PNG]    a record's measures (PGA, PGV, PGD, Arias, D5-95, CAV) and plot
-    masonrydam plot OUT.nc [--nodes N ..] [--joints J ..] -o PNG   histories from a result file
+    masonrydam plot OUT.nc [--nodes N ..] [--joints J ..] -o PNG   histories (static, driven DOFs: pushover curve)
+    masonrydam plot OUT.nc --quantity VAR [--select DIM=VALUE ..] -o PNG   history of one variable
     masonrydam plot OUT.nc --mode N [--scale S] -o PNG   mode shape N of a result with a modal stage
     masonrydam plot OUT.nc --deformed [--step N] [--scale S] -o PNG   deformed blocks and joint states (2D)
     masonrydam assess OUT.nc [--step N] [--condition C] [--csv F]  stability of the joint lines (dams)
@@ -75,6 +77,33 @@ def _cmd_export(args):
     return 0
 
 
+def _cmd_export_results(args):
+    """A result file as a ParaView time series: ``.xdmf`` (+ ``.h5``) or ``.pvd`` (+ one ``.vtu`` per step),
+    with ``OUT.units.json`` beside it (:func:`masonrydam.results.paraview.export_results`)."""
+    from ..results import paraview
+    from ..results.files import check_output_path, open_result
+
+    path = Path(args.result)
+    out = check_output_path(args.output or f"{path.stem}.xdmf", "-o")
+    paraview.check_options(out, args.joints, args.every, args.steps, args.time)  # before any work
+    s = paraview.export_results(open_result(path), out, joints=args.joints, every=args.every, steps=args.steps,
+                                time=args.time, source=str(path))
+    unit = "s" if s.time_unit == "s" else "(step numbers)"
+    print(f"wrote {out}: {len(s.steps)} steps, time {s.times[0]:g} to {s.times[-1]:g} {unit}; {s.n_points} points, "
+          f"{s.n_block_cells} block cells, {s.n_joint_cells} interface cells ({args.joints})")
+    left = s.left_out
+    if left.get("block_cells") or left.get("joint_elements"):
+        print(f"  left out (nodes not recorded): {left['block_cells']} block cells, {left['joint_elements']} "
+              "interface elements")
+    if left.get("nodes_without_cell"):
+        print(f"  {left['nodes_without_cell']} recorded nodes in no cell are points without a cell in XDMF; "
+              "export to .pvd to see them")
+    if left.get("static_steps"):
+        print(f"  left out: {left['static_steps']} static step(s) (no time; --time step keeps them)")
+    print(f"  units of the fields: {paraview.units_path(out)}")
+    return 0
+
+
 def _cmd_records(args):
     from .. import records as rec
 
@@ -119,17 +148,24 @@ def _cmd_records(args):
 
 
 def _cmd_plot(args):
-    """Time histories (dynamic results) or step histories (static results) of a result file, as PNG
-    (:func:`history_figure`); with ``--mode N`` the mode shape N of a result with a modal stage
+    """The default figure of a result file, as PNG (:func:`masonrydam.results.histories.default_figure`):
+    time histories (dynamic results), the pushover curve (static results with driven DOFs) or histories
+    against the load factor (other static results); with ``--quantity VAR [--select DIM=VALUE ...]`` the
+    history of one variable (:func:`masonrydam.results.histories.quantity_figure`); with ``--pushover`` the
+    pushover curve; with ``--mode N`` the mode shape N of a result with a modal stage
     (:func:`masonrydam.results.mode_plot.mode_figure`); with ``--deformed`` the deformed blocks and joint
     states of one step (:func:`masonrydam.results.deformed.deformed_figure`)."""
     from ..results.files import check_output_path, open_result
 
     path = Path(args.result)
+    quantity, select = getattr(args, "quantity", None), getattr(args, "select", None)
+    chosen = [opt for opt, given in (("deformed", args.deformed), ("pushover", args.pushover),
+                                      ("mode", args.mode is not None), ("quantity", quantity is not None)) if given]
+    if len(chosen) > 1:
+        raise MasonrydamError(f"--{chosen[0]} and --{chosen[1]} draw different figures: give one of them")
+    if select and quantity is None:
+        raise MasonrydamError("--select applies to --quantity VAR; give --quantity as well")
     if args.deformed:
-        for opt, given in (("pushover", args.pushover), ("mode", args.mode is not None)):
-            if given:
-                raise MasonrydamError(f"--deformed and --{opt} draw different figures: give one of them")
         for opt in ("nodes", "joints", "component"):
             if getattr(args, opt) is not None:
                 raise MasonrydamError(f"--{opt} applies to histories, not to the deformed shape (--deformed)")
@@ -142,13 +178,10 @@ def _cmd_plot(args):
         return 0
     if args.step is not None:
         raise MasonrydamError("--step applies to the deformed shape; give --deformed as well")
-    if args.pushover and args.mode is not None:
-        raise MasonrydamError("--pushover and --mode draw different figures: give one of them")
     if args.pushover:
         for opt in ("nodes", "joints", "scale"):
             if getattr(args, opt) is not None:
                 raise MasonrydamError(f"--{opt} does not apply to a pushover curve (--pushover)")
-        from ..results.files import check_output_path, open_result
         from ..results.pushover import pushover_figure
 
         out = check_output_path(args.output or f"{path.stem}_pushover.png", "-o")
@@ -163,15 +196,31 @@ def _cmd_plot(args):
         for opt in ("nodes", "joints", "component"):
             if getattr(args, opt) is not None:
                 raise MasonrydamError(f"--{opt} applies to histories, not to a mode shape (--mode)")
-    default = f"{path.stem}.png" if args.mode is None else f"{path.stem}_mode{args.mode}.png"
+    if quantity is not None:
+        for opt, dim in (("nodes", "node"), ("joints", "joint_point"), ("component", "component")):
+            if getattr(args, opt) is not None:
+                raise MasonrydamError(f"--{opt} applies to the default histories; with --quantity select with "
+                                      f"--select {dim}=VALUE")
+    if args.mode is not None:
+        default = f"{path.stem}_mode{args.mode}.png"
+    elif quantity is not None:
+        default = f"{path.stem}_{quantity}.png"
+    else:
+        default = f"{path.stem}.png"
     out = check_output_path(args.output or default, "-o")
     ds = open_result(path)  # an incomplete result warns (one line on the command line)
     if args.mode is not None:
         from ..results.mode_plot import mode_figure
 
         fig = mode_figure(ds, args.mode, scale=args.scale, title=path.name)
+    elif quantity is not None:
+        from ..results.histories import parse_selection, quantity_figure
+
+        fig = quantity_figure(ds, quantity, parse_selection(select), title=path.name)
     else:
-        fig = history_figure(ds, path.name, args.component or "x", args.nodes, args.joints)
+        from ..results.histories import default_figure
+
+        fig = default_figure(ds, path.name, args.component, args.nodes, args.joints)
     fig.savefig(out, dpi=110)
     print(f"wrote {out}")
     return 0
@@ -199,82 +248,12 @@ def _cmd_assess(args):
     return 0
 
 
-#: energy terms drawn by ``masonrydam plot`` (those that are not zero throughout)
-PLOTTED_ENERGIES = ("input", "external", "kinetic", "strain", "damping", "joint_stored", "joint_friction",
-                    "joint_bond_break", "joint_contact", "numerical", "error")
-
-
 def history_figure(ds, title: str, comp: str = "x", nodes=None, joints=None):
-    """The figure of ``masonrydam plot`` (a matplotlib Figure, not drawn to screen): ground acceleration
-    (dynamic results), relative displacement of ``nodes`` (node numbers; default: the recorded node that
-    moves most) in component ``comp``, slip and opening of the ``joints`` (joint point indices; default:
-    the one that slips most) and the energy balance (the terms of :data:`PLOTTED_ENERGIES` that are not
-    zero throughout), against time (dynamic) or the step number (static). Errors name the bad option."""
-    import numpy as np
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
+    """The history figure of ``masonrydam plot``: :func:`masonrydam.results.histories.history_figure`
+    (kept under this name for callers that import it from the command line module)."""
+    from ..results.histories import history_figure as figure
 
-    if not ds.sizes["step"]:
-        raise MasonrydamError(f"'{title}' has no steps to plot (status '{ds.attrs.get('status', '?')}': the run "
-                              "stopped before its first converged step)")
-    if comp not in ds.component.values:
-        raise MasonrydamError(f"--component must be one of {list(ds.component.values)}, got {comp!r}")
-    dynamic = "time" in ds.variables and np.isfinite(ds.time.values).any()
-    if dynamic:
-        ds = ds.isel(step=np.nonzero(np.isfinite(ds.time.values))[0])
-        x, xlabel = ds.time.values, "time [s]"
-    else:
-        x, xlabel = np.arange(ds.sizes["step"]), "step"
-    u = ds.displacement.sel(component=comp)
-    if nodes:
-        pos = []
-        for n in nodes:
-            hit = np.nonzero(ds.node.values == n)[0]
-            if not len(hit):
-                raise MasonrydamError(f"--nodes: node {n} is not in the file (recorded nodes: "
-                                      f"{ds.node.values[:10].tolist()}{' ...' if ds.sizes['node'] > 10 else ''})")
-            pos.append(int(hit[0]))
-    else:
-        pos = [int(np.argmax(np.abs(u.values).max(axis=0)))] if ds.sizes["node"] else []
-    njp = ds.sizes.get("joint_point", 0)
-    if joints:
-        bad = [j for j in joints if not 0 <= j < njp]
-        if bad:
-            raise MasonrydamError(f"--joints: joint point(s) {bad} not in the file (0 to {njp - 1})")
-        jpos = list(joints)
-    elif njp:
-        jpos = [int(np.argmax(np.abs(ds.joint_slip.values).max(axis=(0, 2))))]
-    else:
-        jpos = []
-    panels = (["ground"] if dynamic else []) + ["disp"] + (["joint"] if jpos else []) + (["energy"] if dynamic else [])
-    fig = Figure(figsize=(8.0, 2.6 * len(panels)), layout="constrained")
-    FigureCanvasAgg(fig)
-    axs = fig.subplots(len(panels), 1, squeeze=False)[:, 0]
-    for ax, kind in zip(axs, panels):
-        if kind == "ground":
-            for c in ds.component.values:
-                ax.plot(x, ds.ground_acceleration.sel(component=c).values, lw=0.8, label=f"a_g,{c}")
-            ax.set_ylabel("ground acc. [m/s2]")
-        elif kind == "disp":
-            for p in pos:
-                ax.plot(x, u.values[:, p], lw=0.8, label=f"node {int(ds.node.values[p])}")
-            ax.set_ylabel(f"u_{comp} [m]" + (" (relative)" if dynamic else ""))
-        elif kind == "joint":
-            for j in jpos:
-                ax.plot(x, ds.joint_slip.values[:, j, 0], lw=0.8, label=f"slip, point {j}")
-                ax.plot(x, ds.joint_opening.values[:, j], lw=0.8, ls="--", label=f"opening, point {j}")
-            ax.set_ylabel("joint [m]")
-        else:
-            for name in PLOTTED_ENERGIES:
-                v = ds.get(f"energy_{name}")
-                if v is not None and np.abs(v.values).max() > 0:
-                    ax.plot(x, v.values, lw=0.8, label=name)
-            ax.set_ylabel("energy [J]")
-        ax.set_xlabel(xlabel)
-        ax.grid(True, alpha=0.3)
-        ax.legend(fontsize=7, loc="best")
-    fig.suptitle(f"{title}: {ds.attrs.get('scene_name', '')} (completed = {ds.attrs.get('completed', '?')})")
-    return fig
+    return figure(ds, title, comp, nodes, joints)
 
 
 def main(argv=None) -> int:
@@ -301,6 +280,27 @@ def main(argv=None) -> int:
     e.add_argument("--default", action="store_true")
     e.add_argument("-o", "--output", required=True)
     e.set_defaults(func=_cmd_export)
+    ex = sub.add_parser("export-results", help="write a result file (netCDF) as a ParaView time series: .xdmf "
+                                                "(+ .h5) or .pvd (+ one .vtu per step)",
+                         description="Blocks and interface elements with the nodal fields (displacement, "
+                                     "velocity, ...) and the element and joint fields of each step, on the "
+                                     "undeformed mesh (apply Warp By Vector with 'displacement' in ParaView); "
+                                     "units in OUT.units.json beside the output (docs/paraview.md).")
+    ex.add_argument("result", help="result file written by `masonrydam run`")
+    ex.add_argument("-o", "--output", help="OUT.xdmf (XDMF + HDF5 OUT.h5) or OUT.pvd (collection + "
+                                            "OUT_<step>.vtu) (default: RESULT.xdmf in the current folder)")
+    ex.add_argument("--joints", default="deformed", metavar="VIEW",
+                     help="interface cells: deformed (on the blocks' nodes: warped, they show the gap and slip), "
+                          "shrunk (own nodes moved toward each cell's centroid to 0.8 of their distance, so "
+                          "neighbouring joint elements show as separate strips), or both (default deformed)")
+    ex.add_argument("--every", type=int, default=1, metavar="K",
+                     help="keep every K-th step (and the last one) (default 1: all)")
+    ex.add_argument("--steps", metavar="A:B", help="steps numbered A (included) to B (excluded), as a Python "
+                                                    "slice; either may be empty, negative from the end")
+    ex.add_argument("--time", default="auto", metavar="T",
+                     help="time values: auto (dynamic results: the time in s, static steps left out; static "
+                          "results: the step number) or step (the step number, every step kept) (default auto)")
+    ex.set_defaults(func=_cmd_export_results)
     rc = sub.add_parser("records", help="the bundled ground-motion records: list them, show one")
     rsub = rc.add_subparsers(dest="records_command", required=True)
     rsub.add_parser("list", help="table of the bundled records")
@@ -317,12 +317,28 @@ def main(argv=None) -> int:
     rs.add_argument("--column", type=int, help="which value column of a text file with several, counted from 0 "
                                                "without the time column (or which trace of a SAC/MiniSEED file)")
     rc.set_defaults(func=_cmd_records)
-    pl = sub.add_parser("plot", help="plot histories (or, with --mode, a mode shape; with --pushover, the pushover "
-                                     "curve; with --deformed, the deformed shape) from a result file (netCDF) to PNG")
+    pl = sub.add_parser("plot", help="plot histories (a static result with driven DOFs: its pushover curve; with "
+                                     "--quantity, one variable; with --mode, a mode shape; with --deformed, the "
+                                     "deformed shape) from a result file (netCDF) to PNG",
+                        description="Without options: time histories of a dynamic result (ground acceleration at "
+                                    "the record's own rate, displacement, joint slip and opening, energies); the "
+                                    "pushover curve of a static result with driven DOFs; else the histories "
+                                    "against the load factor of the static stages.")
     pl.add_argument("result", help="result file written by `masonrydam run`")
     pl.add_argument("--nodes", type=int, nargs="+", help="node numbers, as in the file's node coordinate (default: the recorded node that moves most)")
-    pl.add_argument("--joints", type=int, nargs="+", help="joint point indices along joint_point (default: the one that slips most)")
-    pl.add_argument("--component", help="displacement component (default x)")
+    pl.add_argument("--joints", type=int, nargs="+", help="joint point indices along joint_point (default: the one "
+                                                          "that slips most, or else opens most; 3D: |slip| and its "
+                                                          "components)")
+    pl.add_argument("--component", help="displacement component (default x; the default pushover curve: the "
+                                         "component of the last driving stage)")
+    pl.add_argument("--quantity", metavar="VAR",
+                    help="draw the history of any step variable of the file instead (e.g. joint_opening, "
+                         "displacement, energy_kinetic, ground_acceleration_record_x), against time (dynamic) "
+                         "or the load factor (static); one line per value left after --select, at most 10")
+    pl.add_argument("--select", nargs="+", action="extend", metavar="DIM=VALUE",
+                    help="with --quantity: xarray-style selection by coordinate value (a position along a "
+                         "dimension without one), e.g. --select joint_point=12, --select component=x node=27; "
+                         "several values: node=27,28")
     pl.add_argument("--mode", type=int, metavar="N",
                     help="draw mode shape N (1-based, as the file's mode coordinate) of a result with a modal "
                          "stage instead of the histories: undeformed nodes and joints grey, deformed nodes "
@@ -341,7 +357,9 @@ def main(argv=None) -> int:
                          "displacement is 10 %% of the model's largest extent); with --deformed: drawn "
                          "displacement = S x displacement (default: the largest is 5 %% of the extent)")
     pl.add_argument("-o", "--output", help="PNG file (default: RESULT.png, with --mode N RESULT_modeN.png, "
-                                           "with --deformed RESULT_deformed.png, in the current folder)")
+                                           "with --deformed RESULT_deformed.png, with --pushover "
+                                           "RESULT_pushover.png, with --quantity VAR RESULT_VAR.png, in the "
+                                           "current folder)")
     pl.set_defaults(func=_cmd_plot)
     a = sub.add_parser("assess", help="stability of a dam's joint lines (sliding, resultant, cracking) at one step",
                        description="Table of the stability sections (base and lift joints) of a result whose "

@@ -35,9 +35,11 @@ class Effect:
 
 
 def _modules():
-    from . import dynamic_water, foundation, ground_motion, large_kinematics, loads, plasticity, reservoir, uplift
+    from . import (dynamic_loads, dynamic_water, foundation, ground_motion, large_kinematics, loads, plasticity,
+                   reservoir, uplift)
 
-    return (plasticity, large_kinematics, loads, reservoir, uplift, ground_motion, dynamic_water, foundation)
+    return (plasticity, large_kinematics, loads, reservoir, uplift, ground_motion, dynamic_loads, dynamic_water,
+            foundation)
 
 
 def registry() -> dict[str, Effect]:

@@ -27,9 +27,11 @@ steps keeps the static state and the dynamic history in one file with one set of
 appending is the same for both. Dynamic variables (NaN for static steps): ``velocity`` and
 ``acceleration`` relative to the ground, ``acceleration_absolute`` (relative plus ground),
 ``ground_acceleration`` (step, component) and the energies ``energy_*`` (J, cumulative since the
-start of the first dynamic stage). Only recorded steps (every ``stride``-th step of a dynamic stage,
-its first and last, and the last converged state before a failure) are written; memory does not
-grow with the record length.
+start of the first dynamic stage); off the ``step`` dimension, each ground-motion component's record at
+its own sampling rate (``ground_acceleration_record_<c>`` on ``ground_record_<c>``, with its time
+``ground_record_time_<c>``: :meth:`ResultWriter.write_ground_records`). Only recorded steps (every
+``stride``-th step of a dynamic stage, its first and last, and the last converged state before a
+failure) are written; memory does not grow with the record length.
 """
 from __future__ import annotations
 
@@ -356,6 +358,31 @@ class ResultWriter:
             var = nc[name]
             if var.dimensions and var.dimensions[0] == "step" and name not in ("step", "time"):
                 var.coordinates = "time"
+
+    def write_ground_records(self, records: dict):
+        """The ground-acceleration records of the dynamic stages at their own sampling rate (the step
+        variable ``ground_acceleration`` holds them at the output steps only, which can miss the peak):
+        for each component ``c`` of ``records`` (``{c: (time (n,), acceleration (n,))}``) a dimension
+        ``ground_record_<c>``, the samples' time ``ground_record_time_<c>`` (s, since the start of the
+        first dynamic stage, like ``time``) and ``ground_acceleration_record_<c>`` (m/s2), with the time
+        as its coordinate; a NaN value separates two stages' records."""
+        for c, (t, a) in records.items():
+            dim = f"ground_record_{c}"
+            self.nc.createDimension(dim, len(t))
+            kw = dict(zlib=True, complevel=self.options.compression, shuffle=True) if self.options.compression else {}
+            v = self.nc.createVariable(f"ground_record_time_{c}", "f8", (dim,), **kw)
+            v.units = "s"
+            v.long_name = (f"time of the samples of ground_acceleration_record_{c}, since the start of the first "
+                           "dynamic stage")
+            v[:] = t
+            v = self.nc.createVariable(f"ground_acceleration_record_{c}", "f8", (dim,), fill_value=np.nan, **kw)
+            v.units = "m/s2"
+            v.long_name = (f"ground acceleration {c} at the record's own sampling rate (the input motion of the "
+                           "dynamic stages, linear between samples, zero after a record's last sample; NaN "
+                           "between stages)")
+            v.coordinates = f"ground_record_time_{c}"
+            v[:] = a
+        self.nc.sync()
 
     def _string_coord(self, name, dims, values, long_name):
         v = self.nc.createVariable(name, str, dims)

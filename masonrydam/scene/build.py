@@ -147,6 +147,39 @@ def build_model(scene: dict, mesh: Mesh) -> Model:
     return model
 
 
+def _load_vector(scene: dict, mesh: Mesh, model: Model, ld: dict, key: str) -> np.ndarray:
+    """Consistent nodal force vector (n_dof,) N of a normalised ``nodal``, ``traction`` or ``pressure`` load."""
+    from ..effects import loads as L
+
+    if ld["type"] == "nodal":
+        return L.nodal_force(model, _node_set(mesh, ld["set"], f"{key}.set"), ld["force"])
+    if ld["set"] not in mesh.facet_sets:
+        what = "edge" if mesh.dim == 2 else "face"
+        raise SceneError(f"{key}.set", f"no facet ({what}) set '{ld['set']}' in the mesh "
+                                       f"(facet sets: {sorted(mesh.facet_sets)})")
+    fs = mesh.facet_sets[ld["set"]]
+    if ld["type"] == "traction":
+        return L.facet_traction(model, fs.type, fs.facets, scene["model"]["thickness"], traction=ld["traction"])
+    return L.facet_traction(model, fs.type, fs.facets, scene["model"]["thickness"], pressure=ld["pressure"],
+                            owner_centroids=_owner_centroids(mesh, fs.facets))
+
+
+def _loads_in_time(scene: dict, mesh: Mesh, model: Model, st: dict, i: int, base_dir):
+    """``force(t)`` (n_dof,) N of a dynamic stage's loads given in time (:mod:`masonrydam.effects.dynamic_loads`),
+    or None without such loads."""
+    from ..effects.dynamic_loads import TimeFunction, load_history
+
+    if not st.get("loads"):
+        return None
+    parts = []
+    for j, ld in enumerate(st["loads"]):
+        key = f"stages[{i}].loads[{j}]"
+        kind = {"edge_traction": "traction", "edge_pressure": "pressure"}.get(ld["type"], ld["type"])
+        parts.append((_load_vector(scene, mesh, model, dict(ld, type=kind), key),
+                      TimeFunction.build(ld["time_function"], f"{key}.time_function", base_dir)))
+    return load_history(parts)
+
+
 def _node_set(mesh: Mesh, name: str, key: str) -> np.ndarray:
     if name in mesh.node_sets:
         return mesh.node_sets[name]
@@ -346,7 +379,7 @@ def build_stages(scene: dict, mesh: Mesh, model: Model, base_dir: Path | None = 
             v0 = None if st.get("initial_velocity") is None else \
                 initial_velocity_field(model, st["initial_velocity"], f"stages[{i}].initial_velocity")
             stages.append(DynamicStage(st["name"], duration, supports | held, gms, settings, st["output"]["stride"],
-                                       initial_velocity=v0))
+                                       initial_velocity=v0, loads=_loads_in_time(scene, mesh, model, st, i, base_dir)))
             continue
         force = np.zeros(model.n_dof)
         presc = np.zeros(model.n_dof, dtype=bool)
@@ -367,19 +400,8 @@ def build_stages(scene: dict, mesh: Mesh, model: Model, base_dir: Path | None = 
                 if weight is None:
                     weight = L.self_weight(model, scene["model"]["gravity"])
                 force += ld["factor"] * weight
-            elif ld["type"] == "nodal":
-                force += L.nodal_force(model, _node_set(mesh, ld["set"], f"{key}.set"), ld["force"])
-            elif ld["type"] in ("traction", "pressure"):
-                if ld["set"] not in mesh.facet_sets:
-                    what = "edge" if dim == 2 else "face"
-                    raise SceneError(f"{key}.set", f"no facet ({what}) set '{ld['set']}' in the mesh "
-                                                   f"(facet sets: {sorted(mesh.facet_sets)})")
-                fs = mesh.facet_sets[ld["set"]]
-                if ld["type"] == "traction":
-                    force += L.facet_traction(model, fs.type, fs.facets, scene["model"]["thickness"], traction=ld["traction"])
-                else:
-                    force += L.facet_traction(model, fs.type, fs.facets, scene["model"]["thickness"],
-                                              pressure=ld["pressure"], owner_centroids=_owner_centroids(mesh, fs.facets))
+            elif ld["type"] in ("nodal", "traction", "pressure"):
+                force += _load_vector(scene, mesh, model, ld, key)
             else:  # displacement
                 nodes = _node_set(mesh, ld["set"], f"{key}.set")
                 for c, v in zip(ld["components"], ld["value"]):

@@ -221,6 +221,8 @@ def run(scene, output: str | os.PathLike | None = None, progress: bool = False, 
                               hydrodynamic=None if moving is None or not dyn_stages else
                               {"nodes": moving.nodes, "coords": model.coords[moving.nodes]},
                               driven=_driven(static_stages, model), blocks=_block_cells(model))
+        if dyn_stages:
+            writer.write_ground_records(_ground_records(dyn_stages))
     except OSError as exc:  # e.g. another run holds the working file (HDF5 file lock), disk full
         if target is None:
             os.unlink(work)
@@ -395,6 +397,27 @@ def _dynamic_attrs(stages) -> dict:
     return out
 
 
+def _ground_records(dyn_stages) -> dict:
+    """``{component letter: (time (n,), acceleration (n,))}``: the ground-acceleration samples the dynamic
+    stages use, at the records' own rate (:meth:`~masonrydam.results.writer.ResultWriter.write_ground_records`):
+    each stage's samples within its duration, at the stage's start time plus ``i dt`` (time since the start of
+    the first dynamic stage, the result's ``time``); a NaN value (at the next stage's first time) between two
+    stages' records of one component, so that no line joins them."""
+    out = {}
+    t0 = 0.0
+    for st in dyn_stages:
+        for g in st.ground_motion:
+            n = min(len(g.values), int(np.floor(st.duration / g.dt * (1.0 + 1e-12))) + 1)
+            t = t0 + np.arange(n) * g.dt
+            parts = out.setdefault("xyz"[g.component], [])
+            if parts:
+                parts.append((t[:1], np.array([np.nan])))
+            parts.append((t, g.values[:n]))
+        t0 += st.duration
+    return {c: (np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]))
+            for c, parts in out.items()}
+
+
 def _dynamic_water(s, mesh, model, water):
     """The reservoir moving with the dam (:mod:`masonrydam.effects.dynamic_water`), or None."""
     spec = s.get("reservoir")
@@ -462,6 +485,9 @@ def _dynamic_terms(moving, rock, stage, state_force):
         terms.support_excitation = rock.base_excitation
         terms.bottom_acceleration = rock.surface_acceleration
         stage.supports = stage.supports & ~rock.released_dofs
+    if stage.loads is not None:  # loads given in time (effects.dynamic_loads), with the free field if any
+        free_field, loads = terms.force, stage.loads
+        terms.force = loads if free_field is None else (lambda tau: free_field(tau) + loads(tau))
     return terms
 
 

@@ -269,7 +269,7 @@ PULSE_SHAPES = ("rectangular", "half_sine")
 AUTO_STEP_KEYS = ("tolerance", "dt_min", "dt_max")
 _DYNAMIC_KEYS = {"name", "type", "steps", "duration", "dt", "integrator", "alpha", "rho_inf", "mass", "damping",
                  "ground_motion", "output", "max_iterations", "max_substeps", "force_tolerance", "energy_tolerance",
-                 "low_rank_max", "joint_space", "initial_velocity", *AUTO_STEP_KEYS}
+                 "low_rank_max", "joint_space", "initial_velocity", "loads", *AUTO_STEP_KEYS}
 #: dt = "auto" without dt_max (and without output.dt): the largest step (s)
 AUTO_DT_MAX_DEFAULT = 0.01
 #: dt = "auto": default relative local error per step (see solvers.dynamic.DynamicSolver._step_error)
@@ -449,11 +449,15 @@ def _initial_velocity(d, key, dim) -> list:
 
 
 def _dynamic_stage(s, key, dim, index):
+    from ..effects.dynamic_loads import normalize_dynamic_load
+
     _check_keys(s, _DYNAMIC_KEYS, key)
-    if "loads" in s:
-        raise SceneError(f"{key}.loads", "a dynamic stage has no loads of its own: the loads of the static stages "
-                                         "stay applied, the excitation is 'ground_motion'")
     out = {"name": str(s.get("name", f"stage{index + 1}")), "type": "dynamic"}
+    loads = s.get("loads", [])
+    if not isinstance(loads, list):
+        raise SceneError(f"{key}.loads", "expected an array of tables [[stages.loads]]")
+    # loads given in time (effects.dynamic_loads), on top of the static stages' loads, which stay applied
+    out["loads"] = [normalize_dynamic_load(ld, f"{key}.loads[{j}]", dim) for j, ld in enumerate(loads)]
     if "dt" not in s:
         raise SceneError(f"{key}.dt", "is required for a dynamic stage (analysis time step, s, or \"auto\" for error-controlled steps)")
     o = s.get("output", {})
@@ -539,7 +543,7 @@ def _dynamic_stage(s, key, dim, index):
     out["initial_velocity"] = (None if "initial_velocity" not in s else
                                _initial_velocity(s["initial_velocity"], f"{key}.initial_velocity", dim))
     gm = s.get("ground_motion")
-    if gm is None and out["initial_velocity"] is not None:  # free motion from the initial velocity
+    if gm is None and (out["initial_velocity"] is not None or out["loads"]):  # free motion, or loads in time
         if out["steps"] is None and out["duration"] is None:
             raise SceneError(f"{key}.duration", "is required for a dynamic stage without ground motion (or give "
                                                 "'steps')")
@@ -547,7 +551,8 @@ def _dynamic_stage(s, key, dim, index):
     elif not isinstance(gm, dict) or not gm:
         raise SceneError(f"{key}.ground_motion", "is required: give at least one component, e.g. "
                                                  "[stages.ground_motion.x] record = \"elcentro_1940_ns_peknold\" "
-                                                 "(or an initial_velocity for a free motion)")
+                                                 "(or an initial_velocity for a free motion, or loads with a "
+                                                 "time_function)")
     _check_keys(gm, set(COMPONENT_NAMES[:dim]), f"{key}.ground_motion")
     out["ground_motion"] = {c: _ground_component(v, f"{key}.ground_motion.{c}") for c, v in gm.items()}
     _check_keys(o, {"stride", "dt", "nodes", "joints"}, f"{key}.output")

@@ -471,6 +471,8 @@ class DynamicStage:
     output_stride: int = 1
     terms: DynamicTerms | None = None
     initial_velocity: np.ndarray | None = None
+    #: ``loads(tau) -> (n_dof,)`` N: the stage's loads given in time (stage time tau, s), or None
+    loads: object = None
 
     def __post_init__(self):
         if not (math.isfinite(self.duration) and self.duration > 0):

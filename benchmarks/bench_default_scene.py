@@ -78,7 +78,8 @@ def breakdown():
     import masonrydam
     from masonrydam.assembly.model import Model
     from masonrydam.cli.main import default_scene_path
-    from masonrydam.solvers import linear, static
+    from masonrydam.solvers.linear import direct as linear
+    from masonrydam.solvers.static import stepping as static
 
     scene = default_scene_path()
     masonrydam.run(scene)  # warm-up (JIT / cache load)

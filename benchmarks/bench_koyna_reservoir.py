@@ -7,7 +7,7 @@ the reservoir empty and at its 1967 level of 91.75 m with the water's dynamics
 - ``westergaard``: Westergaard's added mass;
 - ``incompressible``: acoustic elements, incompressible (an added mass rho Q H^-1 Q^T on the face);
 - ``acoustic``: acoustic elements, c = 1440 m/s, condensed into the implicit step
-  (:mod:`masonrydam.solvers.fluid`).
+  (:mod:`masonrydam.solvers.dynamic.fluid`).
 
     python benchmarks/bench_koyna_reservoir.py [--steps 1000] [--dt 0.005] [--cases empty acoustic ...] [--linear]
 

@@ -13,7 +13,7 @@ maps) and ``Model.evaluate`` (joints + assembly of the free-DOF tangent). The ta
 right-hand side are saved, and every linear solver runs in its own subprocess so that its peak
 memory is its own:
 
-* ``superlu``: ``masonrydam.solvers.linear.Factorization(K, "superlu")`` (SciPy SuperLU, MMD on A^T+A);
+* ``superlu``: ``masonrydam.solvers.linear.direct.Factorization(K, "superlu")`` (SciPy SuperLU, MMD on A^T+A);
 * ``pardiso``: ``Factorization(K, "pardiso")`` (MKL PARDISO, pinned to 1 MKL thread by the package);
 * ``pardiso-2thr``: the same, with the benchmark overriding the pin to 2 MKL threads (NOT what the
   package does; labelled in the tables);
@@ -151,7 +151,7 @@ def child(backend: str, npz: str, repeats: int):
     import scipy.sparse as sp
     import scipy.sparse.linalg as spla
 
-    from masonrydam.solvers import linear as lin
+    from masonrydam.solvers.linear import direct as lin
 
     if backend == "pardiso-2thr":
         orig = lin._new_pardiso

@@ -26,7 +26,7 @@ every 5 ms during setup + solve) is its own:
 * ``superlu``: ``Factorization(K, "superlu")`` - SciPy SuperLU with COLAMD ordering (as the package);
 * ``amg``: ``AMGSolver(K, rigid_body_modes(...), dof_coords=..., dof_nodes=...)`` - as the static solver
   builds it: pyamg smoothed aggregation with the rigid-body near-nullspace, tied interface node pairs
-  collapsed, other joint springs left out of the first strength graph (masonrydam/solvers/iterative.py),
+  collapsed, other joint springs left out of the first strength graph (masonrydam/solvers/linear/iterative.py),
   CG (FGMRES for a non-symmetric tangent) to a relative residual of 1e-10 (the package default);
 * ``amg-plain`` (penalty sweep and joint states only): ``AMGSolver(K, rigid_body_modes(...))`` without
   node positions, i.e. plain smoothed aggregation with the rigid-body modes.
@@ -306,10 +306,10 @@ def _warm_up(solver):
 
 def _run_solver(solver, K, b, coords, free):
     """(setup s, solve s, x, extra dict) of one solver."""
-    from masonrydam.solvers.linear import Factorization
+    from masonrydam.solvers.linear.direct import Factorization
 
     if solver.startswith("amg"):
-        from masonrydam.solvers.iterative import AMGSolver, rigid_body_modes
+        from masonrydam.solvers.linear.iterative import AMGSolver, rigid_body_modes
 
         t0 = time.perf_counter()
         B = rigid_body_modes(coords, free, 3)
@@ -407,9 +407,9 @@ def default_scene_section(every=8):
     import tomllib
 
     import masonrydam
-    from masonrydam.solvers import static
-    from masonrydam.solvers.iterative import AMGSolver, rigid_body_modes
-    from masonrydam.solvers.linear import Factorization, SingularMatrix
+    from masonrydam.solvers.static import stepping as static
+    from masonrydam.solvers.linear.iterative import AMGSolver, rigid_body_modes
+    from masonrydam.solvers.linear.direct import Factorization, SingularMatrix
 
     path = ROOT / "masonrydam" / "scenes" / "wall_push.toml"
     captured, count = [], [0]

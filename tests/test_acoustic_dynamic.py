@@ -6,7 +6,7 @@ of reference problem 4 (shared/reference/PROBLEMS.md): incompressible base press
 resultant 0.5428 rho a H^2; under harmonic excitation each term of the series divided by
 c_m = sqrt(1 - (w / w_m)^2), w_m = m pi c / (2 H) (Chopra 1967, J. Eng. Mech. Div. ASCE 93(EM6):205-223).
 The matrices themselves are checked in tests/test_acoustic.py; here the time integration of the
-coupled dam-water system (masonrydam/solvers/fluid.py) is.
+coupled dam-water system (masonrydam/solvers/dynamic/fluid.py) is.
 """
 from __future__ import annotations
 

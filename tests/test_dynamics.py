@@ -32,8 +32,8 @@ from masonrydam.assembly.model import Model
 from masonrydam.materials.elastic import elasticity_matrix
 from masonrydam.scene.build import build_mesh, build_model, build_stages
 from masonrydam.scene.scene import Scene
-from masonrydam.solvers.dynamic import DynamicSettings, DynamicSolver, DynamicStage, GroundMotion
-from masonrydam.solvers.modal import RayleighDamping, modal_analysis, rayleigh_coefficients
+from masonrydam.solvers.dynamic.integration import DynamicSettings, DynamicSolver, DynamicStage, GroundMotion
+from masonrydam.solvers.dynamic.modal import RayleighDamping, modal_analysis, rayleigh_coefficients
 
 G = 9.80665
 
@@ -164,7 +164,7 @@ def test_step_residual_kernels_are_the_newmark_residual(mass_form):
     mass; a NaN in the forces is reported."""
     import scipy.sparse as sp
 
-    from masonrydam.solvers.dynamic_kernels import newmark_kinematics, newmark_residual
+    from masonrydam.solvers.dynamic.kernels import newmark_kinematics, newmark_residual
 
     rng = np.random.default_rng(5)
     n_dof, n = 14, 10
@@ -201,7 +201,7 @@ def test_step_works_kernel_is_the_trapezoidal_rule(lumped):
     (energy balance of Hughes 2000, *The Finite Element Method*, sec. 9.1.4): W = du . (f0 + f1) / 2 for
     the earthquake, damping and joint forces (fj = f_int - K_continuum u), du . fs for the constant
     loads, and the kinetic energy v . M v / 2 with a diagonal or a full mass product."""
-    from masonrydam.solvers.dynamic_kernels import step_works
+    from masonrydam.solvers.dynamic.kernels import step_works
 
     rng = np.random.default_rng(9)
     n_dof, n = 12, 9

@@ -30,7 +30,7 @@ import masonrydam
 from masonrydam.effects import loads as L
 from masonrydam.errors import ConvergenceError, MechanismError
 from masonrydam.materials import mohr_coulomb as mc
-from masonrydam.solvers.dynamic import DynamicSettings, DynamicSolver, DynamicStage, GroundMotion
+from masonrydam.solvers.dynamic.integration import DynamicSettings, DynamicSolver, DynamicStage, GroundMotion
 from test_dynamics import B, H, rocking_model, sliding_scene
 from test_system import BASE, BLOCK, _direction_changes, block_scene, top_force
 
@@ -609,7 +609,7 @@ def test_klarbring_non_unique_friction_step_finds_an_admissible_solution(fx_over
     at 0.5 and 1.2 mu P. The static solver, one step from the virgin state, must return one of them
     (to 1e-9), with an admissible joint state (|tau| <= mu (-t_n), no tension, an open point carrying
     nothing) and the load balanced by the contact and spring forces (statics)."""
-    from masonrydam.solvers.static import SolverSettings, StaticSolver, StaticStage
+    from masonrydam.solvers.static.stepping import SolverSettings, StaticSolver, StaticStage
 
     mu, P = 1.0, 1e4
     model, supports = klarbring_model(mu)
@@ -700,7 +700,7 @@ def test_near_collapse_coincident_thresholds_stiff_joint_converges():
     test_near_collapse_static_converges_below_the_threshold."""
     from masonrydam.scene.build import build_mesh, build_model, build_stages
     from masonrydam.scene.scene import Scene
-    from masonrydam.solvers.static import SolverSettings, StaticSolver, StaticStage
+    from masonrydam.solvers.static.stepping import SolverSettings, StaticSolver, StaticStage
 
     k, tan_phi = 0.24, 0.25
     sc = near_collapse_scene("rock", k)

@@ -206,7 +206,7 @@ def _node_dofs(nodes, dim):
 def test_cantilever_under_an_end_rotation_rolls_into_a_circle():
     """A plane-strain cantilever (nu = 0) whose end section is turned by theta up to 2 pi: the axis is an
     arc of radius L / theta, a full circle at the end, with the end moment E I theta / L."""
-    from masonrydam.solvers.static import SolverSettings, StaticSolver, StaticStage
+    from masonrydam.solvers.static.stepping import SolverSettings, StaticSolver, StaticStage
 
     L, h, E = 5.0, 0.1, 1e9
     scene = {"model": {"name": "cantilever", "thickness": 1.0, "kinematics": "large", "hypothesis": "plane_strain"},

@@ -3,7 +3,7 @@
 Sources: smoothed aggregation AMG with the rigid-body near-nullspace (Vanek, Mandel & Brezina 1996,
 Computing 56:179-196; pyamg), CG for symmetric and FGMRES for non-symmetric matrices (Saad 2003,
 Iterative Methods for Sparse Linear Systems, alg. 9.1 and sec. 9.4.1); the tied-node collapse for
-penalty interfaces is described in masonrydam/solvers/iterative.py. The reference answer of every
+penalty interfaces is described in masonrydam/solvers/linear/iterative.py. The reference answer of every
 test is the direct solve of the same matrix (PARDISO, or SuperLU where PARDISO cannot load).
 """
 from __future__ import annotations
@@ -24,9 +24,9 @@ from masonrydam.materials import mohr_coulomb as mc
 from masonrydam.materials.elastic import elasticity_matrix
 from masonrydam.scene.build import build_mesh, build_model, build_stages
 from masonrydam.scene.scene import Scene
-from masonrydam.solvers import linear
-from masonrydam.solvers.iterative import AMGSolver, is_symmetric, rigid_body_modes, tied_groups
-from masonrydam.solvers.linear import Factorization, SingularMatrix, make_solver, resolve_backend
+from masonrydam.solvers.linear import direct as linear
+from masonrydam.solvers.linear.iterative import AMGSolver, is_symmetric, rigid_body_modes, tied_groups
+from masonrydam.solvers.linear.direct import Factorization, SingularMatrix, make_solver, resolve_backend
 
 pytest.importorskip("pyamg")
 
@@ -483,7 +483,7 @@ def test_supernodal_block_solve_equals_the_entry_by_entry_one(monkeypatch, max_w
     the entry-by-entry substitution's answer to round-off on the jointed wall's effective matrix,
     whatever the widest supernode allowed; every supernode it uses is a true one (each column holds
     the rows of its diagonal block and then those of the supernode's last column)."""
-    from masonrydam.solvers.ldlt_kernels import supernode_partition
+    from masonrydam.solvers.linear.ldlt_kernels import supernode_partition
 
     model, K, b, free = model_system(wall_dict(epu=2))
     Kf = (K + sp.diags(np.full(K.shape[0], 1e-3 * K.diagonal().max()))).tocsr()
@@ -564,7 +564,7 @@ def test_static_run_reuses_the_symbolic_analysis():
     again only where the kept matching perturbs pivots), not once per factorization, and reports both
     counts; the answer is that of a run that analyses every
     time (the same Newton path to the solver tolerance)."""
-    from masonrydam.solvers import static
+    from masonrydam.solvers.static import stepping as static
 
     if resolve_backend("auto") != "pardiso":
         pytest.skip("PARDISO is not available here")

@@ -16,7 +16,7 @@ masonrydam/elements/continuum_plastic.py with the point law masonrydam/materials
      nu = 1/2; de Souza Neto et al. compare their finite elements with it at nu = 0.3);
    - limit (c = b): p_lim = (2 / sqrt(3)) sigma_y ln(b / a) (192.09 MPa).
 
-   The limit is found by load control with ``until_failure = true`` (masonrydam/solvers/static.py,
+   The limit is found by load control with ``until_failure = true`` (masonrydam/solvers/static/stepping.py,
    ``StaticStage.until_failure``): the stage ends at the last converged load factor and the result records
    ``limit_load_factor`` and ``limit_state`` (masonrydam/scene/run.py ``_stats_attrs``).
 
@@ -143,7 +143,7 @@ def test_thick_cylinder_first_yield(tmp_path):
     pressure of the elastic solution, 0.99 p_y sigma_y / max q (measured 1.0056 p_y), is p_y within 1 %."""
     from masonrydam.scene import Scene
     from masonrydam.scene.build import build_mesh, build_model, build_stages
-    from masonrydam.solvers.static import SolverSettings, StaticSolver
+    from masonrydam.solvers.static.stepping import SolverSettings, StaticSolver
 
     h1 = 0.002
     stages = [{"name": name, "steps": 1, "loads": [{"type": "pressure", "set": "inner", "pressure": dp * P_YIELD}]}

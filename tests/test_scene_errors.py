@@ -52,7 +52,7 @@ def base_scene() -> dict:
 @pytest.fixture
 def no_solve(monkeypatch):
     """Make any attempt to solve fail loudly: errors must come before solving."""
-    from masonrydam.solvers import static
+    from masonrydam.solvers.static import stepping as static
 
     def _forbidden(self, *a, **k):
         raise AssertionError("the solver was started although the scene is invalid")

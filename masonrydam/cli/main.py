@@ -50,7 +50,7 @@ def _cmd_run(args):
 def _cmd_check(args):
     from ..scene.build import build_mesh, build_model, build_stages, effects
     from ..scene.scene import Scene
-    from ..solvers.static import check_mechanisms
+    from ..solvers.static.stepping import check_mechanisms
 
     sc = Scene.from_toml(_scene_arg(args))
     mesh = build_mesh(sc.normalized, sc.base_dir)

@@ -10,7 +10,7 @@ face during the earthquake and the water has no inertia):
   reservoir, for any face shape and reservoir length), with the load of the reservoir bottom moving
   with a vertical ground motion;
 - ``"acoustic"`` with a sound speed: the compressible reservoir condensed into the dam's implicit step
-  (:class:`masonrydam.solvers.fluid.AcousticStep`), which keeps the joint-space fast path.
+  (:class:`masonrydam.solvers.dynamic.fluid.AcousticStep`), which keeps the joint-space fast path.
 
 In all three the water level is the one the static stages left (the water must be on the dam before
 the earthquake), the reservoir depth ``H`` is measured from the lowest point of the wetted face, and the
@@ -132,11 +132,11 @@ class DynamicWater:
         return None
 
     def fluid_step(self):
-        """:class:`~masonrydam.solvers.fluid.AcousticStep` of the compressible reservoir, or None."""
+        """:class:`~masonrydam.solvers.dynamic.fluid.AcousticStep` of the compressible reservoir, or None."""
         if self.acoustic is None or self.incompressible:
             return None
         if self._fluid_step is None:
-            from ..solvers.fluid import AcousticStep
+            from ..solvers.dynamic.fluid import AcousticStep
 
             A = self.acoustic
             self._fluid_step = AcousticStep(A.G, A.H, A.L, A.Q, A.B_face, A.B_bottom, self.density)

@@ -1,7 +1,7 @@
 """Inertia, damping and uniform base excitation: what a dynamic stage adds to the model.
 
 The stage's schema is :func:`masonrydam.scene.schema._dynamic_stage` (time steps, integrator, output),
-its solver :mod:`masonrydam.solvers.dynamic`; the records are read and processed by
+its solver :mod:`masonrydam.solvers.dynamic.integration`; the records are read and processed by
 :mod:`masonrydam.records`. This module says, for the run's list of simulated effects, what a scene's
 dynamic stages simulate; a scene with static stages only simulates no inertia and no damping.
 """

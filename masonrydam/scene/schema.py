@@ -13,7 +13,7 @@ import numpy as np
 
 from ..elements.quadrature import QUADRATURE_SCHEMES
 from ..errors import SceneError
-from ..solvers.linear import LINEAR_SOLVERS
+from ..solvers.linear.direct import LINEAR_SOLVERS
 from ..checks import COMPONENT_NAMES
 from ..checks import boolean as _bool
 from ..checks import check_keys as _check_keys

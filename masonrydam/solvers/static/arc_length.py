@@ -36,8 +36,8 @@ import math
 
 import numpy as np
 
-from ..errors import ConvergenceError, NumericalError
-from .linear import SingularMatrix
+from ...errors import ConvergenceError, NumericalError
+from ..linear.direct import SingularMatrix
 
 #: an arc-length stage may take this many times its nominal steps before it gives up
 MAX_STEPS_PER_NOMINAL = 20

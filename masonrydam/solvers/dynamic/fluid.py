@@ -39,7 +39,7 @@ the run puts it in the mass matrix instead
 
 Why written here: the condensation needs the integrator's coefficients and the dam's DOF numbering.
 ``A`` (symmetric positive definite, a 2D or 3D Laplacian-like matrix) gets the L D L^T with numba
-substitutions of :class:`~masonrydam.solvers.linear.SymmetricFactorization` (SuperLU's own solve as
+substitutions of :class:`~masonrydam.solvers.linear.direct.SymmetricFactorization` (SuperLU's own solve as
 the fallback): on the Koyna reservoir (4 212 unknowns) the water's part of a step fell from 0.86 to
 about 0.5 ms with it and the right-hand side from three precomputed matrices
 (benchmarks/bench_koyna_reservoir.py).
@@ -52,7 +52,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from .linear import SingularMatrix, SymmetricFactorization
+from ..linear.direct import SingularMatrix, SymmetricFactorization
 
 
 @dataclass

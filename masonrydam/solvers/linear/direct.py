@@ -17,7 +17,7 @@ all-stick effective matrix) :class:`SymmetricFactorization` adds a sparse ``L D 
 symmetric mode) whose substitutions are numba kernels (:mod:`.ldlt_kernels`), 2-3x faster per solve
 than PARDISO's solve phase at 7 500 equations.
 
-Iterative backend ``"amg"``: :class:`~masonrydam.solvers.iterative.AMGSolver`, smoothed-aggregation
+Iterative backend ``"amg"``: :class:`~masonrydam.solvers.linear.iterative.AMGSolver`, smoothed-aggregation
 algebraic multigrid (pyamg) with the rigid-body near-nullspace as the preconditioner of CG (or of
 FGMRES for a non-symmetric tangent), solved to a relative residual of 1e-10. :func:`make_solver`
 returns a :class:`Factorization` or an ``AMGSolver`` behind the same interface (``solve(b)``, ``K``,
@@ -33,6 +33,8 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from .common import SingularMatrix  # noqa: F401  (raised here; importable from this module too)
+
 LINEAR_SOLVERS = ("auto", "pardiso", "superlu", "amg")
 DIRECT_SOLVERS = ("pardiso", "superlu")
 
@@ -45,8 +47,6 @@ DIRECT_SOLVERS = ("pardiso", "superlu")
 AUTO_ITERATIVE_MIN_DOF = 50_000
 
 
-class SingularMatrix(Exception):
-    """The matrix is singular or numerically singular (a mechanism)."""
 
 
 _PARDISO_OK: bool | None = None
@@ -142,9 +142,9 @@ def make_solver(K: sp.csr_matrix, backend: str = "auto", near_nullspace: np.ndar
     backend: one of ``LINEAR_SOLVERS``; ``"auto"`` is resolved by :func:`resolve_backend` with the
     size of K and ``dim`` (or, without ``dim``, the dimension implied by the near-nullspace: 3
     columns 2D, 6 columns 3D). near_nullspace (n, k), dof_coords (n, dim) and dof_nodes (n,): the
-    rigid-body modes (``masonrydam.solvers.iterative.rigid_body_modes``), the position and the node of
+    rigid-body modes (``masonrydam.solvers.linear.iterative.rigid_body_modes``), the position and the node of
     each row, used by ``"amg"`` only (the positions find the node pairs of interfaces); amg_options:
-    keyword arguments of :class:`~masonrydam.solvers.iterative.AMGSolver` (``tol``, ``maxiter``, ...).
+    keyword arguments of :class:`~masonrydam.solvers.linear.iterative.AMGSolver` (``tol``, ``maxiter``, ...).
 
     Returns a :class:`Factorization` (``"pardiso"``, ``"superlu"``) or an ``AMGSolver`` (``"amg"``).
     ``"auto"`` never picks AMG without a near-nullspace (with the constant vector alone it converges

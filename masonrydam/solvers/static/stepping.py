@@ -31,10 +31,10 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from ..errors import ConvergenceError, MechanismError, NumericalError
-from .diagnostics import find_free_parts
-from .iterative import rigid_body_modes
-from .linear import SingularMatrix, make_solver, resolve_backend
+from ...errors import ConvergenceError, MechanismError, NumericalError
+from ..diagnostics import find_free_parts
+from ..linear.iterative import rigid_body_modes
+from ..linear.direct import SingularMatrix, make_solver, resolve_backend
 
 #: tangent factor of open joint points in ordinary Newton iterations: a tiny stiffness in the
 #: tangent only (tractions stay zero) so that a block resting on a single contact point does not make
@@ -159,7 +159,7 @@ def joint_mechanisms(model, limit: int = 4) -> list[str]:
     the joint's extent. At most ``limit`` entries (the most open first), then how many more. Empty if
     no joint is in such a state (a joint whose points are all open leaves a free part, which
     :func:`find_free_parts` names)."""
-    from ..materials.mohr_coulomb import OPEN, SLIP
+    from ...materials.mohr_coulomb import OPEN, SLIP
 
     names = [g.name for g in model.cgroups] + ["?"]
     owner = np.full(model.n_nodes, len(model.cgroups))  # element group of each node (interfaces split nodes)
@@ -293,7 +293,7 @@ class StaticSolver:
             status(f"{self._where}, {text}")
 
     def _joint_space(self):
-        """The joint-space system (:class:`~masonrydam.solvers.joint_space.JointSpace`) of the current
+        """The joint-space system (:class:`~masonrydam.solvers.dynamic.joint_space.JointSpace`) of the current
         constraint set, set up when first needed; None where it does not apply.
 
         Why: the blocks are linear elastic, so a load step is nonlinear only in the joint law, and the
@@ -302,9 +302,9 @@ class StaticSolver:
         solver does with its effective matrix (:mod:`.joint_space`): no sparse factorization per
         iteration. It applies with ``joint_space = "auto"``, full Newton, a direct solver and nonlinear
         joints (above JOINT_SPACE_MAX joint unknowns the columns of the flexibility are computed as the
-        iterations need them, :class:`~masonrydam.solvers.joint_space.FlexibilityColumns`, in models of
+        iterations need them, :class:`~masonrydam.solvers.dynamic.joint_space.FlexibilityColumns`, in models of
         at least STATIC_COLUMNS_MIN_EQUATIONS equations)."""
-        from .joint_space import JointSpace, joint_space_size
+        from ..dynamic.joint_space import JointSpace, joint_space_size
 
         m, s = self.model, self.s
         if s.joint_space == "off" or s.method != "newton" or not m.nonlinear or not m.condensable \
@@ -315,15 +315,15 @@ class StaticSolver:
         self._js, self._js_dofmap = None, m.dofmap
         if resolve_backend(s.linear_solver, n_dof=len(m.dofmap.free), dim=m.dim) == "amg":
             return None
-        from . import joint_space
+        from ..dynamic import joint_space
 
         if (joint_space_size(m) > joint_space.JOINT_SPACE_MAX
                 and len(m.dofmap.free) < STATIC_COLUMNS_MIN_EQUATIONS):
             return None
         import scipy.sparse as sp
 
-        from .linear import SymmetricFactorization
-        from .modal import elastic_tangent_data
+        from ..linear.direct import SymmetricFactorization
+        from ..dynamic.modal import elastic_tangent_data
 
         t0 = time.perf_counter()
         n = len(m.dofmap.free)
@@ -345,7 +345,7 @@ class StaticSolver:
         returned where the joint-space iteration converged (the general Newton iterations check it
         against the full residual and go on from it if needed), else ``u`` itself, with the joint
         states as committed."""
-        from .joint_space import MAX_INITIAL_STIFFNESS_ITERATIONS
+        from ..dynamic.joint_space import MAX_INITIAL_STIFFNESS_ITERATIONS
 
         m, free = self.model, self.model.dofmap.free
         f_int, _ = m.evaluate(u, want_tangent=False)

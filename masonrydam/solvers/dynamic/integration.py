@@ -116,11 +116,11 @@ gets its own joint-space system, set up the first time it is needed); at the las
 on from its last iterate in the general path below. ``"auto"`` (the same as ``"on"``) condenses any
 number of joint unknowns: up to ``JOINT_SPACE_MAX`` the flexibility S is set up at once (8 m^2
 bytes), above it its columns are computed when a step first needs them and kept in a bounded store
-(:class:`~masonrydam.solvers.joint_space.FlexibilityColumns`); ``"off"`` forces the general path.
+(:class:`~masonrydam.solvers.dynamic.joint_space.FlexibilityColumns`); ``"off"`` forces the general path.
 
 Because the all-stick matrix is symmetric positive definite and solved once or twice per step for
 the whole record, it is factorized as a sparse ``L D L^T`` with numba substitutions
-(:class:`~masonrydam.solvers.linear.SymmetricFactorization`, when the scene's ``linear_solver`` is
+(:class:`~masonrydam.solvers.linear.direct.SymmetricFactorization`, when the scene's ``linear_solver`` is
 ``"auto"``; about 2-3x faster per solve than PARDISO's solve phase on the Koyna section), and the
 dense LU of the joint-space iterations is LAPACK's, with BLAS pinned to one thread during the stage
 (threadpoolctl) so that runs stay bitwise reproducible. ``dynamic_reference_solver`` in the result
@@ -158,7 +158,7 @@ doubled the iterations, triggered the chatter guard 38 times and ran at 130 ms/s
 full Newton; on the sliding block it saved nothing (the sliding tangent, once factorized, repeats).
 Each factorization's PARDISO iterative refinement is switched off (``iparm(8) = 0``): two
 refinement steps made each substitution 7x slower (4.5 ms against 0.64 ms at 7 048 equations) and
-serve only perturbed pivots, which :class:`~masonrydam.solvers.linear.Factorization` rejects.
+serve only perturbed pivots, which :class:`~masonrydam.solvers.linear.direct.Factorization` rejects.
 
 Measured for the general path alone, before the joint-space path existed and before a row-swap error
 in the Woodbury solves was fixed (failed updates were caught by the residual check and refactorized,
@@ -184,7 +184,7 @@ one; confined sliding costs about 2x a linear step instead of 4x; when the nonli
 everywhere, a factorization per changed iteration (~26 ms here) dominates and low-rank updates
 cannot help (they switch themselves off). Reusing PARDISO's symbolic analysis between
 factorizations of the same pattern (22 ms of the 38 ms measured for a factorization here) would
-roughly halve that case; it belongs in :class:`~masonrydam.solvers.linear.Factorization`.
+roughly halve that case; it belongs in :class:`~masonrydam.solvers.linear.direct.Factorization`.
 """
 from __future__ import annotations
 
@@ -197,12 +197,12 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from threadpoolctl import threadpool_limits
 
-from ..errors import ConvergenceError, NumericalError, RunStopped, SceneError
-from .dynamic_kernels import (joint_step_energy, joint_stored_energy, newmark_kinematics, newmark_residual, step_works,
+from ...errors import ConvergenceError, NumericalError, RunStopped, SceneError
+from .kernels import (joint_step_energy, joint_stored_energy, newmark_kinematics, newmark_residual, step_works,
                               woodbury_apply, woodbury_factor)
 from .joint_space import (MAX_INITIAL_STIFFNESS_ITERATIONS, SPLIT_INITIAL_STIFFNESS_ITERATIONS, JointSpace,
                           joint_space_size)
-from .linear import DIRECT_SOLVERS, Factorization, SingularMatrix, SymmetricFactorization, resolve_backend
+from ..linear.direct import DIRECT_SOLVERS, Factorization, SingularMatrix, SymmetricFactorization, resolve_backend
 from .modal import MassMatrix, RayleighDamping, add_to_pattern, elastic_joint_full, elastic_tangent_data
 
 JOINT_SPACE_MODES = ("auto", "on", "off")
@@ -441,7 +441,7 @@ class DynamicTerms:
     bottom_acceleration: ``bottom_acceleration(tau) -> (dim,)`` m/s2, the total acceleration of the
     ground under the reservoir (the free field at the rock's surface with a foundation of mass);
     default the ground motion.
-    fluid: :class:`~masonrydam.solvers.fluid.AcousticStep` (a compressible reservoir condensed on the
+    fluid: :class:`~masonrydam.solvers.dynamic.fluid.AcousticStep` (a compressible reservoir condensed on the
     wetted DOFs, which must be coupled in the pattern); its work on the dam is ``hydrodynamic``.
     support_excitation: apply the ground motion as ``-M iota a_g`` (the relative formulation); False
     when the ground motion enters through ``force`` (a compliant base): displacements are then total.
@@ -506,7 +506,7 @@ class DynamicState:
     v: np.ndarray
     a: np.ndarray
     energy: dict = field(default_factory=dict)
-    #: the compressible reservoir's state (:class:`~masonrydam.solvers.fluid.FluidState`) and its force on
+    #: the compressible reservoir's state (:class:`~masonrydam.solvers.dynamic.fluid.FluidState`) and its force on
     #: the free wetted DOFs, carried into the next dynamic stage
     fluid: object = None
     fluid_force: np.ndarray | None = None
@@ -625,7 +625,7 @@ class EffectiveSolver:
         """Factorize the effective matrix of values ``data`` and cache it (``pin``: never evicted).
         ``symmetric``: the matrix is a symmetric positive definite one (the all-stick matrix of a step
         size) that will be solved many times: with ``self.symmetric_fast`` it gets a sparse
-        ``L D L^T`` with fast substitutions (:class:`~masonrydam.solvers.linear.SymmetricFactorization`),
+        ``L D L^T`` with fast substitutions (:class:`~masonrydam.solvers.linear.direct.SymmetricFactorization`),
         falling back to the general backend should that refuse it."""
         fact = None
         if symmetric and self.symmetric_fast:
@@ -662,7 +662,7 @@ class EffectiveSolver:
 
     def _refactorize_oldest(self, data):
         """The factorization the cache would evict next, refactorized with ``data`` on its kept symbolic
-        analysis (:meth:`~masonrydam.solvers.linear.Factorization.refactorize`) and taken out of the cache;
+        analysis (:meth:`~masonrydam.solvers.linear.direct.Factorization.refactorize`) and taken out of the cache;
         None where there is none (pinned, symmetric L D L^T, another backend)."""
         for k in range(len(self.refs) - 1, -1, -1):
             ref = self.refs[k]
@@ -1034,7 +1034,7 @@ class DynamicSolver:
     def _all_stick(self) -> bool:
         """Every point of every Mohr-Coulomb joint set sticks in the trial state: the tangent is then the
         elastic one, bitwise (the stick tangent depends on nothing but the geometry and ks, kn)."""
-        from ..materials.mohr_coulomb import S_CODE, STICK
+        from ...materials.mohr_coulomb import S_CODE, STICK
 
         if not self.model.condensable:  # nonlinear blocks or large kinematics: the tangent moves anyway
             return False
@@ -1121,7 +1121,7 @@ class DynamicSolver:
         """Elastic energy stored in the joints (J): sum over contact points of (t_n^2/kn + |tau|^2/ks)/2
         times the point's area; open points store nothing. Back stresses of the residual-stiffness
         hardening are counted as dissipated."""
-        from ..materials import mohr_coulomb as mc
+        from ...materials import mohr_coulomb as mc
 
         if self._joint_compliance is None:  # w / (2 kn) and w / (2 ks) per point (m^3/N), once per stage
             self._joint_compliance = []

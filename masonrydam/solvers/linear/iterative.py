@@ -83,7 +83,7 @@ floor, a residual that no longer halves over ``stagnation_window`` iterations or
 error ``||r|| / (||K|| ||x|| + ||b||)`` below 1e-17 (Arioli, Duff & Ruiz 1992, SIAM J. Matrix Anal.
 Appl. 13:138-144), returns the best iterate seen (past that floor CG iterates can diverge), and the
 solution is accepted when its relative residual passes ``residual_check``, the acceptance test of
-the direct solvers. Raised as :class:`~masonrydam.solvers.linear.SingularMatrix`, with the
+the direct solvers. Raised as :class:`~masonrydam.solvers.linear.direct.SingularMatrix`, with the
 iteration count and the residual: no convergence within ``maxiter``, a residual above
 ``residual_check`` when the iteration stops or breaks down, NaN/inf, and a singular coarsest
 level (a floating block: its rigid-body modes are in the near-nullspace, which the prolongators
@@ -102,6 +102,8 @@ import warnings
 import numba
 import numpy as np
 import scipy.sparse as sp
+
+from .common import SingularMatrix
 
 #: relative distance (to the model size) below which two DOF positions coincide
 COINCIDENT_RTOL = 1e-9
@@ -301,7 +303,7 @@ def _block_gauss_seidel(indptr, indices, data, x, b, members, ptr, inv, inv_ptr,
 class AMGSolver:
     """Smoothed-aggregation AMG preconditioned CG (symmetric K) or FGMRES (non-symmetric K).
 
-    Same interface as :class:`~masonrydam.solvers.linear.Factorization`: ``solve(b)`` returns x
+    Same interface as :class:`~masonrydam.solvers.linear.direct.Factorization`: ``solve(b)`` returns x
     with ``||K x - b|| <= tol ||b||`` or raises ``SingularMatrix``.
 
     Parameters
@@ -368,7 +370,6 @@ class AMGSolver:
                  tie_threshold: float | None = 0.25, max_coarse: int = 100,
                  coarse_theta: float = 0.1, stagnation_window: int = 50, backward_tol: float = 1e-17,
                  sa_options: dict | None = None):
-        from .linear import SingularMatrix
 
         t0 = time.perf_counter()
         K = sp.csr_matrix(K)
@@ -441,7 +442,6 @@ class AMGSolver:
         import pyamg
         from pyamg.strength import symmetric_strength_of_connection
 
-        from .linear import SingularMatrix
 
         opts = {"coarse_solver": "splu", "improve_candidates": None}
         self.joint_links_dropped = 0
@@ -493,7 +493,6 @@ class AMGSolver:
         return ml
 
     def _setup_tied(self, K, B, label, key, nodes):
-        from .linear import SingularMatrix
 
         n, ng = K.shape[0], self.n_groups
         label = label.astype(np.int64)
@@ -596,7 +595,6 @@ class AMGSolver:
         return x, flag, None
 
     def solve(self, b: np.ndarray) -> np.ndarray:
-        from .linear import SingularMatrix
 
         t0 = time.perf_counter()
         b = np.asarray(b, dtype=np.float64)

@@ -53,13 +53,13 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from ..assembly.groups import raise_for_status
-from ..assembly.sparsity import scatter_matrix
-from ..elements import continuum as ck
-from ..elements import interface as ik
-from ..errors import MechanismError, SceneError
-from ..materials import mohr_coulomb as mc
-from .linear import Factorization, SingularMatrix
+from ...assembly.groups import raise_for_status
+from ...assembly.sparsity import scatter_matrix
+from ...elements import continuum as ck
+from ...elements import interface as ik
+from ...errors import MechanismError, SceneError
+from ...materials import mohr_coulomb as mc
+from ..linear.direct import Factorization, SingularMatrix
 
 #: integration points per element type for a consistent mass (exact for N_a N_b on straight elements)
 MASS_RULE = {"tri3": 3, "tri6": 6, "tet4": 4, "tet10": 14}
@@ -420,7 +420,7 @@ class ModalStage:
 def coupled_modal_analysis(model, n_modes: int, fluid, lumped: bool = False, u: np.ndarray | None = None,
                            mass: MassMatrix | None = None) -> ModalResult:
     """The ``n_modes`` lowest modes of the dam coupled with a compressible reservoir of acoustic elements
-    (``fluid``: :class:`~masonrydam.solvers.fluid.AcousticStep`, radiation damping ``L`` left out):
+    (``fluid``: :class:`~masonrydam.solvers.dynamic.fluid.AcousticStep`, radiation damping ``L`` left out):
 
         [K  -Q] [u]          [M       0] [u]
         [0   H] [p] = w^2    [rho Q^T G] [p]

@@ -54,9 +54,9 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.linalg.lapack import dgetrf
 
-from ..errors import STATUS_NAN, STATUS_OK
-from ..materials import mohr_coulomb as mc
-from .dynamic_kernels import STATUS_SINGULAR
+from ...errors import STATUS_NAN, STATUS_OK
+from ...materials import mohr_coulomb as mc
+from .kernels import STATUS_SINGULAR
 from .joint_space_kernels import (active_components, add_flexibility_product, apply_correction, capacitance_assemble,
                                   capacitance_update_solve, condensed_residual, joint_points_evaluate,
                                   joint_space_correction, joint_space_reevaluate_points, state_key,

@@ -107,3 +107,26 @@ def test_bad_dynamic_loads_are_named(change, key):
     with pytest.raises(SceneError) as err:
         masonrydam.run(s)
     assert err.value.key == key
+
+
+def test_released_from_an_initial_displacement():
+    """The oscillator released from rest at u0 (the block pushed down 0.1 mm onto its joint, the static state
+    undisplaced) swings as u0 cos(omega t) (Chopra eq. 2.1.3 with zero initial velocity)."""
+    u0 = 1e-4
+    s = oscillator({"type": "pulse", "duration": 1.0})
+    st = s["stages"][1]
+    del st["loads"]
+    st["initial_displacement"] = {"groups": ["block"], "displacement": [0.0, -u0]}
+    ds = masonrydam.run(s)
+    t, u = top_history(ds)
+    assert t[0] == 0.0 and u[0] == pytest.approx(u0, rel=1e-9)
+    np.testing.assert_allclose(u, u0 * np.cos(OMEGA * t), atol=0.01 * u0)
+    assert "released from an initial displacement" in ds.attrs["simulated_effects"]
+    st["initial_displacement"] = {"groups": ["wall"], "displacement": [0.0, -u0]}
+    with pytest.raises(SceneError) as err:
+        masonrydam.run(s)
+    assert err.value.key == "stages[1].initial_displacement.groups"
+    st["initial_displacement"] = {"groups": ["block"], "rotation": 0.001}
+    with pytest.raises(SceneError) as err:
+        masonrydam.run(s)
+    assert err.value.key == "stages[1].initial_displacement.rotation_center"

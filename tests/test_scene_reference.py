@@ -165,6 +165,8 @@ def _dynamic_scene():
                                   {"groups": "base", "angular_velocity": 0.1, "rotation_center": ["0 m", "0.5 m"]}]},
             {"name": "impact", "type": "dynamic", "dt": "1 ms", "steps": 10, "integrator": "central_difference",
              "initial_velocity": {"groups": ["block"], "velocity": [0.0, -0.1]},
+             "initial_displacement": [{"groups": ["block"], "displacement": ["0 mm", "-0.1 mm"]},
+                                      {"groups": "base", "rotation": 1e-5, "rotation_center": [0.0, 0.0]}],
              "loads": [
                  {"type": "nodal", "set": "top", "force": [1e3, 0.0],
                   "time_function": {"type": "table", "time": [0.0, 0.01], "values": [0.0, 1.0]}},
@@ -257,7 +259,7 @@ def _pattern(where: str) -> str:
     p = re.sub(r"^materials\.[^.]+", "materials.<group>", p)
     p = re.sub(r"^joints\.[^.]+", "joints.<set>", p)
     p = re.sub(r"\.ground_motion\.[xyz](?=\.|$)", ".ground_motion.<axis>", p)
-    return p.replace("initial_velocity[]", "initial_velocity")
+    return p.replace("initial_velocity[]", "initial_velocity").replace("initial_displacement[]", "initial_displacement")
 
 
 def _variant(pattern: str, d, scene: dict):

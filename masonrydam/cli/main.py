@@ -10,7 +10,7 @@
     masonrydam plot OUT.nc [--nodes N ..] [--joints J ..] -o PNG   histories (static, driven DOFs: pushover curve)
     masonrydam plot OUT.nc --quantity VAR [--select DIM=VALUE ..] -o PNG   history of one variable
     masonrydam plot OUT.nc --mode N [--scale S] -o PNG   mode shape N of a result with a modal stage
-    masonrydam plot OUT.nc --deformed [--step N] [--scale S] -o PNG   deformed blocks and joint states (2D)
+    masonrydam plot OUT.nc --deformed [--step N] [--scale S] [--slice y=V] -o PNG   deformed blocks, joint states
     masonrydam assess OUT.nc [--step N] [--condition C] [--csv F]  stability of the joint lines (dams)
 """
 from __future__ import annotations
@@ -172,12 +172,15 @@ def _cmd_plot(args):
         from ..results.deformed import deformed_figure
 
         out = check_output_path(args.output or f"{path.stem}_deformed.png", "-o")
-        fig = deformed_figure(open_result(path), step=args.step, scale=args.scale, title=path.name)
+        fig = deformed_figure(open_result(path), step=args.step, scale=args.scale, title=path.name,
+                              slice=args.slice)
         fig.savefig(out, dpi=110)
         print(f"wrote {out}")
         return 0
     if args.step is not None:
         raise MasonrydamError("--step applies to the deformed shape; give --deformed as well")
+    if args.slice is not None:
+        raise MasonrydamError("--slice applies to the deformed shape of a 3D result; give --deformed as well")
     if args.pushover:
         for opt in ("nodes", "joints", "scale"):
             if getattr(args, opt) is not None:
@@ -347,8 +350,13 @@ def main(argv=None) -> int:
                     help="draw the pushover curve of a static result: the force on the DOFs a stage drives by "
                          "prescribed displacements against their displacement (--component, default x)")
     pl.add_argument("--deformed", action="store_true",
-                    help="draw the deformed blocks and the joints of one step (2D results): stick grey, slip "
-                         "orange, open red (wider the more open), crushed purple, with the count of each state")
+                    help="draw the deformed blocks and the joints of one step (3D results: a slice, --slice): "
+                         "stick grey, slip orange, open red (wider the more open), crushed purple, with the "
+                         "count of each state")
+    pl.add_argument("--slice", metavar="AXIS=VALUE",
+                    help="with --deformed, 3D results: the plane the model is cut by, e.g. --slice y=0.05 (m); "
+                         "drawn in the plane's other two axes (default: the mid-plane across the model's "
+                         "thinnest extent, e.g. a wall's mid-thickness)")
     pl.add_argument("--step", type=int, metavar="N",
                     help="with --deformed: step, as in the file's step coordinate; negative: from the end "
                          "(default: the last step)")

@@ -38,6 +38,10 @@ def _inertia(scene, model):
             how = (f"velocity {it['velocity']} m/s" if "velocity" in it else
                    f"rigid rotation {it['angular_velocity']} rad/s about {it['rotation_center']}")
             out.append(f"dynamic stage '{st['name']}': initial {how} of {', '.join(it['groups'])}")
+        for it in st.get("initial_displacement") or []:
+            how = (f"displacement {it['displacement']} m" if "displacement" in it else
+                   f"rigid rotation {it['rotation']} rad about {it['rotation_center']}")
+            out.append(f"dynamic stage '{st['name']}': released from an initial {how} of {', '.join(it['groups'])}")
     return out
 
 

@@ -378,8 +378,12 @@ def build_stages(scene: dict, mesh: Mesh, model: Model, base_dir: Path | None = 
                 duration = max(g.duration for g in gms)
             v0 = None if st.get("initial_velocity") is None else \
                 initial_velocity_field(model, st["initial_velocity"], f"stages[{i}].initial_velocity")
+            u0 = None if st.get("initial_displacement") is None else \
+                initial_velocity_field(model, st["initial_displacement"], f"stages[{i}].initial_displacement",
+                                       "displacement", "rotation")
             stages.append(DynamicStage(st["name"], duration, supports | held, gms, settings, st["output"]["stride"],
-                                       initial_velocity=v0, loads=_loads_in_time(scene, mesh, model, st, i, base_dir)))
+                                       initial_velocity=v0, loads=_loads_in_time(scene, mesh, model, st, i, base_dir),
+                                       initial_displacement=u0))
             continue
         force = np.zeros(model.n_dof)
         presc = np.zeros(model.n_dof, dtype=bool)
@@ -434,10 +438,12 @@ def build_stages(scene: dict, mesh: Mesh, model: Model, base_dir: Path | None = 
     return stages
 
 
-def initial_velocity_field(model: Model, items: list, key: str) -> np.ndarray:
+def initial_velocity_field(model: Model, items: list, key: str, translation="velocity",
+                           rotation="angular_velocity") -> np.ndarray:
     """(n_dof,) m/s: the initial velocities of a dynamic stage (normalised ``initial_velocity`` items) at
     the nodes of their element groups, NaN elsewhere; a rotation is ``v = w x (x - c)`` (small-rotation
-    rigid motion)."""
+    rigid motion). With ``translation="displacement", rotation="rotation"`` the initial displacements (m) of
+    ``initial_displacement`` items, ``u = theta x (x - c)`` for a (small) rotation."""
     dim = model.dim
     v = np.full(model.n_dof, np.nan)
     names = sorted({g.name for g in model.cgroups})
@@ -450,11 +456,11 @@ def initial_velocity_field(model: Model, items: list, key: str) -> np.ndarray:
                                  f"no element group '{name}' (groups: {names})")
             nodes += [np.unique(g.conn) for g in found]
         nodes = np.unique(np.concatenate(nodes))
-        if "velocity" in it:
-            vel = np.tile(np.asarray(it["velocity"], dtype=float), (len(nodes), 1))
+        if translation in it:
+            vel = np.tile(np.asarray(it[translation], dtype=float), (len(nodes), 1))
         else:
             r = model.coords[nodes] - np.asarray(it["rotation_center"], dtype=float)
-            w = it["angular_velocity"]
+            w = it[rotation]
             vel = (np.stack([-w * r[:, 1], w * r[:, 0]], axis=1) if dim == 2 else
                    np.cross(np.asarray(w, dtype=float), r))
         v[(nodes[:, None] * dim + np.arange(dim)).ravel()] = vel.ravel()

@@ -499,6 +499,8 @@ _DYNAMIC = Section("[[stages]] type = \"dynamic\"", "A time history from the sta
     _k("stages[].ground_motion", "table", "base excitation, one table per axis `[stages.ground_motion.x]`"),
     _k("stages[].initial_velocity", "table or list", "initial velocity of element groups (a table or a list of "
        "tables)"),
+    _k("stages[].initial_displacement", "table or list", "a displacement of element groups added to the state the "
+       "stage starts from, which is released from rest out of equilibrium (a table or a list of tables)"),
     _k("stages[].loads", "list", "loads given in time (below)", default=[]),
     _k("stages[].output", "table", "which steps and what the stage records `[stages.output]`", default_text="{}"),
     _k("stages[].max_iterations", "integer", "Newton iterations per step", default=25),
@@ -588,6 +590,17 @@ _INITIAL = Section("initial_velocity", "A table or a list of tables: a translati
     _k(f"{_IV}.velocity", "list", "velocity, one value per axis", "m/s"),
     _k(f"{_IV}.angular_velocity", "number or list", "2D: a number; 3D: a vector [wx, wy, wz]", "rad/s"),
     _k(f"{_IV}.rotation_center", "list", "the point the rotation is about (with `angular_velocity`)", "m", UNIT),
+))
+
+_ID = "stages[].initial_displacement"
+_INITIAL_DISPLACEMENT = Section("initial_displacement", "A table or a list of tables: a translation (`displacement`) "
+                                "or a small rigid rotation (`rotation` about `rotation_center`, u = theta x (x - c)) "
+                                "of element groups, added to the static state; the stage starts from rest there. A "
+                                "stage with an initial displacement may have no ground motion.", (
+    _k(f"{_ID}.groups", "list", "element groups (a single string is one)", default=REQUIRED),
+    _k(f"{_ID}.displacement", "list", "displacement, one value per axis", "m", UNIT),
+    _k(f"{_ID}.rotation", "number or list", "2D: a number; 3D: a vector [tx, ty, tz] (small)", "rad"),
+    _k(f"{_ID}.rotation_center", "list", "the point the rotation is about (with `rotation`)", "m", UNIT),
 ))
 
 _STAGE_OUTPUT = Section("[stages.output]", "What a dynamic stage records. Every dynamic stage that selects nodes or "
@@ -710,7 +723,7 @@ _FOUNDATION = Section("[foundation]", "The rock under a dam (an element group of
 
 #: the tables of the reference, in the order of docs/scene.md
 SECTIONS: tuple = (_TOP, _MODEL, _MESH, *_GENERATOR_SECTIONS, _MATERIALS, _JOINTS, _SUPPORTS, _STATIC, _LOADS,
-                   _MODAL, _DYNAMIC, _DAMPING, _GROUND, _PROCESSING, _INITIAL, _STAGE_OUTPUT, _TIME_LOADS, _SOLVER,
+                   _MODAL, _DYNAMIC, _DAMPING, _GROUND, _PROCESSING, _INITIAL, _INITIAL_DISPLACEMENT, _STAGE_OUTPUT, _TIME_LOADS, _SOLVER,
                    _OUTPUT, _RESERVOIR, _FOUNDATION)
 
 

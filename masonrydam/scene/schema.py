@@ -269,7 +269,7 @@ PULSE_SHAPES = ("rectangular", "half_sine")
 AUTO_STEP_KEYS = ("tolerance", "dt_min", "dt_max")
 _DYNAMIC_KEYS = {"name", "type", "steps", "duration", "dt", "integrator", "alpha", "rho_inf", "mass", "damping",
                  "ground_motion", "output", "max_iterations", "max_substeps", "force_tolerance", "energy_tolerance",
-                 "low_rank_max", "joint_space", "initial_velocity", "loads", *AUTO_STEP_KEYS}
+                 "low_rank_max", "joint_space", "initial_velocity", "initial_displacement", "loads", *AUTO_STEP_KEYS}
 #: dt = "auto" without dt_max (and without output.dt): the largest step (s)
 AUTO_DT_MAX_DEFAULT = 0.01
 #: dt = "auto": default relative local error per step (see solvers.dynamic.DynamicSolver._step_error)
@@ -413,35 +413,38 @@ def _numbers(value, n, key) -> list:
     return [_number(v, f"{key}[{i}]") for i, v in enumerate(value)]
 
 
-def _initial_velocity(d, key, dim) -> list:
+def _initial_velocity(d, key, dim, translation="velocity", rotation="angular_velocity",
+                      translation_dimension=None) -> list:
     """``initial_velocity`` of a dynamic stage: a table or a list of tables ``{ groups = [...], velocity =
     [vx, vy(, vz)] }`` (m/s) or ``{ groups, angular_velocity = w (2D, rad/s; 3D: [wx, wy, wz]),
-    rotation_center = [x, y(, z)] }`` (a rigid rotation about the centre, v = w x (x - c))."""
+    rotation_center = [x, y(, z)] }`` (a rigid rotation about the centre, v = w x (x - c)).
+    ``initial_displacement`` has the same form with ``displacement`` (m, a string with a length unit too)
+    and ``rotation`` (rad, small: u = theta x (x - c)): ``translation``, ``rotation`` name the keys."""
     items = d if isinstance(d, list) else [d]
     out = []
     for i, t in enumerate(items):
         k = key if not isinstance(d, list) else f"{key}[{i}]"
         if not isinstance(t, dict):
             raise SceneError(k, f"expected a table {{ groups = [...], velocity = [...] }}, got {t!r}")
-        _check_keys(t, {"groups", "velocity", "angular_velocity", "rotation_center"}, k)
+        _check_keys(t, {"groups", translation, rotation, "rotation_center"}, k)
         groups = t.get("groups")
         groups = [groups] if isinstance(groups, str) else groups
         if not isinstance(groups, list) or not groups or not all(isinstance(g, str) for g in groups):
             raise SceneError(f"{k}.groups", f"expected a list of element group names, got {t.get('groups')!r}")
-        if ("velocity" in t) == ("angular_velocity" in t):
-            raise SceneError(k, "give 'velocity' = [vx, vy(, vz)] (a translation) or 'angular_velocity' with "
+        if (translation in t) == (rotation in t):
+            raise SceneError(k, f"give '{translation}' = [x, y(, z)] (a translation) or '{rotation}' with "
                                 "'rotation_center' (a rigid rotation), one of them")
         item = {"groups": list(groups)}
-        if "velocity" in t:
+        if translation in t:
             if "rotation_center" in t:
-                raise SceneError(f"{k}.rotation_center", "goes with 'angular_velocity'")
-            item["velocity"] = _numbers(t["velocity"], dim, f"{k}.velocity")
+                raise SceneError(f"{k}.rotation_center", f"goes with '{rotation}'")
+            item[translation] = (_numbers(t[translation], dim, f"{k}.{translation}") if translation_dimension is None
+                                 else _vector(t[translation], translation_dimension, f"{k}.{translation}", dim))
         else:
-            w = t["angular_velocity"]
-            item["angular_velocity"] = (_number(w, f"{k}.angular_velocity") if dim == 2 else
-                                        _numbers(w, 3, f"{k}.angular_velocity"))
+            w = t[rotation]
+            item[rotation] = (_number(w, f"{k}.{rotation}") if dim == 2 else _numbers(w, 3, f"{k}.{rotation}"))
             if "rotation_center" not in t:
-                raise SceneError(f"{k}.rotation_center", "is required with 'angular_velocity' (the point the "
+                raise SceneError(f"{k}.rotation_center", f"is required with '{rotation}' (the point the "
                                                          "rotation is about, m)")
             item["rotation_center"] = _vector(t["rotation_center"], "length", f"{k}.rotation_center", dim)
         out.append(item)
@@ -542,8 +545,13 @@ def _dynamic_stage(s, key, dim, index):
         out["damping"] = d
     out["initial_velocity"] = (None if "initial_velocity" not in s else
                                _initial_velocity(s["initial_velocity"], f"{key}.initial_velocity", dim))
+    # a displaced start (released from a deformed shape: a pluck test), on top of the static state
+    out["initial_displacement"] = (None if "initial_displacement" not in s else
+                                   _initial_velocity(s["initial_displacement"], f"{key}.initial_displacement", dim,
+                                                     "displacement", "rotation", "length"))
     gm = s.get("ground_motion")
-    if gm is None and (out["initial_velocity"] is not None or out["loads"]):  # free motion, or loads in time
+    if gm is None and (out["initial_velocity"] is not None or out["initial_displacement"] is not None
+                       or out["loads"]):  # free motion, or loads in time
         if out["steps"] is None and out["duration"] is None:
             raise SceneError(f"{key}.duration", "is required for a dynamic stage without ground motion (or give "
                                                 "'steps')")

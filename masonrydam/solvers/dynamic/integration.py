@@ -473,6 +473,9 @@ class DynamicStage:
     initial_velocity: np.ndarray | None = None
     #: ``loads(tau) -> (n_dof,)`` N: the stage's loads given in time (stage time tau, s), or None
     loads: object = None
+    #: (n_dof,) m, NaN where not given: a displacement added to the state the stage starts from (at rest in
+    #: equilibrium there), so that it starts out of equilibrium: released from a deformed shape
+    initial_displacement: np.ndarray | None = None
 
     def __post_init__(self):
         if not (math.isfinite(self.duration) and self.duration > 0):
@@ -1170,6 +1173,12 @@ class DynamicSolver:
                 self.stats.static_residual = float(np.linalg.norm(diff) / scale)
                 fs = f_int[free].copy()
             self.fs_f = fs
+            if stage.initial_displacement is not None:  # released from a displaced state (the loads stay those
+                # of the state it was displaced from, so the displacement is out of equilibrium)
+                shift = np.where(np.isnan(stage.initial_displacement), 0.0, stage.initial_displacement)
+                shift[~np.isin(np.arange(m.n_dof), free)] = 0.0
+                u = u + shift
+                f_int, K = m.evaluate(u, want_tangent=True)
             ag0 = self.ground_at(0.0)
             if a0 is None:
                 # (the pressure of a compressible reservoir is a state: its force at t0 is that of the

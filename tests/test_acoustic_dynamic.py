@@ -95,7 +95,7 @@ def test_harmonic_excitation_follows_the_compressible_series():
 
 @pytest.mark.parametrize("integrator", ["newmark_average", "hht", "generalized_alpha"])
 def test_condensed_step_tends_to_the_added_mass(integrator):
-    """The compressible path (water condensed into each step, solvers/fluid.py) with a very fast sound
+    """The compressible path (water condensed into each step, solvers/dynamic/fluid.py) with a very fast sound
     speed gives the incompressible added mass's answer, on a flexible block sliding on a joint (the
     joint-space path with the water in its flexibility), for each implicit integrator."""
     def scene(c):

@@ -78,11 +78,11 @@ def test_time_functions():
 
 def test_time_function_from_a_file(tmp_path):
     (tmp_path / "blast.txt").write_text("# t (s)  p (-)\n0 0\n0.01 1\n0.03 0\n")
-    spec = {"type": "file", "path": "blast.txt", "column": 1}
+    spec = {"type": "file", "path": "blast.txt", "column": 0}
     tf = TimeFunction.build(normalize_time_function(spec, "tf"), "tf", tmp_path)
     assert tf.at(0.005) == pytest.approx(0.5) and tf.at(0.02) == pytest.approx(0.5) and tf.at(1.0) == 0.0
     with pytest.raises(SceneError) as err:
-        TimeFunction.build(normalize_time_function(dict(spec, column=3), "tf"), "tf", tmp_path)
+        TimeFunction.build(normalize_time_function(dict(spec, column=1), "tf"), "tf", tmp_path)
     assert err.value.key == "tf.column"
     with pytest.raises(SceneError) as err:
         TimeFunction.build(normalize_time_function(dict(spec, path="none.txt"), "tf"), "tf", tmp_path)
@@ -130,3 +130,36 @@ def test_released_from_an_initial_displacement():
     with pytest.raises(SceneError) as err:
         masonrydam.run(s)
     assert err.value.key == "stages[1].initial_displacement.rotation_center"
+
+
+def test_a_step_that_could_pass_over_the_load_is_refused():
+    """A 2 ms pulse between the ends of 10 ms steps would never be seen (both ends give zero force)."""
+    s = oscillator({"type": "pulse", "duration": 0.002, "start": 0.001}, dt=0.01, steps=3)
+    with pytest.raises(SceneError) as err:
+        masonrydam.run(s)
+    assert err.value.key == "stages[1].dt" and "0.0005" in str(err.value)
+    s["stages"][1].update(dt="auto", dt_max=0.01)
+    del s["stages"][1]["steps"]
+    s["stages"][1]["duration"] = 0.02
+    with pytest.raises(SceneError) as err:
+        masonrydam.run(s)
+    assert err.value.key == "stages[1].dt_max"
+
+
+def test_release_past_the_friction_limit_dissipates():
+    """A block on a Mohr-Coulomb joint (mu = 0.2) under gravity, released 1 mm sideways (far past its elastic
+    slip, mu m g / (ks A) = 2 um): the start is a sliding state (committed), so friction only dissipates and
+    the kinetic energy never exceeds the elastic energy the joint held at the start, (mu m g)^2 / (2 ks A)."""
+    s = oscillator({"type": "pulse", "duration": 1.0}, steps=200)
+    s["model"]["gravity"] = [0.0, -9.80665]
+    s["joints"]["joints"] = {"law": "mohr_coulomb", "normal_stiffness": KN, "shear_stiffness": KN,
+                             "friction_angle": math.degrees(math.atan(0.2))}
+    s["stages"][0]["loads"] = [{"type": "self_weight"}]
+    st = s["stages"][1]
+    del st["loads"]
+    st["initial_displacement"] = {"groups": ["block"], "displacement": ["1 mm", 0.0]}
+    ds = masonrydam.run(s)
+    dyn = np.isfinite(ds.time.values)
+    assert ds.energy_joint_friction.values[dyn].min() >= -1e-9
+    stored = (0.2 * RHO * 9.80665) ** 2 / (2 * KN)
+    assert ds.energy_kinetic.values[dyn].max() <= 1.01 * stored

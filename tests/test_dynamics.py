@@ -157,7 +157,7 @@ def sdof_max_omega(omega):
 
 @pytest.mark.parametrize("mass_form", ["lumped", "consistent"])
 def test_step_residual_kernels_are_the_newmark_residual(mass_form):
-    """``dynamic_kernels.newmark_kinematics`` and ``newmark_residual`` against the Newmark (1959)
+    """``solvers.dynamic.kernels.newmark_kinematics`` and ``newmark_residual`` against the Newmark (1959)
     relations written out with numpy (Hughes 2000, *The Finite Element Method*, sec. 9.1; HHT weight
     w_m): a1 = (u - u_n - h v_n - h^2 (1/2 - beta) a_n) / (beta h^2), v1 = v_n + h ((1 - gamma) a_n +
     gamma a1), R = w_m M a1 + C v1 + f_int + const, for a lumped (diagonal) and a consistent (sparse)
@@ -197,7 +197,7 @@ def test_step_residual_kernels_are_the_newmark_residual(mass_form):
 
 @pytest.mark.parametrize("lumped", [True, False])
 def test_step_works_kernel_is_the_trapezoidal_rule(lumped):
-    """``dynamic_kernels.step_works`` against the trapezoidal works of a step written out with numpy
+    """``solvers.dynamic.kernels.step_works`` against the trapezoidal works of a step written out with numpy
     (energy balance of Hughes 2000, *The Finite Element Method*, sec. 9.1.4): W = du . (f0 + f1) / 2 for
     the earthquake, damping and joint forces (fj = f_int - K_continuum u), du . fs for the constant
     loads, and the kinetic energy v . M v / 2 with a diagonal or a full mass product."""

@@ -47,7 +47,8 @@ def _generator_choices():
 def _toml_scenes():
     files = sorted(ROOT.glob("examples/*.toml")) + sorted(ROOT.glob("masonrydam/scenes/*.toml"))
     assert len(files) >= 10
-    return [(f.relative_to(ROOT).as_posix(), tomllib.loads(f.read_text(encoding="utf-8"))) for f in files]
+    read = [(f.relative_to(ROOT).as_posix(), tomllib.loads(f.read_text(encoding="utf-8"))) for f in files]
+    return [(name, data) for name, data in read if "ensemble" not in data]  # (ensemble files are no scenes)
 
 
 _BLOCKS = {"blocks": [{"x0": 0, "y0": 0, "x1": 1, "y1": 0.5, "group": "base"},

@@ -229,6 +229,56 @@ def _cmd_plot(args):
     return 0
 
 
+def _cmd_ensemble(args):
+    """Run an ensemble file on dask (:func:`masonrydam.ensemble.runner.run_ensemble`): members already in the
+    store beside the output are not run again."""
+    from ..ensemble.runner import run_ensemble
+    from ..results.files import check_output_path
+
+    path = Path(args.ensemble)
+    out = check_output_path(args.output or f"{path.stem}.nc", "-o")
+    if args.workers is not None and args.workers < 1:
+        raise MasonrydamError(f"--workers must be at least 1, got {args.workers}")
+    ds = run_ensemble(path, out, workers=args.workers, scheduler=args.scheduler, progress=not args.no_progress)
+    status = ds.status.values
+    print(f"ensemble '{path.name}': {status.size} members, {int((status == 0).sum())} completed, "
+          f"{int((status == 1).sum())} collapsed, {int((status == 2).sum())} numerical failures; "
+          f"{ds.attrs['wall_time_s']:.1f} s on {ds.attrs['workers']} worker(s)")
+    print(f"wrote {out} (members' outcomes in {out}.members/)")
+    return 0
+
+
+def _cmd_ensemble_report(args):
+    """IDA curves and lognormal fragility curves of an ensemble dataset, as figures and a table
+    (:func:`masonrydam.ensemble.report.ensemble_report`)."""
+    import xarray as xr
+
+    from ..ensemble.report import ensemble_report, write_table_csv
+    from ..ensemble.fragility import fragility_table
+
+    path = Path(args.result)
+    if not path.exists():
+        raise MasonrydamError(f"{path}: no such ensemble file")
+    with xr.open_dataset(path) as ds:
+        ds = ds.load()
+    if args.demand is not None and args.demand not in ds.data_vars:
+        raise MasonrydamError(f"--demand {args.demand!r}: not a variable of the ensemble (demands: "
+                              f"{sorted(v for v in ds.data_vars if v not in ('status', 'status_reason', 'wall_time'))})")
+    if args.limit is not None and args.demand is None:
+        raise MasonrydamError("--limit needs --demand: the demand whose value above the limit is a failure")
+    lines, figures = ensemble_report(ds, args.demand, args.limit, level=args.level)
+    print("\n".join(lines))
+    prefix = Path(args.output) if args.output else path.with_suffix("")
+    for name, fig in figures.items():
+        target = prefix.with_name(f"{prefix.name}_{name}.png")
+        fig.savefig(target, dpi=110)
+        print(f"wrote {target}")
+    table = prefix.with_name(f"{prefix.name}_fragility.csv")
+    write_table_csv(fragility_table(ds, args.demand, args.limit, level=args.level), table)
+    print(f"wrote {table}")
+    return 0
+
+
 def _cmd_assess(args):
     """Stability table of the joint lines of a result with a reservoir, at one step, against the criteria
     of a load condition (:func:`masonrydam.results.assess.assessment_report`); exit code 0 whether or not
@@ -369,6 +419,25 @@ def main(argv=None) -> int:
                                            "RESULT_pushover.png, with --quantity VAR RESULT_VAR.png, in the "
                                            "current folder)")
     pl.set_defaults(func=_cmd_plot)
+    en = sub.add_parser("ensemble", help="run an ensemble of a base scene (records x intensities x parameters) on "
+                                         "dask; resumable")
+    en.add_argument("ensemble", help="ensemble file (TOML): [ensemble] scene = ..., [axes.records], [axes.intensity], "
+                                     "[[axes.parameters]]; docs/ensembles.md")
+    en.add_argument("-o", "--output", help="ensemble dataset (netCDF; default ENSEMBLE.nc); the members' outcomes "
+                                           "are kept in OUTPUT.members/ and reused by a second call")
+    en.add_argument("--workers", type=int, help="local worker processes (default: the file's [execution] workers, "
+                                                "else the CPU count)")
+    en.add_argument("--scheduler", help="address of a running dask scheduler (tcp://host:8786) instead of a local "
+                                        "cluster")
+    en.add_argument("--no-progress", action="store_true", help="no progress line")
+    en.set_defaults(func=_cmd_ensemble)
+    er = sub.add_parser("ensemble-report", help="IDA and fragility curves of an ensemble dataset")
+    er.add_argument("result", help="ensemble dataset written by `masonrydam ensemble`")
+    er.add_argument("--demand", help="demand variable (e.g. peak_slip_joints); default: collapse only")
+    er.add_argument("--limit", type=float, help="limit of the demand (SI units): a member above it has failed")
+    er.add_argument("--level", type=float, default=0.9, help="confidence level of the intervals (default 0.9)")
+    er.add_argument("-o", "--output", help="prefix of the figures and the table (default: the dataset's name)")
+    er.set_defaults(func=_cmd_ensemble_report)
     a = sub.add_parser("assess", help="stability of a dam's joint lines (sliding, resultant, cracking) at one step",
                        description="Table of the stability sections (base and lift joints) of a result whose "
                                    "scene has a [reservoir], at one step, against the criteria of a load "

@@ -7,8 +7,9 @@ multiplied at the stage time ``t`` (s, from the stage's start):
 
 - ``{ type = "table", time = [...], values = [...] }``: linear interpolation between the points; before the
   first and after the last time the end values hold;
-- ``{ type = "file", path = "pulse.txt", column = 1 }``: the same from a text file of columns (time in
-  column 0, s; values in ``column``; ``#`` comments), a path relative to the scene file;
+- ``{ type = "file", path = "pulse.txt", column = 0 }``: the same from a text file of columns (the time in s
+  first, then value columns; ``column`` counts the value columns from 0 without the time column, as a ground
+  motion's ``column`` does; ``#`` comments), a path relative to the scene file;
 - ``{ type = "pulse", shape = "rectangular" | "half_sine" | "triangular", duration = 0.05, start = 0 }``:
   1 (rectangular), ``sin(pi s / duration)`` (half sine) or a symmetric triangle of peak 1 for ``0 <= s <=
   duration``, ``s = t - start``, and 0 outside;
@@ -64,9 +65,10 @@ def normalize_time_function(d, key: str) -> dict:
         check_keys(d, {"type", "path", "column"}, key)
         if not isinstance(d.get("path"), str):
             raise SceneError(f"{key}.path", "is required: a text file of columns (time in s first)")
-        col = d.get("column", 1)
-        if isinstance(col, bool) or not isinstance(col, int) or col < 1:
-            raise SceneError(f"{key}.column", f"must be a column index >= 1 (0 is the time), got {col!r}")
+        col = d.get("column", 0)
+        if isinstance(col, bool) or not isinstance(col, int) or col < 0:
+            raise SceneError(f"{key}.column", f"must be a value column index >= 0 (counted after the time "
+                                              f"column), got {col!r}")
         return {"type": "file", "path": d["path"], "column": col}
     if kind == "pulse":
         check_keys(d, {"type", "shape", "duration", "start"}, key)
@@ -124,11 +126,12 @@ class TimeFunction:
                 data = np.loadtxt(path, comments="#", ndmin=2)
             except (OSError, ValueError) as exc:
                 raise SceneError(f"{key}.path", f"cannot read '{path}' as columns of numbers: {exc}") from None
-            if data.shape[1] <= spec["column"]:
-                raise SceneError(f"{key}.column", f"'{path}' has {data.shape[1]} column(s); column "
-                                                  f"{spec['column']} is not there")
-            t, v = data[:, 0], data[:, spec["column"]]
-            if len(t) < 2 or np.any(np.diff(t) <= 0) or not np.all(np.isfinite(data[:, [0, spec["column"]]])):
+            col = spec["column"] + 1  # (the time is column 0 of the file)
+            if data.shape[1] <= col:
+                raise SceneError(f"{key}.column", f"'{path}' has {data.shape[1] - 1} value column(s) after the "
+                                                  f"time; value column {spec['column']} is not there")
+            t, v = data[:, 0], data[:, col]
+            if len(t) < 2 or np.any(np.diff(t) <= 0) or not np.all(np.isfinite(data[:, [0, col]])):
                 raise SceneError(f"{key}.path", f"'{path}': the times (column 0) must increase strictly and the "
                                                 "values be finite")
             return cls(spec, t, v)
@@ -151,6 +154,23 @@ class TimeFunction:
         if tau < 0.0 or (s["duration"] is not None and tau > s["duration"]):
             return 0.0
         return math.sin(2.0 * math.pi * s["frequency"] * tau + math.radians(s["phase"]))
+
+
+#: a dynamic stage's (largest) step may be at most this fraction of its loads' time scale (:func:`time_scale`)
+STEPS_PER_TIME_SCALE = 4
+
+
+def time_scale(tf: "TimeFunction") -> float:
+    """The shortest time (s) over which a time function changes: a pulse's duration, the closest points of a
+    table or file, a fifth of a harmonic's period. A step longer than a quarter of it could pass over the load
+    (both ends of a step may miss a short pulse entirely: neither a fixed step nor the error estimate of
+    ``dt = "auto"``, which looks at the step's ends, would see it), so dynamic stages refuse such steps."""
+    s = tf.spec
+    if s["type"] == "pulse":
+        return s["duration"]
+    if s["type"] == "harmonic":
+        return 0.2 / s["frequency"]
+    return float(np.min(np.diff(tf.time)))
 
 
 def load_history(loads: list[tuple[np.ndarray, TimeFunction]]):

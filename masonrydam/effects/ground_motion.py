@@ -90,7 +90,7 @@ def _effects():
     from . import Effect
 
     return [
-        Effect("static", "static stages only", __name__, "load and displacement control (solvers/static.py)",
+        Effect("static", "static stages only", __name__, "load and displacement control (solvers/static/stepping.py)",
                "tests/test_system.py", _static_only),
         Effect("inertia", "a stage with type = 'dynamic'", __name__,
                "Newmark 1959; Hilber, Hughes & Taylor 1977; Chung & Hulbert 1993", "tests/test_dynamics.py",

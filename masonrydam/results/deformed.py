@@ -229,8 +229,9 @@ def _joint_segments(ds, coords: np.ndarray, deformed: np.ndarray):
 
 
 def _check_connectivity(ds):
+    joint_vars = ("joint_point_nodes", "joint_point_shape")
     if "block_cell_nodes" not in ds.variables or (ds.sizes.get("joint_point", 0)
-                                                   and "joint_point_nodes" not in ds.variables):
+                                                   and any(v not in ds.variables for v in joint_vars)):
         raise MasonrydamError("--deformed: the result has no block connectivity (block_cell_nodes, "
                               "joint_point_nodes): it was written by an older masonrydam; run the scene again")
 

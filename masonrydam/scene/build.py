@@ -167,7 +167,7 @@ def _load_vector(scene: dict, mesh: Mesh, model: Model, ld: dict, key: str) -> n
 def _loads_in_time(scene: dict, mesh: Mesh, model: Model, st: dict, i: int, base_dir):
     """``force(t)`` (n_dof,) N of a dynamic stage's loads given in time (:mod:`masonrydam.effects.dynamic_loads`),
     or None without such loads."""
-    from ..effects.dynamic_loads import TimeFunction, load_history
+    from ..effects.dynamic_loads import STEPS_PER_TIME_SCALE, TimeFunction, load_history, time_scale
 
     if not st.get("loads"):
         return None
@@ -175,8 +175,14 @@ def _loads_in_time(scene: dict, mesh: Mesh, model: Model, st: dict, i: int, base
     for j, ld in enumerate(st["loads"]):
         key = f"stages[{i}].loads[{j}]"
         kind = {"edge_traction": "traction", "edge_pressure": "pressure"}.get(ld["type"], ld["type"])
-        parts.append((_load_vector(scene, mesh, model, dict(ld, type=kind), key),
-                      TimeFunction.build(ld["time_function"], f"{key}.time_function", base_dir)))
+        tf = TimeFunction.build(ld["time_function"], f"{key}.time_function", base_dir)
+        scale = time_scale(tf)
+        if st["dt"] > scale / STEPS_PER_TIME_SCALE:
+            what = "dt_max" if st.get("adaptive") else "dt"
+            raise SceneError(f"stages[{i}].{what}", f"{st['dt']:g} s is too long for {key}.time_function, which "
+                                                    f"changes within {scale:g} s: the steps could pass over it; use "
+                                                    f"{what} <= {scale / STEPS_PER_TIME_SCALE:g} s")
+        parts.append((_load_vector(scene, mesh, model, dict(ld, type=kind), key), tf))
     return load_history(parts)
 
 

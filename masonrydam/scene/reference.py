@@ -500,7 +500,8 @@ _DYNAMIC = Section("[[stages]] type = \"dynamic\"", "A time history from the sta
     _k("stages[].initial_velocity", "table or list", "initial velocity of element groups (a table or a list of "
        "tables)"),
     _k("stages[].initial_displacement", "table or list", "a displacement of element groups added to the state the "
-       "stage starts from, which is released from rest out of equilibrium (a table or a list of tables)"),
+       "stage starts from, out of equilibrium, with the velocity it had (at rest after the static stages; a table or a list of "
+       "tables)"),
     _k("stages[].loads", "list", "loads given in time (below)", default=[]),
     _k("stages[].output", "table", "which steps and what the stage records `[stages.output]`", default_text="{}"),
     _k("stages[].max_iterations", "integer", "Newton iterations per step", default=25),
@@ -595,7 +596,8 @@ _INITIAL = Section("initial_velocity", "A table or a list of tables: a translati
 _ID = "stages[].initial_displacement"
 _INITIAL_DISPLACEMENT = Section("initial_displacement", "A table or a list of tables: a translation (`displacement`) "
                                 "or a small rigid rotation (`rotation` about `rotation_center`, u = theta x (x - c)) "
-                                "of element groups, added to the static state; the stage starts from rest there. A "
+                                "of element groups, added to the state before the stage; it starts there with the velocity it had (at rest after "
+                                "the static stages). A "
                                 "stage with an initial displacement may have no ground motion.", (
     _k(f"{_ID}.groups", "list", "element groups (a single string is one)", default=REQUIRED),
     _k(f"{_ID}.displacement", "list", "displacement, one value per axis", "m", UNIT),
@@ -626,7 +628,7 @@ _TIME_LOADS = Section("Loads of a dynamic stage", "A load of a dynamic stage is 
        variants=("table",)),
     _k(f"{_TF}.path", "string", "a text file of columns, time (s) first, relative to the scene file's folder",
        default=REQUIRED, variants=("file",)),
-    _k(f"{_TF}.column", "integer", "the value column (0 is the time)", default=1, variants=("file",)),
+    _k(f"{_TF}.column", "integer", "the value column, from 0 without the time column", default=0, variants=("file",)),
     _k(f"{_TF}.shape", "string", "1 (rectangular), a half sine or a symmetric triangle of peak 1 over `duration`",
        default="rectangular", choices=TIME_PULSE_SHAPES, variants=("pulse",)),
     _k(f"{_TF}.duration", "number", "pulse length; harmonic: length of the shaking (default: to the end)", "s",

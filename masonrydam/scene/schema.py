@@ -272,7 +272,7 @@ _DYNAMIC_KEYS = {"name", "type", "steps", "duration", "dt", "integrator", "alpha
                  "low_rank_max", "joint_space", "initial_velocity", "initial_displacement", "loads", *AUTO_STEP_KEYS}
 #: dt = "auto" without dt_max (and without output.dt): the largest step (s)
 AUTO_DT_MAX_DEFAULT = 0.01
-#: dt = "auto": default relative local error per step (see solvers.dynamic.DynamicSolver._step_error)
+#: dt = "auto": default relative local error per step (see solvers.dynamic.integration.DynamicSolver._step_error)
 AUTO_TOLERANCE_DEFAULT = 1e-5
 
 
@@ -468,7 +468,7 @@ def _dynamic_stage(s, key, dim, index):
         raise SceneError(f"{key}.output", f"expected a table, e.g. {{ stride = 10 }}, got {o!r}")
     out_dt = None if "dt" not in o else _time(o["dt"], f"{key}.output.dt")
     if s["dt"] == "auto":
-        # error-controlled steps: dt_max / 2^k down to dt_min (solvers.dynamic.DynamicSolver._run_adaptive)
+        # error-controlled steps: dt_max / 2^k down to dt_min (solvers.dynamic.integration.DynamicSolver._run_adaptive)
         out["adaptive"] = True
         out["dt"] = _time(s.get("dt_max", out_dt or AUTO_DT_MAX_DEFAULT), f"{key}.dt_max")
         out["dt_min"] = None if "dt_min" not in s else _time(s["dt_min"], f"{key}.dt_min")

@@ -111,7 +111,7 @@ class AcousticStep:
             beta, gamma, am, af = self.coef
             A = ((1.0 - am) * self.G + (1.0 - af) * (gamma * h * self.L + beta * h * h * self.H)).tocsr()
             A = 0.5 * (A + A.T)
-            try:  # L D L^T with numba substitutions: about 2x faster per solve than SuperLU's (linear.py)
+            try:  # L D L^T with numba substitutions: about 2x faster per solve than SuperLU's (linear/direct.py)
                 fact = SymmetricFactorization(A.tocsr())
             except (SingularMatrix, ValueError):
                 fact = spla.splu(sp.csc_matrix(A))

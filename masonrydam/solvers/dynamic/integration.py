@@ -76,7 +76,7 @@ external (constant static loads), damping ``C v . du``, joints ``f_joint . du`` 
 K_continuum u), plus kinetic ``v M v / 2`` and continuum strain ``u K_c u / 2`` energies and the
 elastic energy stored in the joints (``(t_n^2/kn + |tau|^2/ks) A / 2`` over contact points). The joint
 work is split point by point into stored energy, friction (traction times plastic slip), bond breaks
-and contact events (:func:`~.dynamic_kernels.joint_step_energy`: a point that opens or closes within
+and contact events (:func:`~.kernels.joint_step_energy`: a point that opens or closes within
 a step leaves a remainder, the trapezoidal work of the jump of its contact traction, which is lost at
 an impact and *created* where a compressed point opens; Laursen & Chawla 1997, IJNME 40:863-886;
 Armero & Petocz 1998, CMAME 158:269-300), and the integrator's numerical dissipation (HHT,
@@ -142,7 +142,7 @@ Newton iteration takes the first that applies:
    Sherman-Morrison-Woodbury identity ``x = y - Z (I + E Z_JJ)^-1 E y_J`` with ``y = K_ref^-1 b``,
    ``Z = K_ref^-1 P`` (Golub & Van Loan, *Matrix Computations*, 4th ed. 2013, sec. 2.1.4) gives the
    exact Newton correction from the old factorization (numba kernels in
-   :mod:`.dynamic_kernels`, single-threaded and deterministic). Columns of Z are computed once per
+   :mod:`.kernels`, single-threaded and deterministic). Columns of Z are computed once per
    DOF (a multi-RHS substitution) and kept with their reference; the m x m factors are kept while
    (J, E) repeat (the same points sliding the same way). An update may ask for at most
    :func:`low_rank_column_budget` (``0.3 sqrt(n)``, about half a factorization) new columns; the
@@ -968,7 +968,7 @@ class DynamicSolver:
         self._recent_pg = _RecentProducts(2)
         self._joint_compliance = None
         self._joint_weight = None
-        # operands of the step residual kernels (dynamic_kernels.newmark_kinematics: the lumped mass
+        # operands of the step residual kernels (kernels.newmark_kinematics: the lumped mass
         # diagonal, or nothing for a consistent mass; no damping: a zero damping force)
         self._mass_diag = self.mdiag if self.mdiag is not None else np.zeros(0)
         self._zeros_free = np.zeros(self.n)
@@ -1179,6 +1179,7 @@ class DynamicSolver:
                 shift[~np.isin(np.arange(m.n_dof), free)] = 0.0
                 u = u + shift
                 f_int, K = m.evaluate(u, want_tangent=True)
+                m.commit()  # the displaced state is where the stage starts: its joint states (slip) included
             ag0 = self.ground_at(0.0)
             if a0 is None:
                 # (the pressure of a compressible reservoir is a state: its force at t0 is that of the
@@ -1223,7 +1224,7 @@ class DynamicSolver:
             if s.integrator == "central_difference":
                 st = self._run_explicit(stage, st)
             else:
-                # "auto": the all-stick matrices get the L D L^T with fast substitutions (linear.py)
+                # "auto": the all-stick matrices get the L D L^T with fast substitutions (linear/direct.py)
                 # nonlinear blocks change every entry of the tangent in every iteration: no low-rank
                 # updates (their search costs and never pays), and a new factorization reuses the
                 # symbolic analysis of the one it evicts (same pattern; PARDISO phase 22)
@@ -1251,7 +1252,7 @@ class DynamicSolver:
                         sum(js.XT.nbytes for js in self._js_by_h.values() if js.XT is not None))
                     self._js_by_h = {}  # their factors and columns: each stage sets up its own
         finally:
-            m.set_open_tangent(1e-6)  # the static solver's regularisation (solvers.static.OPEN_TANGENT_REGULAR)
+            m.set_open_tangent(1e-6)  # the static solver's regularisation (solvers.static.stepping.OPEN_TANGENT_REGULAR)
             self.stats.wall_time_s += time.perf_counter() - t_wall
         entry = {"stage": stage.name, "steps": self.stats.steps - steps_before, "dt": s.dt, "integrator": s.integrator,
                  "dt_critical": dtc}
@@ -1318,7 +1319,7 @@ class DynamicSolver:
         """Accumulate the works of the step prev -> st (Hughes 2000, sec. 9.1.4) and the balance error.
 
         Terms (J, cumulative): the trapezoidal works of the loads, damping and joints; kinetic, strain and
-        joint stored energies; the joint work split by :func:`~.dynamic_kernels.joint_step_energy` into
+        joint stored energies; the joint work split by :func:`~.kernels.joint_step_energy` into
         friction, bond breaks and contact events; and the integrator's numerical dissipation
         ``numerical = du . M (a0 + a1)/2 - dT - du . T_alpha`` with ``T_alpha = (am - 1/2) M da +
         (af - 1/2) (C dv + df - dp)``: the generalized-alpha equation of the step differs from the
@@ -1545,7 +1546,7 @@ class DynamicSolver:
           largest relative velocity so far. The displacement estimate above cannot see it: the velocity
           error it leaves grows into the displacement over the rest of the record;
         - events: the energy a contact event leaves unaccounted by the trapezoidal rule (the step's
-          change of ``joint_contact``, see :func:`~.dynamic_kernels.joint_step_energy`: a joint point
+          change of ``joint_contact``, see :func:`~.kernels.joint_step_energy`: a joint point
           that opens or closes within the step) over the largest energy term so far. It shrinks as the
           event is resolved (the penetration stepped over goes like h), so steps are refined where
           joints open and close; sliding that starts or stops shows in the first measure as the

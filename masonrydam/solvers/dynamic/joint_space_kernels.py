@@ -14,7 +14,7 @@ tangent of the joint law.
 All kernels are single-threaded and deterministic (docs/architecture.md) and return a status code.
 The LU of the capacitance matrix is LAPACK's ``getrf`` (called from :mod:`.joint_space`, pinned to
 one BLAS thread); the substitutions with its factors and the small LU of a Woodbury update are
-written out here (:func:`lu_solve_colmajor`, :func:`.dynamic_kernels.lu_solve_inplace`).
+written out here (:func:`lu_solve_colmajor`, :func:`.kernels.lu_solve_inplace`).
 """
 from __future__ import annotations
 

@@ -1,0 +1,280 @@
+"""Running an ensemble on dask.distributed, keeping every member's outcome, and the ensemble dataset.
+
+Each member (:func:`masonrydam.ensemble.members.enumerate_members`) is one task: it runs the member's scene
+(:func:`masonrydam.run`), measures its demands (:func:`masonrydam.ensemble.measures.member_measures`) and writes
+its outcome as one small JSON file, ``<output>.members/<member_id>.json``, atomically (written beside, then
+renamed). A member that fails (a mechanism or collapse, no convergence, a numerical failure) is an outcome,
+recorded with its status and reason, not a crash of the ensemble. A second call with the same file skips the
+members whose outcome is already there (the run is resumable after a kill). The dataset is assembled from the
+outcomes: dims ``record``, ``intensity``, the swept parameters (``p_<name>``) and ``sample``, one variable per
+demand with units and a long name, ``status`` and ``status_reason``, ``wall_time``; written to ``output`` (netCDF,
+readable by ``xarray.open_dataset``).
+
+Execution: a ``dask.distributed.LocalCluster`` of ``workers`` single-threaded processes by default, or the
+scheduler at ``scheduler`` (``tcp://host:8786``): a user who outgrows one machine changes one option. Each
+worker first runs a short version of the base scene (numba compiles or loads its cache once per worker, not
+inside the first member's wall time). Progress: members done, failed and the estimated time left.
+
+Why a folder of JSON outcomes and not one shared store: workers write concurrently and a killed ensemble must
+keep what finished; one file per member needs no locking and makes resuming a directory listing.
+"""
+from __future__ import annotations
+
+import json
+import math
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import MasonrydamError
+
+#: member status codes (the dataset's ``status``)
+STATUS_COMPLETED = 0
+STATUS_COLLAPSE = 1  # a mechanism or collapse: the structure found no equilibrium (an outcome)
+STATUS_NUMERICAL = 2  # no convergence or a numerical failure (excluded from fragility fits)
+STATUS_NOT_RUN = -1
+STATUS_MEANINGS = "0 completed, 1 collapse or mechanism, 2 numerical failure (no convergence), -1 not run"
+
+
+def members_dir(output: str | os.PathLike) -> Path:
+    """The folder of the members' outcomes beside ``output``."""
+    p = Path(output)
+    return p.with_name(p.name + ".members")
+
+
+def _write_json_atomic(path: Path, data: dict) -> None:
+    tmp = path.with_name(path.name + f".{os.getpid()}.tmp")
+    tmp.write_text(json.dumps(data, sort_keys=True, default=float))
+    os.replace(tmp, path)
+
+
+def run_member(member, store: str, measure, keep_history: bool = False) -> dict:
+    """Run one member (a task on a worker): its scene, its measures (``measure(ds) -> dict``), its outcome
+    written to ``store/<member_id>.json``; returns the outcome (dict: id, coords, status, reason, wall_time,
+    measures)."""
+    import contextlib
+    import io
+
+    import masonrydam
+    from ..errors import ConvergenceError, MechanismError, NumericalError
+    from ..scene.scene import Scene
+
+    store = Path(store)
+    history = store / f"{member.member_id}.nc" if keep_history else None
+    t0 = time.perf_counter()
+    status, reason, measures = STATUS_COMPLETED, "", {}
+    try:
+        with contextlib.redirect_stdout(io.StringIO()):
+            ds = masonrydam.run(Scene(member.scene, base_dir=member.base_dir), output=history)
+        measures = measure(ds)
+    except MechanismError as exc:
+        status, reason = STATUS_COLLAPSE, f"{type(exc).__name__}: {exc}"
+    except (ConvergenceError, NumericalError) as exc:
+        status, reason = STATUS_NUMERICAL, f"{type(exc).__name__}: {exc}"
+    out = {"member_id": member.member_id, "coords": member.coords, "status": status, "reason": reason,
+           "wall_time": time.perf_counter() - t0, "measures": measures}
+    _write_json_atomic(store / f"{member.member_id}.json", out)
+    return out
+
+
+def done_members(store: Path) -> dict[str, dict]:
+    """The outcomes already in ``store`` (member_id -> outcome); unreadable files are ignored (rerun)."""
+    out = {}
+    if not store.is_dir():
+        return out
+    for p in store.glob("*.json"):
+        try:
+            rec = json.loads(p.read_text())
+        except (OSError, ValueError):
+            continue
+        out[rec["member_id"]] = rec
+    return out
+
+
+def _warm(scene: dict, base_dir: str) -> float:
+    """A short run of ``scene`` on a worker (numba compiles or loads its cache); returns its wall time (s)."""
+    import contextlib
+    import io
+
+    import masonrydam
+    from ..scene.scene import Scene
+
+    t0 = time.perf_counter()
+    with contextlib.redirect_stdout(io.StringIO()):
+        try:
+            masonrydam.run(Scene(scene, base_dir=base_dir))
+        except masonrydam.MasonrydamError:
+            pass  # a warm-up that fails still compiled what it reached
+    return time.perf_counter() - t0
+
+
+def short_scene(scene: dict, steps: int = 3) -> dict:
+    """``scene`` with every dynamic stage cut to ``steps`` steps (for the warm-up)."""
+    import copy
+
+    s = copy.deepcopy(scene)
+    for st in s.get("stages", []):
+        if st.get("type") == "dynamic":
+            st.pop("duration", None)
+            st["steps"] = steps
+    return s
+
+
+def connect(workers: int | None = None, scheduler: str | None = None, timeout: float = 10.0):
+    """A ``dask.distributed.Client``: to ``scheduler`` (an address), or to a new LocalCluster of ``workers``
+    single-threaded worker processes. MasonrydamError naming ``--scheduler`` when it cannot be reached."""
+    from distributed import Client, LocalCluster
+
+    if scheduler:
+        try:
+            return Client(scheduler, timeout=timeout)
+        except (OSError, TimeoutError) as exc:
+            raise MasonrydamError(f"--scheduler {scheduler}: cannot reach the dask scheduler ({exc})") from None
+    n = workers or os.cpu_count() or 1
+    if n < 1:
+        raise MasonrydamError(f"--workers must be at least 1, got {workers}")
+    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None)
+    return Client(cluster)
+
+
+def run_members(members, store: Path, measure, client, keep_history=False, warm=None, progress=True) -> dict:
+    """Run the ``members`` not yet in ``store`` on ``client`` (one task each); returns every outcome in the
+    store (member_id -> outcome). ``warm``: ``(scene, base_dir)`` run once on each worker first."""
+    from distributed import as_completed
+
+    store.mkdir(parents=True, exist_ok=True)
+    done = done_members(store)
+    todo = [m for m in members if m.member_id not in done]
+    if progress:
+        print(f"ensemble: {len(members)} members, {len(members) - len(todo)} already in {store}, {len(todo)} to run",
+              file=sys.stderr, flush=True)
+    if not todo:
+        return done
+    if warm is not None:
+        client.run(_warm, *warm)
+    futures = [client.submit(run_member, m, str(store), measure, keep_history, key=f"member-{m.member_id}",
+                             pure=False) for m in todo]
+    t0 = time.perf_counter()
+    n_done = n_failed = 0
+    for fut in as_completed(futures):
+        rec = fut.result()
+        done[rec["member_id"]] = rec
+        n_done += 1
+        n_failed += rec["status"] != STATUS_COMPLETED
+        if progress:
+            left = (time.perf_counter() - t0) / n_done * (len(todo) - n_done)
+            print(f"\rensemble: {n_done}/{len(todo)} done, {n_failed} failed, about {_eta(left)} left   ",
+                  end="", file=sys.stderr, flush=True)
+    if progress:
+        print(file=sys.stderr, flush=True)
+    return done
+
+
+def assemble(outcomes: dict, axes: dict, measures_table: dict, attrs: dict, members: dict | None = None):
+    """The ensemble ``xarray.Dataset`` from the members' outcomes.
+
+    axes: ordered ``name -> (values, attrs)`` of the member coordinates (``record``, ``intensity``, ``p_<name>``,
+    ``sample``); measures_table: ``name -> (units, long_name)`` for the demand variables; members:
+    ``member_id -> Member`` whose ``position`` (axis -> index) places an outcome (else its coordinates do)."""
+    import xarray as xr
+
+    names = list(axes)
+    shape = tuple(len(axes[n][0]) for n in names)
+    index = {n: {_key(v): i for i, v in enumerate(axes[n][0])} for n in names}
+    data: dict[str, np.ndarray] = {}
+    status = np.full(shape, STATUS_NOT_RUN, dtype=np.int8)
+    reason = np.full(shape, "", dtype=object)
+    wall = np.full(shape, np.nan)
+    for rec in outcomes.values():
+        member = (members or {}).get(rec["member_id"])
+        try:
+            pos = (tuple(member.position[n] for n in names) if member is not None and hasattr(member, "position")
+                   else tuple(index[n][_key(rec["coords"][n])] for n in names))
+        except KeyError:
+            continue  # an outcome of another ensemble definition left in the store
+        status[pos] = rec["status"]
+        reason[pos] = rec["reason"]
+        wall[pos] = rec["wall_time"]
+        for k, v in rec["measures"].items():
+            if k not in data:
+                data[k] = np.full(shape, np.nan)
+            data[k][pos] = np.nan if v is None else float(v)
+    coords = {n: xr.Variable((n,), np.asarray(axes[n][0]), axes[n][1]) for n in names}
+    ds = xr.Dataset(coords=coords, attrs=attrs)
+    for k, arr in sorted(data.items()):
+        units, long_name = _measure_attrs(k, measures_table)
+        ds[k] = xr.Variable(names, arr, {"units": units, "long_name": long_name})
+    ds["status"] = xr.Variable(names, status, {"units": "1", "long_name": "member outcome: " + STATUS_MEANINGS,
+                                              "flag_values": np.array([-1, 0, 1, 2], np.int8),
+                                              "flag_meanings": "not_run completed collapse numerical_failure"})
+    ds["status_reason"] = xr.Variable(names, reason.astype(str), {"units": "1",
+                                                                  "long_name": "why the member failed (empty: it did not)"})
+    ds["wall_time"] = xr.Variable(names, wall, {"units": "s", "long_name": "wall time of the member's run"})
+    return ds
+
+
+def _key(v):
+    return v if isinstance(v, str) else round(float(v), 12)
+
+
+def _measure_attrs(name: str, table: dict) -> tuple[str, str]:
+    if name in table:
+        return table[name]
+    for pattern, attrs in table.items():  # patterns such as "peak_slip_<set>"
+        if "<" in pattern and name.startswith(pattern.split("<")[0]):
+            return attrs[0], attrs[1].replace(pattern[pattern.index("<"):], name[len(pattern.split("<")[0]):])
+    return "1", name.replace("_", " ")
+
+
+def write_dataset(ds, output: Path) -> None:
+    """Write ``ds`` to ``output`` (netCDF) atomically (a working file renamed over it)."""
+    tmp = output.with_name(output.name + ".partial")
+    ds.to_netcdf(tmp)
+    os.replace(tmp, output)
+
+
+def _eta(seconds: float) -> str:
+    return f"{seconds / 60:.1f} min" if seconds >= 120 else f"{seconds:.0f} s" if math.isfinite(seconds) else "?"
+
+
+def run_ensemble(path, output, workers: int | None = None, scheduler: str | None = None, progress: bool = True):
+    """Run the ensemble file ``path`` into ``output`` (netCDF; outcomes in ``<output>.members/``) and return the
+    dataset. ``workers`` / ``scheduler`` override the file's ``[execution]``; the members already in the store
+    are not run again."""
+    import functools
+
+    from .measures import MEASURES, member_measures
+    from .members import enumerate_members, member_axes, sample_coordinates
+    from .spec import load_spec
+
+    spec = load_spec(path)
+    members = enumerate_members(spec)
+    axes = member_axes(spec)
+    output = Path(output)
+    store = members_dir(output)
+    client = connect(workers if workers is not None else spec.workers,
+                     scheduler if scheduler is not None else spec.scheduler)
+    t0 = time.perf_counter()
+    try:
+        warm = (short_scene(members[0].scene), str(members[0].base_dir)) if members else None
+        outcomes = run_members(members, store, functools.partial(member_measures, spec=spec), client,
+                               keep_history=spec.history, warm=warm, progress=progress)
+        n_workers = len(client.scheduler_info().get("workers", {}))
+    finally:
+        client.close()
+        cluster = getattr(client, "cluster", None)
+        if cluster is not None:
+            cluster.close()
+    attrs = {"title": f"masonrydam ensemble: {spec.name}", "ensemble_file": str(path),
+             "base_scene": str(spec.scene_path), "members": len(members),
+             "workers": n_workers, "wall_time_s": round(time.perf_counter() - t0, 3),
+             "status_meanings": STATUS_MEANINGS}
+    ds = assemble({m.member_id: outcomes[m.member_id] for m in members if m.member_id in outcomes}, axes,
+                  MEASURES, attrs, {m.member_id: m for m in members})
+    for name, (values, a) in sample_coordinates(spec).items():  # the sampled values along ``sample``
+        ds = ds.assign_coords({name: ("sample", np.asarray(values, dtype=float), a)})
+    write_dataset(ds, output)
+    return ds

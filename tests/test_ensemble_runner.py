@@ -98,3 +98,18 @@ def test_report_from_the_command_line(ensemble, tmp_path, capsys):
     assert "peak_slip_joints" in text and (tmp_path / "rep_ida.png").exists()
     assert (tmp_path / "rep_fragility.csv").read_text().count("\n") == 3  # a header and one row per friction
     assert main(["ensemble-report", str(out), "--demand", "nothing"]) == 2
+
+
+def test_fixed_keys_of_every_member(tmp_path):
+    """``[ensemble] set``: scene keys changed for every member (here the stage's duration); a bad one is named."""
+    from masonrydam.errors import SceneError
+
+    (tmp_path / "base.toml").write_text(BASE)
+    path = tmp_path / "ens.toml"
+    path.write_text(ENSEMBLE.replace('scene = "base.toml"', 'scene = "base.toml"\nset = { "stages[1].duration" = 0.2 }'))
+    members = enumerate_members(load_spec(path))
+    assert {m.scene["stages"][1]["duration"] for m in members} == {0.2}
+    path.write_text(ENSEMBLE.replace('scene = "base.toml"', 'scene = "base.toml"\nset = { "stages[7].duration" = 0.2 }'))
+    with pytest.raises(SceneError) as err:
+        load_spec(path)
+    assert err.value.key == "ensemble.set.stages[7].duration"

@@ -52,7 +52,6 @@ from __future__ import annotations
 import copy
 import math
 import os
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -256,19 +255,10 @@ class EnsembleSpec:
 
 def load_ensemble(path) -> EnsembleSpec:
     """Read and check the ensemble file ``path`` (TOML)."""
+    from ..scene.scene import read_toml
+
     path = Path(path)
-    if not path.is_file():
-        what = "is a folder; give an ensemble TOML file" if path.is_dir() else "does not exist"
-        raise SceneError("ensemble", f"ensemble file '{path}' {what}")
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise SceneError("ensemble", f"cannot read '{path}': {exc.strerror or exc}") from None
-    except UnicodeDecodeError:
-        raise SceneError("ensemble", f"'{path}' is not a text file (not UTF-8); an ensemble is a TOML file") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise SceneError("ensemble", f"'{path}' is not valid TOML: {exc}") from None
-    return parse_ensemble(data, path.parent, path=path)
+    return parse_ensemble(read_toml(path, "ensemble", "an ensemble"), path.parent, path=path)
 
 
 def load_spec(path) -> EnsembleSpec:
@@ -358,7 +348,7 @@ def _base_scene(ens, ensemble_dir):
         try:
             sc = Scene(data, base_dir=p.parent, source=str(p))
         except SceneError as exc:
-            raise SceneError(f"ensemble.set", f"the base scene with these keys is not valid: {exc}") from None
+            raise SceneError("ensemble.set", f"the base scene with these keys is not valid: {exc}") from None
     return p, p.parent, sc.data, sc.normalized
 
 

@@ -27,19 +27,8 @@ class Scene:
     @classmethod
     def from_toml(cls, path: str | Path) -> "Scene":
         path = Path(path)
-        if not path.exists():
-            raise SceneError("scene", f"scene file '{path}' does not exist")
-        if path.is_dir():
-            raise SceneError("scene", f"'{path}' is a folder; give a scene TOML file (e.g. one in examples/)")
-        try:
-            data = tomllib.loads(path.read_text(encoding="utf-8"))
-        except OSError as exc:
-            raise SceneError("scene", f"cannot read '{path}': {exc.strerror or exc}") from None
-        except UnicodeDecodeError:
-            raise SceneError("scene", f"'{path}' is not a text file (not UTF-8); a scene is a TOML file") from None
-        except tomllib.TOMLDecodeError as exc:
-            raise SceneError("scene", f"'{path}' is not valid TOML: {exc}") from None
-        return cls(data, base_dir=path.parent, source=str(path))
+        return cls(read_toml(path, "scene", "a scene", "(e.g. one in examples/)"), base_dir=path.parent,
+                   source=str(path))
 
     @property
     def name(self) -> str:
@@ -55,6 +44,23 @@ class Scene:
             if p.exists():
                 h.update(p.read_bytes())
         return h.hexdigest()
+
+
+def read_toml(path: Path, key: str, what: str, hint: str = "") -> dict:
+    """The TOML file ``path`` as a dict; SceneError with ``key`` for a missing file, a folder, an unreadable
+    or non-UTF-8 file or invalid TOML (``what``: "a scene", "an ensemble"; ``hint`` follows the folder message)."""
+    if not path.exists():
+        raise SceneError(key, f"{what[what.index(' ') + 1:]} file '{path}' does not exist")
+    if path.is_dir():
+        raise SceneError(key, f"'{path}' is a folder; give {what} TOML file {hint}".rstrip())
+    try:
+        return tomllib.loads(path.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise SceneError(key, f"cannot read '{path}': {exc.strerror or exc}") from None
+    except UnicodeDecodeError:
+        raise SceneError(key, f"'{path}' is not a text file (not UTF-8); {what} is a TOML file") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise SceneError(key, f"'{path}' is not valid TOML: {exc}") from None
 
 
 def _path_parts(path: str) -> list:

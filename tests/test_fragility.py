@@ -391,6 +391,9 @@ def test_members_not_run_are_excluded_and_counted():
     assert rows[0].n[0] == 2 and "1 not run" in rows[0].note
     lines, _ = ensemble_report(ds, "peak_drift", LIMIT)
     assert any("1 not run (status -1, excluded)" in line for line in lines)
-    ds["status"] = (ds["status"].dims, np.where(status == 2, 3, status).astype(np.int8))
+    ds["status"] = (ds["status"].dims, np.where(status == 2, 3, status).astype(np.int8))  # an error: excluded too
+    rows3 = fragility_table(ds, "peak_drift", LIMIT)
+    assert (rows3[1].n_excluded, rows3[1].n_numerical) == (1, 1)
+    ds["status"] = (ds["status"].dims, np.where(status == 2, 7, status).astype(np.int8))
     with pytest.raises(FragilityError, match="status values"):
         fragility_table(ds)

@@ -50,7 +50,8 @@ G = 9.80665  # standard gravity, m/s2 (as masonrydam.records.readers.G, not impo
 
 STATUS_COMPLETED = 0
 STATUS_COLLAPSE = 1  # failed: mechanism / collapse
-STATUS_NUMERICAL = 2  # failed: numerical (non-convergence)
+STATUS_NUMERICAL = 2  # failed: numerical (non-convergence before the record)
+STATUS_ERROR = 3  # not run through: a model error or an exception (excluded, like numerical failures)
 STATUS_NOT_RUN = -1  # a member not run (yet): an interrupted ensemble
 
 #: dims that a fragility curve aggregates over (each element along them is one run)
@@ -431,9 +432,10 @@ def _check_ensemble(ds):
         if d not in dims:
             raise FragilityError(f"the ensemble dataset's 'status' has no '{d}' dim (dims: {list(dims)})")
     st = ds["status"].values
-    bad = ~np.isin(st, (STATUS_COMPLETED, STATUS_COLLAPSE, STATUS_NUMERICAL, STATUS_NOT_RUN))
+    bad = ~np.isin(st, (STATUS_COMPLETED, STATUS_COLLAPSE, STATUS_NUMERICAL, STATUS_ERROR, STATUS_NOT_RUN))
     if bad.any():
-        raise FragilityError(f"status values must be 0, 1, 2 or -1 (not run), found {sorted(set(np.unique(st[bad]).tolist()))}")
+        raise FragilityError(f"status values must be 0, 1, 2, 3 or -1 (not run), found "
+                             f"{sorted(set(np.unique(st[bad]).tolist()))}")
 
 
 def demand_variables(ds) -> list[str]:
@@ -620,7 +622,8 @@ def fragility_table(ds, demand: str | None = None, limit: float | None = None, l
     for params in parameter_combinations(ds):
         im, z, n, excluded = counts_per_intensity(failed, usable, params)
         st = _select(ds["status"], params).values
-        n_numerical, n_not_run = int((st == STATUS_NUMERICAL).sum()), int((st == STATUS_NOT_RUN).sum())
+        n_numerical = int(((st == STATUS_NUMERICAL) | (st == STATUS_ERROR)).sum())
+        n_not_run = int((st == STATUS_NOT_RUN).sum())
         keep = n > 0
         if not keep.any():
             fit = FragilityFit(median=None, dispersion=None, log_likelihood=None, level=float(level), median_ci=None,

@@ -86,12 +86,16 @@ def measure_names(demand_sets, sliding: bool = False) -> list:
     return out + ["energy_dissipated"]
 
 
-def _steps(ds):
-    """(positions of the dynamic steps, position of the reference step)."""
+def _steps(ds, stage=None):
+    """(positions of the dynamic steps, position of the reference step); with ``stage`` (the index of the
+    ensemble's dynamic stage in the scene's stages) only the steps from that stage on."""
     if "time" not in ds.variables:
         raise MasonrydamError("the result has no 'time': it has no dynamic stage to measure")
     t = np.asarray(ds["time"].values, dtype=float)
-    dyn = np.flatnonzero(np.isfinite(t))
+    finite = np.isfinite(t)
+    if stage is not None and "stage" in ds.variables:
+        finite &= np.asarray(ds["stage"].values) >= stage
+    dyn = np.flatnonzero(finite)
     if not len(dyn):
         raise MasonrydamError("the result has no dynamic steps (every 'time' is NaN): the run stopped before its "
                               "first dynamic stage, or the scene has none")
@@ -143,7 +147,7 @@ def member_measures(ds, spec=None, demand_sets=None) -> dict:
     every set of the result). See the module docstring for the exact definitions."""
     if demand_sets is None:
         demand_sets = list(spec.demand_sets) if spec is not None else _set_names(ds)
-    dyn, ref = _steps(ds)
+    dyn, ref = _steps(ds, None if spec is None else spec.stage)
     last = int(dyn[-1])
     out = {}
 

@@ -33,10 +33,15 @@ from ..errors import MasonrydamError
 
 #: member status codes (the dataset's ``status``)
 STATUS_COMPLETED = 0
-STATUS_COLLAPSE = 1  # a mechanism or collapse: the structure found no equilibrium (an outcome)
-STATUS_NUMERICAL = 2  # no convergence or a numerical failure (excluded from fragility fits)
+#: a mechanism or collapse: the structure found no equilibrium (an outcome). A dynamic stage that finds none
+#: within its step cuts is counted here too, as incremental dynamic analysis does (Vamvatsikos & Cornell 2002,
+#: Earthq. Eng. Struct. Dyn. 31(3): non-convergence taken as collapse); its reason says so
+STATUS_COLLAPSE = 1
+STATUS_NUMERICAL = 2  # a numerical failure before the record (a static stage), excluded from fragility fits
+STATUS_ERROR = 3  # the member could not be run (a model error, an exception): excluded, with its reason
 STATUS_NOT_RUN = -1
-STATUS_MEANINGS = "0 completed, 1 collapse or mechanism, 2 numerical failure (no convergence), -1 not run"
+STATUS_MEANINGS = ("0 completed, 1 collapse, mechanism or no convergence in the dynamic stage, 2 numerical failure "
+                   "before it, 3 error (not run through), -1 not run")
 
 
 def members_dir(output: str | os.PathLike) -> Path:
@@ -51,10 +56,24 @@ def _write_json_atomic(path: Path, data: dict) -> None:
     os.replace(tmp, path)
 
 
-def run_member(member, store: str, measure, keep_history: bool = False) -> dict:
+def fingerprint(member, settings: dict) -> str:
+    """A hash of what decides a member's outcome: its whole scene (base scene, fixed keys, record, intensity,
+    parameters) and the ensemble ``settings`` that shape its measures (demand sets, history). An outcome in the
+    store is reused only when its fingerprint is the member's (a changed base scene reruns the members)."""
+    import hashlib
+
+    text = json.dumps({"scene": member.scene, "base_dir": str(member.base_dir), **settings}, sort_keys=True,
+                      default=str)
+    return hashlib.sha1(text.encode()).hexdigest()[:16]
+
+
+def run_member(member, store: str, measure, keep_history: bool = False, fp: str = "",
+               dynamic_stage: str | None = None) -> dict:
     """Run one member (a task on a worker): its scene, its measures (``measure(ds) -> dict``), its outcome
-    written to ``store/<member_id>.json``; returns the outcome (dict: id, coords, status, reason, wall_time,
-    measures)."""
+    written to ``store/<member_id>.json``; returns the outcome (dict: member_id, fingerprint, coords, status,
+    reason, wall_time, measures). Every failure is an outcome: a mechanism, or no convergence in the dynamic
+    stage ``dynamic_stage``, is a collapse; other non-convergence a numerical failure; anything else an error
+    with its type and message."""
     import contextlib
     import io
 
@@ -70,12 +89,18 @@ def run_member(member, store: str, measure, keep_history: bool = False) -> dict:
         with contextlib.redirect_stdout(io.StringIO()):
             ds = masonrydam.run(Scene(member.scene, base_dir=member.base_dir), output=history)
         measures = measure(ds)
+        ds.close()
     except MechanismError as exc:
         status, reason = STATUS_COLLAPSE, f"{type(exc).__name__}: {exc}"
     except (ConvergenceError, NumericalError) as exc:
-        status, reason = STATUS_NUMERICAL, f"{type(exc).__name__}: {exc}"
-    out = {"member_id": member.member_id, "coords": member.coords, "status": status, "reason": reason,
-           "wall_time": time.perf_counter() - t0, "measures": measures}
+        in_record = dynamic_stage is not None and f"stage '{dynamic_stage}'" in str(exc)
+        status = STATUS_COLLAPSE if in_record else STATUS_NUMERICAL
+        reason = (("no convergence in the dynamic stage, counted as collapse: " if in_record else "")
+                  + f"{type(exc).__name__}: {exc}")
+    except Exception as exc:  # noqa: BLE001 (an outcome, not a crash of the ensemble)
+        status, reason = STATUS_ERROR, f"{type(exc).__name__}: {exc}"
+    out = {"member_id": member.member_id, "fingerprint": fp, "coords": member.coords, "status": status,
+           "reason": reason, "wall_time": time.perf_counter() - t0, "measures": measures}
     _write_json_atomic(store / f"{member.member_id}.json", out)
     return out
 
@@ -88,9 +113,9 @@ def done_members(store: Path) -> dict[str, dict]:
     for p in store.glob("*.json"):
         try:
             rec = json.loads(p.read_text())
-        except (OSError, ValueError):
+            out[rec["member_id"]] = rec
+        except (OSError, ValueError, KeyError, TypeError):
             continue
-        out[rec["member_id"]] = rec
     return out
 
 
@@ -125,29 +150,38 @@ def short_scene(scene: dict, steps: int = 3) -> dict:
 
 def connect(workers: int | None = None, scheduler: str | None = None, timeout: float = 10.0):
     """A ``dask.distributed.Client``: to ``scheduler`` (an address), or to a new LocalCluster of ``workers``
-    single-threaded worker processes. MasonrydamError naming ``--scheduler`` when it cannot be reached."""
+    single-threaded worker processes. MasonrydamError naming ``--scheduler`` (or ``[execution] scheduler``)
+    when it cannot be reached."""
     from distributed import Client, LocalCluster
 
     if scheduler:
         try:
             return Client(scheduler, timeout=timeout)
-        except (OSError, TimeoutError) as exc:
-            raise MasonrydamError(f"--scheduler {scheduler}: cannot reach the dask scheduler ({exc})") from None
+        except (OSError, TimeoutError, ValueError) as exc:
+            raise MasonrydamError(f"--scheduler {scheduler} ([execution] scheduler): cannot reach the dask "
+                                  f"scheduler ({exc})") from None
     n = workers or os.cpu_count() or 1
     if n < 1:
         raise MasonrydamError(f"--workers must be at least 1, got {workers}")
     cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None)
-    return Client(cluster)
+    try:
+        return Client(cluster)
+    except Exception:
+        cluster.close()
+        raise
 
 
-def run_members(members, store: Path, measure, client, keep_history=False, warm=None, progress=True) -> dict:
-    """Run the ``members`` not yet in ``store`` on ``client`` (one task each); returns every outcome in the
-    store (member_id -> outcome). ``warm``: ``(scene, base_dir)`` run once on each worker first."""
+def run_members(members, store: Path, measure, client, keep_history=False, warm=None, progress=True,
+                settings: dict | None = None, dynamic_stage: str | None = None) -> dict:
+    """Run the ``members`` whose outcome is not yet in ``store`` (or was obtained with another fingerprint,
+    :func:`fingerprint` of ``settings``) on ``client`` (one task each); returns every outcome in the store
+    (member_id -> outcome). ``warm``: ``(scene, base_dir)`` run once on each worker first."""
     from distributed import as_completed
 
     store.mkdir(parents=True, exist_ok=True)
     done = done_members(store)
-    todo = [m for m in members if m.member_id not in done]
+    fps = {m.member_id: fingerprint(m, settings or {}) for m in members}
+    todo = [m for m in members if done.get(m.member_id, {}).get("fingerprint") != fps[m.member_id]]
     if progress:
         print(f"ensemble: {len(members)} members, {len(members) - len(todo)} already in {store}, {len(todo)} to run",
               file=sys.stderr, flush=True)
@@ -155,12 +189,19 @@ def run_members(members, store: Path, measure, client, keep_history=False, warm=
         return done
     if warm is not None:
         client.run(_warm, *warm)
-    futures = [client.submit(run_member, m, str(store), measure, keep_history, key=f"member-{m.member_id}",
-                             pure=False) for m in todo]
+    futures = {client.submit(run_member, m, str(store), measure, keep_history, fps[m.member_id], dynamic_stage,
+                             key=f"member-{m.member_id}-{fps[m.member_id]}", pure=False): m for m in todo}
     t0 = time.perf_counter()
     n_done = n_failed = 0
     for fut in as_completed(futures):
-        rec = fut.result()
+        try:
+            rec = fut.result()
+        except Exception as exc:  # noqa: BLE001 (a worker that died, a cancelled task: an outcome too)
+            m = futures[fut]
+            rec = {"member_id": m.member_id, "fingerprint": fps[m.member_id], "coords": m.coords,
+                   "status": STATUS_ERROR, "reason": f"{type(exc).__name__}: {exc}", "wall_time": float("nan"),
+                   "measures": {}}
+            _write_json_atomic(store / f"{m.member_id}.json", rec)
         done[rec["member_id"]] = rec
         n_done += 1
         n_failed += rec["status"] != STATUS_COMPLETED
@@ -208,8 +249,8 @@ def assemble(outcomes: dict, axes: dict, measures_table: dict, attrs: dict, memb
         units, long_name = _measure_attrs(k, measures_table)
         ds[k] = xr.Variable(names, arr, {"units": units, "long_name": long_name})
     ds["status"] = xr.Variable(names, status, {"units": "1", "long_name": "member outcome: " + STATUS_MEANINGS,
-                                              "flag_values": np.array([-1, 0, 1, 2], np.int8),
-                                              "flag_meanings": "not_run completed collapse numerical_failure"})
+                                              "flag_values": np.array([-1, 0, 1, 2, 3], np.int8),
+                                              "flag_meanings": "not_run completed collapse numerical_failure error"})
     ds["status_reason"] = xr.Variable(names, reason.astype(str), {"units": "1",
                                                                   "long_name": "why the member failed (empty: it did not)"})
     ds["wall_time"] = xr.Variable(names, wall, {"units": "s", "long_name": "wall time of the member's run"})
@@ -260,8 +301,10 @@ def run_ensemble(path, output, workers: int | None = None, scheduler: str | None
     t0 = time.perf_counter()
     try:
         warm = (short_scene(members[0].scene), str(members[0].base_dir)) if members else None
+        settings = {"demand_sets": list(spec.demand_sets), "history": bool(spec.history)}
         outcomes = run_members(members, store, functools.partial(member_measures, spec=spec), client,
-                               keep_history=spec.history, warm=warm, progress=progress)
+                               keep_history=spec.history, warm=warm, progress=progress, settings=settings,
+                               dynamic_stage=spec.stage_name)
         n_workers = len(client.scheduler_info().get("workers", {}))
     finally:
         client.close()

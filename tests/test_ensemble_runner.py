@@ -139,3 +139,10 @@ def test_changed_outcomes_are_rerun_and_errors_are_outcomes(ensemble, tmp_path, 
                                                                                      "integrator": "leapfrog"}]})
     rec = run_member(bad, str(tmp_path), lambda d: {})
     assert rec["status"] == STATUS_ERROR and "integrator" in rec["reason"]
+
+
+def test_report_with_a_demand_and_no_limit_draws_its_ida(ensemble, tmp_path, capsys):
+    _, out, ds = ensemble
+    assert main(["ensemble-report", str(out), "--demand", "peak_slip_joints", "-o", str(tmp_path / "r")]) == 0
+    assert "collapse" in capsys.readouterr().out
+    assert main(["ensemble-report", str(out), "--limit", "0.01"]) == 2

@@ -266,7 +266,9 @@ def _cmd_ensemble_report(args):
                               f"{sorted(v for v in ds.data_vars if v not in ('status', 'status_reason', 'wall_time'))})")
     if args.limit is not None and args.demand is None:
         raise MasonrydamError("--limit needs --demand: the demand whose value above the limit is a failure")
-    lines, figures = ensemble_report(ds, args.demand, args.limit, level=args.level)
+    # --demand alone: the IDA curves of that demand, failure = collapse; with --limit: failure = demand > limit
+    failure_demand = args.demand if args.limit is not None else None
+    lines, figures = ensemble_report(ds, failure_demand, args.limit, level=args.level, ida_demand=args.demand)
     print("\n".join(lines))
     prefix = Path(args.output) if args.output else path.with_suffix("")
     for name, fig in figures.items():
@@ -274,7 +276,7 @@ def _cmd_ensemble_report(args):
         fig.savefig(target, dpi=110)
         print(f"wrote {target}")
     table = prefix.with_name(f"{prefix.name}_fragility.csv")
-    write_table_csv(fragility_table(ds, args.demand, args.limit, level=args.level), table)
+    write_table_csv(fragility_table(ds, failure_demand, args.limit, level=args.level), table)
     print(f"wrote {table}")
     return 0
 
@@ -433,7 +435,8 @@ def main(argv=None) -> int:
     en.set_defaults(func=_cmd_ensemble)
     er = sub.add_parser("ensemble-report", help="IDA and fragility curves of an ensemble dataset")
     er.add_argument("result", help="ensemble dataset written by `masonrydam ensemble`")
-    er.add_argument("--demand", help="demand variable (e.g. peak_slip_joints); default: collapse only")
+    er.add_argument("--demand", help="demand variable of the IDA curves (e.g. peak_slip_joints); with --limit also "
+                                     "the failure criterion (default: failure = collapse)")
     er.add_argument("--limit", type=float, help="limit of the demand (SI units): a member above it has failed")
     er.add_argument("--level", type=float, default=0.9, help="confidence level of the intervals (default 0.9)")
     er.add_argument("-o", "--output", help="prefix of the figures and the table (default: the dataset's name)")

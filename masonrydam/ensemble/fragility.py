@@ -630,8 +630,14 @@ def fragility_table(ds, demand: str | None = None, limit: float | None = None, l
                                dispersion_ci=None, n_runs=0, n_failures=0, n_levels=0, ci_method="",
                                identifiable=False, reason="no usable runs (numerical failures, not run, NaN demands)")
         else:
-            fit = fit_lognormal_fragility(im[keep], z[keep], n[keep], level=level, ci=ci, on_degenerate="flag",
-                                          units=units)
+            try:
+                fit = fit_lognormal_fragility(im[keep], z[keep], n[keep], level=level, ci=ci, on_degenerate="flag",
+                                              units=units)
+            except FragilityError as exc:  # a fit that does not converge: this row flagged, the report goes on
+                fit = FragilityFit(median=None, dispersion=None, log_likelihood=None, level=float(level),
+                                   median_ci=None, dispersion_ci=None, n_runs=int(n[keep].sum()),
+                                   n_failures=int(z[keep].sum()), n_levels=int(keep.sum()), ci_method="",
+                                   identifiable=False, reason=str(exc))
         rows.append(FragilityRow(params=params, fit=fit, n_runs=int(n.sum()), n_failures=int(z.sum()),
                                  n_excluded=excluded, n_numerical=n_numerical, n_not_run=n_not_run, units=units,
                                  im=im, failed=z, n=n))

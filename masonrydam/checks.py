@@ -81,9 +81,10 @@ def number(value, key, minimum=None, maximum=None, open_min=False):
     return v
 
 
-def seconds(value, key):
-    """A time in s (plain number, or a string '<number> s' / '<number> ms'); finite, > 0 and, for a
-    time step, in the plausible range of units.PLAUSIBLE."""
+def seconds(value, key, allow_zero=False):
+    """A time in s (plain number, or a string '<number> s' / '<number> ms'); finite, > 0 (>= 0 with
+    ``allow_zero``: a start time, a relaxation time that may be off) and, for a time step, in the
+    plausible range of units.PLAUSIBLE."""
     given = value
     if isinstance(value, str):
         parts = value.split()
@@ -94,4 +95,4 @@ def seconds(value, key):
             value = float(parts[0]) * factor
         except ValueError:
             raise SceneError(key, f"cannot read {value!r} as a time") from None
-    return plausible(number(value, key, 0.0, open_min=True), "time", key, given)
+    return plausible(number(value, key, 0.0, open_min=not allow_zero), "time", key, given)

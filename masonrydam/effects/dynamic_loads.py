@@ -41,10 +41,6 @@ PULSE_SHAPES = ("rectangular", "half_sine", "triangular")
 DYNAMIC_LOAD_TYPES = ("nodal", "traction", "edge_traction", "pressure", "edge_pressure")
 
 
-def _time_or_zero(value, key):
-    return 0.0 if value == 0 else _seconds(value, key)
-
-
 def normalize_time_function(d, key: str) -> dict:
     """The normalised time function of a dynamic load (see the module docstring); SceneError naming the key."""
     if not isinstance(d, dict) or "type" not in d:
@@ -76,13 +72,13 @@ def normalize_time_function(d, key: str) -> dict:
             raise SceneError(f"{key}.duration", "is required (s)")
         return {"type": "pulse", "shape": choice(d.get("shape", "rectangular"), PULSE_SHAPES, f"{key}.shape"),
                 "duration": _seconds(d["duration"], f"{key}.duration"),
-                "start": _time_or_zero(d.get("start", 0), f"{key}.start")}
+                "start": _seconds(d.get("start", 0), f"{key}.start", allow_zero=True)}
     check_keys(d, {"type", "frequency", "phase", "start", "duration"}, key)
     if "frequency" not in d:
         raise SceneError(f"{key}.frequency", "is required (Hz)")
     return {"type": "harmonic", "frequency": number(d["frequency"], f"{key}.frequency", 0.0, open_min=True),
             "phase": number(d.get("phase", 0.0), f"{key}.phase"),
-            "start": _time_or_zero(d.get("start", 0), f"{key}.start"),
+            "start": _seconds(d.get("start", 0), f"{key}.start", allow_zero=True),
             "duration": None if "duration" not in d else _seconds(d["duration"], f"{key}.duration")}
 
 

@@ -214,28 +214,27 @@ def run_members(members, store: Path, measure, client, keep_history=False, warm=
     return done
 
 
-def assemble(outcomes: dict, axes: dict, measures_table: dict, attrs: dict, members: dict | None = None):
-    """The ensemble ``xarray.Dataset`` from the members' outcomes.
+def assemble(outcomes: dict, axes: dict, attrs: dict, members: dict):
+    """The ensemble ``xarray.Dataset`` from the members' outcomes (member_id -> outcome).
 
     axes: ordered ``name -> (values, attrs)`` of the member coordinates (``record``, ``intensity``, ``p_<name>``,
-    ``sample``); measures_table: ``name -> (units, long_name)`` for the demand variables; members:
-    ``member_id -> Member`` whose ``position`` (axis -> index) places an outcome (else its coordinates do)."""
+    ``sample``); members: ``member_id -> Member``, whose ``position`` (axis -> index) places its outcome (an outcome
+    of no member is left out). The demand variables' units and long names are :func:`~.measures.measure_attrs`."""
     import xarray as xr
+
+    from .measures import measure_attrs
 
     names = list(axes)
     shape = tuple(len(axes[n][0]) for n in names)
-    index = {n: {_key(v): i for i, v in enumerate(axes[n][0])} for n in names}
     data: dict[str, np.ndarray] = {}
     status = np.full(shape, STATUS_NOT_RUN, dtype=np.int8)
     reason = np.full(shape, "", dtype=object)
     wall = np.full(shape, np.nan)
     for rec in outcomes.values():
-        member = (members or {}).get(rec["member_id"])
-        try:
-            pos = (tuple(member.position[n] for n in names) if member is not None and hasattr(member, "position")
-                   else tuple(index[n][_key(rec["coords"][n])] for n in names))
-        except KeyError:
+        member = members.get(rec["member_id"])
+        if member is None:
             continue  # an outcome of another ensemble definition left in the store
+        pos = tuple(member.position[n] for n in names)
         status[pos] = rec["status"]
         reason[pos] = rec["reason"]
         wall[pos] = rec["wall_time"]
@@ -246,8 +245,7 @@ def assemble(outcomes: dict, axes: dict, measures_table: dict, attrs: dict, memb
     coords = {n: xr.Variable((n,), np.asarray(axes[n][0]), axes[n][1]) for n in names}
     ds = xr.Dataset(coords=coords, attrs=attrs)
     for k, arr in sorted(data.items()):
-        units, long_name = _measure_attrs(k, measures_table)
-        ds[k] = xr.Variable(names, arr, {"units": units, "long_name": long_name})
+        ds[k] = xr.Variable(names, arr, measure_attrs(k))
     ds["status"] = xr.Variable(names, status, {"units": "1", "long_name": "member outcome: " + STATUS_MEANINGS,
                                               "flag_values": np.array([-1, 0, 1, 2, 3], np.int8),
                                               "flag_meanings": "not_run completed collapse numerical_failure error"})
@@ -255,19 +253,6 @@ def assemble(outcomes: dict, axes: dict, measures_table: dict, attrs: dict, memb
                                                                   "long_name": "why the member failed (empty: it did not)"})
     ds["wall_time"] = xr.Variable(names, wall, {"units": "s", "long_name": "wall time of the member's run"})
     return ds
-
-
-def _key(v):
-    return v if isinstance(v, str) else round(float(v), 12)
-
-
-def _measure_attrs(name: str, table: dict) -> tuple[str, str]:
-    if name in table:
-        return table[name]
-    for pattern, attrs in table.items():  # patterns such as "peak_slip_<set>"
-        if "<" in pattern and name.startswith(pattern.split("<")[0]):
-            return attrs[0], attrs[1].replace(pattern[pattern.index("<"):], name[len(pattern.split("<")[0]):])
-    return "1", name.replace("_", " ")
 
 
 def write_dataset(ds, output: Path) -> None:
@@ -287,7 +272,7 @@ def run_ensemble(path, output, workers: int | None = None, scheduler: str | None
     are not run again."""
     import functools
 
-    from .measures import MEASURES, member_measures
+    from .measures import member_measures
     from .members import enumerate_members, member_axes, sample_coordinates
     from .spec import load_spec
 
@@ -316,7 +301,7 @@ def run_ensemble(path, output, workers: int | None = None, scheduler: str | None
              "workers": n_workers, "wall_time_s": round(time.perf_counter() - t0, 3),
              "status_meanings": STATUS_MEANINGS}
     ds = assemble({m.member_id: outcomes[m.member_id] for m in members if m.member_id in outcomes}, axes,
-                  MEASURES, attrs, {m.member_id: m for m in members})
+                  attrs, {m.member_id: m for m in members})
     for name, (values, a) in sample_coordinates(spec).items():  # the sampled values along ``sample``
         ds = ds.assign_coords({name: ("sample", np.asarray(values, dtype=float), a)})
     write_dataset(ds, output)

@@ -184,12 +184,7 @@ def deformed_data(ds, step: int | None = -1, scale: float | None = None,
     k, scale, u = _step_and_scale(ds, step, scale, coords)
     deformed = coords + scale * u
 
-    model_cells = np.asarray(ds.block_cell_nodes.values).astype(np.int64)
-    cells = _positions(ds, model_cells)
-    complete = np.all((cells >= 0) | (model_cells < 0), axis=1)
-    if not complete.any():
-        raise MasonrydamError("--deformed: the result records none of the blocks' nodes; record them all "
-                              "([output] nodes = \"all\") and run the scene again")
+    cells, complete = _drawable_cells(ds)
     points, segments = _joint_segments(ds, coords, deformed)
     state = np.asarray(ds.joint_state.isel(step=k).values).astype(np.int8)[points]
     opening = np.asarray(ds.joint_opening.isel(step=k).values, dtype=float)[points]
@@ -226,6 +221,18 @@ def _joint_segments(ds, coords: np.ndarray, deformed: np.ndarray):
     start[1:][same_next] = halfway[same_next]
     end[:-1][same_next] = halfway[same_next]
     return points[order], np.stack([start, m, end], axis=1)
+
+
+def _drawable_cells(ds):
+    """``(cells, complete)``: the corner nodes of every block cell as positions along ``node`` (-1 where a node is
+    not recorded, or padding) and which cells have all their nodes recorded; MasonrydamError when none has."""
+    model_cells = np.asarray(ds.block_cell_nodes.values).astype(np.int64)
+    cells = _positions(ds, model_cells)
+    complete = np.all((cells >= 0) | (model_cells < 0), axis=1)
+    if not complete.any():
+        raise MasonrydamError("--deformed: the result records none of the blocks' nodes; record them all "
+                              "([output] nodes = \"all\") and run the scene again")
+    return cells, complete
 
 
 def _check_connectivity(ds):
@@ -310,12 +317,7 @@ def _slice_data(ds, step, scale, plane) -> DeformedSlice:
     cols = [c for c in range(3) if c != a]
     tol = 1e-9 * max(float(np.max(coords.max(axis=0) - coords.min(axis=0))), 1e-300)
 
-    model_cells = np.asarray(ds.block_cell_nodes.values).astype(np.int64)
-    cells = _positions(ds, model_cells)
-    complete = np.all((cells >= 0) | (model_cells < 0), axis=1)
-    if not complete.any():
-        raise MasonrydamError("--deformed: the result records none of the blocks' nodes; record them all "
-                              "([output] nodes = \"all\") and run the scene again")
+    cells, complete = _drawable_cells(ds)
     groups = np.asarray(ds.block_cell_group.values).astype(np.int64)
     types = json.loads(ds.block_cell_group.attrs.get("group_types", "[]"))
     cut_cells, polygon_nodes, polygon_t, edge_lengths = [], [], [], []

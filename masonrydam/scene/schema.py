@@ -183,8 +183,7 @@ def _joint(name, d):
         for k, dim_ in _COMPOSITE_KEYS.items():
             if k in d:
                 if dim_ == "time":  # relaxation_time: 0 is the inviscid law
-                    zero = d[k] == 0 or (isinstance(d[k], str) and d[k].split()[:1] in (["0"], ["0.0"]))
-                    out[k] = 0.0 if zero and not isinstance(d[k], bool) else _time(d[k], f"{key}.{k}")
+                    out[k] = _time(d[k], f"{key}.{k}", allow_zero=True)
                 else:
                     out[k] = _number(d[k], f"{key}.{k}") if dim_ is None else quantity(d[k], dim_, f"{key}.{k}")
         if "residual_shear_stiffness" in d:

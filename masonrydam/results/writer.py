@@ -60,7 +60,7 @@ ENERGY_VARIABLES = {
     "joint_stored": "change of elastic energy stored in the joints",
     "joint_dissipated": "energy dissipated in the joints (joint work minus the stored part)",
     "joint_friction": "energy dissipated by friction in the joints (traction times plastic slip)",
-    "joint_bond_break": "energy released where joint bonds broke (tension cut off, seed sec. 3.4)",
+    "joint_bond_break": "energy released where joint bonds broke (tension cut off, Tzamtzis & Asteris sec. 3.4)",
     "joint_contact": "energy lost at joint impacts (points closing), less that gained where compressed points "
                      "opened within a step (trapezoidal rule over a contact event)",
     "numerical": "numerical dissipation of the time integrator (HHT, generalized-alpha: high-frequency "

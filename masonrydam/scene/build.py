@@ -487,7 +487,7 @@ def effects(scene: dict, model: Model) -> list[str]:
     mc_sets = [g.name for g in model.igroups if g.law == "mohr_coulomb"]
     lin_sets = [g.name for g in model.igroups if g.law == "linear"]
     if mc_sets:
-        out.append("Mohr-Coulomb joints with slip, opening and re-contact (seed sec. 3.4): " + ", ".join(sorted(set(mc_sets))))
+        out.append("Mohr-Coulomb joints with slip, opening and re-contact (Tzamtzis & Asteris, sec. 3.4): " + ", ".join(sorted(set(mc_sets))))
     if lin_sets:
         out.append("linear elastic joints: " + ", ".join(sorted(set(lin_sets))))
     comp_sets = [g.name for g in model.igroups if g.law == "composite"]

@@ -8,11 +8,12 @@ steps and the mesh, for both vertical conditions of the top beam:
   peaks and slides on a bed joint at H = tan(phi) N (22.9 kN here).
 
 Each case is the example with ``--set`` style changes: ``relaxation_time`` of the three composite joint sets
-(0: the inviscid law), the push's ``steps`` and the generator's ``elements_per_unit``. The first case runs
-once before the timings (numba compilation and cache).
+(0: the inviscid law), the push's ``steps``, the generator's ``elements_per_unit`` and the push's ``control``
+(``load``: displacement control with the automatic switches; ``dissipation``: dissipation-based path
+following). The first case runs once before the timings (numba compilation and cache).
 
     python benchmarks/bench_eindhoven.py [--cases held constant] [--taus 0.25 0.025 0.0025 0]
-        [--steps 40 80] [--elements 2 4]
+        [--steps 40 80] [--elements 2 4] [--controls load dissipation]
 
 Prints per case: the peak force and its displacement, the force at 1, 2, 3 and 4 mm, how far the run got,
 the wall time of the run, and the peak's change against the case with the smallest relaxation time of the
@@ -43,8 +44,9 @@ EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "eindhoven_J4D.toml
 JOINT_SETS = ("bed_joints", "head_joints", "unit_cracks")
 
 
-def scene(case: str, tau_ms: float, steps: int, elements: int) -> dict:
+def scene(case: str, tau_ms: float, steps: int, elements: int, control: str = "load") -> dict:
     data = Scene.from_toml(EXAMPLE).data
+    set_key(data, "stages[1].control", control)
     for name in JOINT_SETS:
         if tau_ms > 0:
             set_key(data, f"joints.{name}.relaxation_time", f"{tau_ms:g} ms")
@@ -84,23 +86,24 @@ def main(argv=None) -> int:
     ap.add_argument("--taus", nargs="+", type=float, default=[0.25, 0.025, 0.0025, 0.0], help="relaxation times, ms")
     ap.add_argument("--steps", nargs="+", type=int, default=[40])
     ap.add_argument("--elements", nargs="+", type=int, default=[2])
+    ap.add_argument("--controls", nargs="+", default=["load"], choices=["load", "dissipation"])
     args = ap.parse_args(argv)
     with tempfile.TemporaryDirectory() as folder:
         warm = scene(args.cases[0], 0.025, 4, 2)
         set_key(warm, "stages[1].loads[0].value", ["0.4 mm"] if args.cases[0] == "constant" else ["0.4 mm", "0 mm"])
         run_case(warm, folder)
-        print(f"{'case':9s} {'tau ms':>7s} {'steps':>5s} {'el/unit':>7s} {'peak kN':>8s} {'at mm':>6s} "
+        print(f"{'case':9s} {'control':11s} {'tau ms':>7s} {'steps':>5s} {'el/unit':>7s} {'peak kN':>8s} {'at mm':>6s} "
               f"{'F(1) kN':>8s} {'F(2)':>6s} {'F(3)':>6s} {'F(4)':>6s} {'reached':>8s} {'wall s':>7s} "
               f"{'peak vs smallest tau':>21s}  status")
-        for case, steps, elements in itertools.product(args.cases, args.steps, args.elements):
+        for case, control, steps, elements in itertools.product(args.cases, args.controls, args.steps, args.elements):
             rows = []
             for tau in sorted(args.taus, reverse=True):
-                r = run_case(scene(case, tau, steps, elements), folder)
+                r = run_case(scene(case, tau, steps, elements, control), folder)
                 rows.append((tau, r))
             ref = rows[-1][1]["peak"]
             for tau, r in rows:
                 at = " ".join(f"{v / 1e3:6.2f}" for v in r["at"])
-                print(f"{case:9s} {tau:7.4g} {steps:5d} {elements:7d} {r['peak'] / 1e3:8.2f} {r['d_peak'] * 1e3:6.2f} "
+                print(f"{case:9s} {control:11s} {tau:7.4g} {steps:5d} {elements:7d} {r['peak'] / 1e3:8.2f} {r['d_peak'] * 1e3:6.2f} "
                       f"{at:>29s} {r['reached'] * 1e3:6.2f}mm {r['wall']:7.1f} {100 * (r['peak'] / ref - 1):+20.2f}%  "
                       f"{r['status']}", flush=True)
     return 0

@@ -71,6 +71,26 @@ def test_constant_load_j4d_slides_at_coulomb_friction():
     assert np.ptp(uy) <= 1e-4 * np.abs(uy).max()
 
 
+def test_dissipation_control_follows_the_displacement_controlled_j4d_curve():
+    """``control = "dissipation"`` (Verhoosel, Remmers & Gutierrez 2009): the same equilibrium path as
+    displacement control where that converges (constant vertical load: no snap-back at the wall's scale),
+    its steps placed by the joints' dissipation, and the joints' total dissipation reported."""
+    loads = {"stages[1].loads[0].components": ["x"], "stages[1].loads[0].value": ["4 mm"]}
+    curves = []
+    for control in ("load", "dissipation"):
+        ds = masonrydam.run(j4d(**loads, **{"stages[1].control": control}))
+        d, f, _ = pushover_data(ds)
+        curves.append((d, f, ds))
+    (d0, f0, _), (d1, f1, ds) = curves
+    assert d1[-1] == pytest.approx(d0[-1], abs=1e-9) and ds.attrs["completed"] == "true"
+    assert f1.max() == pytest.approx(f0.max(), rel=5e-3)
+    at = np.array([1e-3, 2e-3, 3e-3, 4e-3])
+    np.testing.assert_allclose(np.interp(at, d1, f1), np.interp(at, d0, f0), rtol=5e-3)
+    dissipated = json.loads(ds.attrs["per_stage"])[1]["joint_dissipation_J"]
+    # at least the friction work of the last 2 mm of sliding on the plateau (H ~ tan(phi) N)
+    assert dissipated > 2e-3 * TAN_PHI * P * LENGTH * THICKNESS
+
+
 def test_cyclic_j4d_hysteresis_plateaus_are_coulomb_friction():
     spec = importlib.util.spec_from_file_location("cyclic", EXAMPLES / "eindhoven_J4D_cyclic.py")
     mod = importlib.util.module_from_spec(spec)

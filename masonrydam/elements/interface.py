@@ -447,6 +447,45 @@ def interface_evaluate(
 
 
 @njit(cache=True)
+def interface_point_tangents(params_table, param_index, state_base, delta, dim, law, state_scratch, traction_scratch,
+                             tangent_out, info):
+    """The joint law's tangent ``dt/d delta`` (local axes) at every integration point, for the relative
+    displacements ``delta`` of the last evaluation from the state that evaluation read (``state_base``): the
+    same law call as :func:`interface_evaluate`, so the tangent is that of the assembled stiffness, kept per
+    point. Used by dissipation-based path following (:mod:`masonrydam.solvers.static.dissipation`), whose
+    constraint needs each point's dissipation derivative, not only the assembled matrix.
+
+    Parameters
+    ----------
+    params_table, param_index, state_base : as in :func:`interface_evaluate` (read only)
+    delta : float64 (n_elem, nip, dim)
+        Local relative displacements (m) of the last evaluation.
+    dim : int;  law : None or int, as in :func:`interface_evaluate`
+    state_scratch : float64 (n_elem, nip, n_state);  traction_scratch : float64 (n_elem, nip, dim)
+        Written (the trial state and tractions again); not read.
+    tangent_out : float64 (n_elem, nip, dim, dim), out
+        Local tangent (Pa/m), rows tractions ``[tau1, (tau2,) t_n]``, columns ``delta``.
+    info : int64 (1,), out
+        Failing element, where the status is not OK.
+
+    Returns the law's status (STATUS_OK when every point evaluated).
+    """
+    C = np.empty((dim, dim))
+    for e in range(delta.shape[0]):
+        pidx = param_index[e]
+        for g in range(delta.shape[1]):
+            status = joint_law_at(params_table, pidx, state_base, state_scratch, delta, traction_scratch, e, g,
+                                  dim, C, law)
+            if status != STATUS_OK:
+                info[0] = e
+                return status
+            for r in range(dim):
+                for c in range(dim):
+                    tangent_out[e, g, r, c] = C[r, c]
+    return STATUS_OK
+
+
+@njit(cache=True)
 def interface_geometry(coords, conn, N, dN, weights, points_out, frame_out, jw_out, info):
     """Integration-point coordinates, local frames and tributary lengths / areas.
 

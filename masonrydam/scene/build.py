@@ -437,6 +437,15 @@ def build_stages(scene: dict, mesh: Mesh, model: Model, base_dir: Path | None = 
             raise SceneError(f"stages[{i}].duration", f"joint sets {relaxing} have a relaxation_time (viscous "
                                                       "regularisation): a static stage needs its duration (s), the "
                                                       "time over which its load is applied")
+        if st.get("control") == "dissipation":
+            softening = [g for g in model.igroups if g.nonlinear]
+            large = [g.name for g in softening if g.kinematics != "small"]
+            if not softening or large:
+                raise SceneError(f"stages[{i}].control", "\"dissipation\" follows the energy dissipated by joints "
+                                 "that crack or slip with small displacements: " + (
+                                     f"joint sets {large} use large kinematics" if large else
+                                     "this model has no composite or Mohr-Coulomb joint set")
+                                 + " (use \"arc_length\")")
         stages.append(StaticStage(st["name"], st["steps"], force, presc, incr, supports.copy(), water=water,
                                   until_failure=st.get("until_failure", False), duration=st.get("duration", 0.0),
                                   control=st.get("control", "load")))
@@ -506,7 +515,9 @@ def effects(scene: dict, model: Model) -> list[str]:
     if controls:
         out.append("static path following: " + ", ".join(
             {"arc_length": "arc-length control (Crisfield's cylindrical)",
-             "opening": "indirect displacement control on the opening of the cracking joints (de Borst 1987)"}[c]
+             "opening": "indirect displacement control on the opening of the cracking joints (de Borst 1987)",
+             "dissipation": "dissipation-based arc-length control on the joints' plastic work (Gutierrez 2004; "
+                            "Verhoosel et al. 2009)"}[c]
             for c in controls))
     from ..effects import simulated
 

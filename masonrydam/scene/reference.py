@@ -430,7 +430,9 @@ _STATIC = Section("[[stages]] type = \"static\"", "A static stage applies its lo
     _k("stages[].loads", "list", "the stage's loads `[[stages.loads]]`", default=[]),
     _k("stages[].control", "string", "`load`: load and displacement control, switching to arc length where a step "
        "finds no equilibrium; `arc_length`: Crisfield's cylindrical arc length from the start; `opening`: indirect "
-       "displacement control on the opening of the cracking joints", default="load", choices=STATIC_CONTROLS),
+       "displacement control on the opening of the cracking joints; `dissipation`: every step dissipates a chosen "
+       "energy in the joints (the stage's own control until they dissipate)", default="load",
+       choices=STATIC_CONTROLS),
     _k("stages[].until_failure", "bool", "last stage only: run until no equilibrium is found and record the peak "
        "(a reservoir stage: the level reached)", default=False),
     _k("stages[].duration", "number", "physical time of the stage, for viscous blocks (Perzyna) or joints "

@@ -806,13 +806,16 @@ def print_summary(sc, mesh, model, eff, solver, stats, path, ds, file=None, dyn_
     lines += ["             " + e for e in eff[1:]]
     for ps in solver.stats.per_stage:
         lines.append(f"stage      : {ps['stage']}: {ps['steps']} steps, {ps['iterations']} Newton iterations, "
-                     f"{ps['step_cuts']} step cuts")
+                     f"{ps['step_cuts']} step cuts"
+                     + (f", the joints dissipated {ps['joint_dissipation_J']:.4g} J under dissipation control"
+                        if "joint_dissipation_J" in ps else ""))
     lines.append(f"solver     : {solver.s.method}, {stats['factorizations']} factorization(s) "
                  f"[{resolve_backend(solver.s.linear_solver, n_dof=model.n_dof, dim=model.dim)}; "
                  f"{stats['symbolic_analyses']} symbolic analyses], {stats['newton_iterations']} general Newton "
                  "iterations")
     if stats["arc_length_steps"]:
-        lines.append(f"arc length : {stats['arc_length_steps']} steps under arc-length control (Crisfield)"
+        lines.append(f"arc length : {stats['arc_length_steps']} steps under path-following control (Crisfield's arc, "
+                     "crack opening or joint dissipation)"
                      + (f", {stats['arc_length_switches']} stage(s) switched to it where load control stalled"
                         if stats["arc_length_switches"] else ""))
     if stats["joint_space_size"]:

@@ -63,8 +63,9 @@ def plain(value):
     return copy.deepcopy(value)
 
 
-#: static stage control: its own (load / displacement, arc-length where that stalls) or arc-length from the start
-STATIC_CONTROLS = ("load", "arc_length", "opening")
+#: static stage control: its own (load / displacement, arc-length where that stalls), arc-length from the start,
+#: indirect displacement control on the cracks' opening, or dissipation-based control
+STATIC_CONTROLS = ("load", "arc_length", "opening", "dissipation")
 
 
 def _model(d):

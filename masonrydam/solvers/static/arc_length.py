@@ -25,6 +25,16 @@ constraint, ``dlambda`` in closed form; de Borst 1987). Through a sharp snap-bac
 constraint also admits the elastic unloading branch and Newton wavers between the two, the opening of
 the softening joints still grows monotonically.
 
+With ``mode = "dissipation"`` every step dissipates a chosen energy in the joints instead
+(:mod:`.dissipation`; Gutierrez 2004; Verhoosel, Remmers & Gutierrez 2009): the stage's own control runs
+while the joints dissipate little; from the first step whose joints dissipate more than
+:data:`DISSIPATION_SWITCH` of the work done on the model in it (or where the stage's own control finds no
+equilibrium) each step dissipates ``Delta tau``, first that step's dissipation, then growing or shrinking
+with the iterations like the arc. A dissipation step that would raise the load factor by more than one
+nominal step (little is dissipated: elastic reloading, a joint that stopped) is taken under the stage's own
+control instead. The constraint is linear in the iteration's unknowns (``dlambda`` in closed form) and,
+unlike the cylindrical arc, has one root.
+
 The stage ends at ``lambda = 1`` (the last step is a load- or displacement-controlled one onto it), or
 when ``lambda`` has come back below 0 (the structure unloaded completely), or after
 ``MAX_STEPS_PER_NOMINAL`` times the stage's steps (an error unless the stage runs ``until_failure``: then the
@@ -49,7 +59,26 @@ OPENING_CODE, OPENING_SHEAR_CODE = 2, 4
 DL_MAX_FACTOR = 1e6
 #: iterations an arc-length step aims at (Delta l grows or shrinks with sqrt(target / iterations)); indirect
 #: displacement control of many softening joints takes more per step and aims higher, or its steps stall
-TARGET_ITERATIONS = {"cylindrical": 6, "opening": 10}
+TARGET_ITERATIONS = {"cylindrical": 6, "opening": 10, "dissipation": 8}
+#: dissipation control starts after the first step whose joints dissipate more than this part of the work done
+#: on the model in that step (before it the stage's own control follows an all but elastic path)
+DISSIPATION_SWITCH = 0.01
+#: a dissipation step is converged when its joints dissipate the target within this part of it (and the
+#: residual is within the solver's force tolerance)
+DISSIPATION_TOLERANCE = 0.05
+#: where the stage's own control stalls before any dissipation was measured, the first target is this part of
+#: the work done on the model in the stage so far
+DISSIPATION_START_FRACTION = 1e-3
+#: a dissipation step that raises the load factor by more than a nominal step is retried with a target this many
+#: times at most (in proportion), then taken under the stage's own control
+MAX_SHRINKS = 3
+#: a step under the stage's own control that dissipates more than this many targets passed over a snap-back
+#: (it found an equilibrium on another branch): dissipation control takes it instead
+JUMP_FACTOR = 4.0
+#: a dissipation step halves its target this many times at most before the stage's own control is tried with
+#: its cuts (a point where neither goes on is left to the other path-following controls, see
+#: :meth:`~.stepping.StaticSolver._run`)
+DISSIPATION_CUTS = 4
 
 
 class ArcLengthStage:
@@ -132,6 +161,8 @@ class ArcLengthStage:
         return float(np.linalg.norm(dq)) / self.st.steps, dq
 
     def run(self):
+        if self.mode == "dissipation":
+            return self._run_dissipation()
         s, m, free = self.solver.s, self.m, self.free
         if self.dl0 is None:
             self.dl0, dq = self._first_arc()
@@ -264,3 +295,190 @@ class ArcLengthStage:
             u_f = u_f + du
             lam = lam + dlam
         return False, None, None, s.max_iterations, None, None
+
+    # -- dissipation-based control ----------------------------------------------------------------------
+    def _run_dissipation(self):
+        """The stage under dissipation-based control (module docstring); returns (u, lam, steps).
+
+        Two ways of stepping, ``by_dissipation`` or not (the stage's own control, load-factor increment ``h``).
+        The stage's own control runs until a step dissipates (more than :data:`DISSIPATION_SWITCH` of its work)
+        or fails. Dissipation control then runs until a step would raise the load factor by more than a
+        nominal step even with a target shrunk in proportion (the joints dissipate next to nothing: elastic
+        reloading, the tail of an open crack); the stage's own control takes over again until it fails or
+        jumps (dissipates more than :data:`JUMP_FACTOR` targets in a step: it passed over a snap-back). Where
+        a dissipation step fails, a step under the stage's own control is tried once (accepted unless it
+        jumps), then the target is halved; below its least value the stage's own control takes over with its
+        own cuts, and where that fails too the stage ends with an error."""
+        from .dissipation import JointDissipation
+
+        s, m, free, st = self.solver.s, self.m, self.free, self.st
+        meter = JointDissipation(m, f"stage '{st.name}'")
+        u0, _ = self._state(self.u[free], self.lam)
+        f_int_prev, _ = m.evaluate(u0, want_tangent=False)  # (a converged state: its tractions start the step)
+        m.revert()
+        meter.mark_start()
+        nominal = 1.0 / st.steps
+        h_min = nominal / 2.0 ** s.max_step_cuts
+        h = nominal
+        by_dissipation = switched = False
+        tau = tau_min = None  # the target dissipation per step (J), once measured
+        d_prev = dlam_prev = None
+        work_stage = 0.0
+        shrinks, own_tried, failed_at, cuts_here = 0, False, None, 0
+        steps = 0
+        self.peak = self.lam
+        self.dissipated = 0.0
+
+        def own(target):
+            """A step onto ``target`` under the stage's own control: (ok, u_f, lam, its, f_int, f_ext, D)."""
+            ok, u1, its, f_int, f_ext = self._controlled(target)
+            if not ok:
+                m.revert()
+                return (False,) + (None,) * 6
+            return True, u1[free], target, its, f_int, f_ext, meter.of_step(want_gradient=False)[0]
+
+        while self.lam < 1.0 - 1e-12:
+            if steps >= MAX_STEPS_PER_NOMINAL * st.steps:
+                if st.until_failure:
+                    break
+                raise ConvergenceError(f"stage '{st.name}': dissipation control took {steps} steps and reached "
+                                       f"load factor {self.lam:.4g} of 1")
+            longest = min(nominal, 1.0 - self.lam)
+            if by_dissipation:
+                step = self._dissipation_step(meter, tau, d_prev, dlam_prev)
+                controlled = False
+                if step[0] and step[2] - self.lam > longest * (1.0 + 1e-9):
+                    # little dissipation per unit load, or past the end of the stage: a target smaller in
+                    # proportion; where that is below the least one, the stage's own control
+                    m.revert()
+                    smaller = 0.9 * tau * longest / (step[2] - self.lam)
+                    if smaller >= tau_min and shrinks < MAX_SHRINKS:
+                        tau, shrinks = smaller, shrinks + 1
+                    else:  # (a step from here is not sent back to dissipation control, whatever it dissipates)
+                        by_dissipation, h, failed_at = False, longest, self.lam
+                    continue
+                if not step[0]:
+                    m.revert()
+                    if not own_tried:  # the stage's own control, once, where it does not jump
+                        own_tried = True
+                        step = own(self.lam + min(h, longest))
+                        controlled = True
+                        if step[0] and step[6] > JUMP_FACTOR * tau:
+                            m.revert()
+                            step = (False,)
+                    if not step[0]:
+                        tau /= 2.0
+                        cuts_here += 1
+                        self.solver.stats.step_cuts += 1
+                        if tau < tau_min or cuts_here > DISSIPATION_CUTS:  # the stage's own control, with its cuts
+                            by_dissipation, tau, h, failed_at = False, 2.0 * tau, longest, self.lam
+                        continue
+            else:
+                step = own(self.lam + min(h, longest))
+                controlled = True
+                if step[0] and switched and step[6] > JUMP_FACTOR * tau and failed_at != self.lam:
+                    m.revert()  # it passed over a snap-back: dissipation control
+                    by_dissipation = True
+                    continue
+                if not step[0]:
+                    if failed_at == self.lam or (tau is None and not work_stage > 0):
+                        h /= 2.0
+                        self.solver.stats.step_cuts += 1
+                        if h < h_min:
+                            raise ConvergenceError(
+                                f"stage '{st.name}': no equilibrium beyond load factor {self.lam:.4g} under "
+                                "dissipation control or the stage's own control"
+                                + ("" if tau is not None else " (and no work done yet to set a dissipation target)"))
+                        continue
+                    if tau is None:  # stalled before the joints dissipated: a target from the work done so far
+                        tau = DISSIPATION_START_FRACTION * work_stage
+                        tau_min = tau / 2.0 ** s.max_step_cuts
+                    by_dissipation = switched = True
+                    continue
+            _, u_f, lam, its, f_int, f_ext, d = step
+            u_new, _ = self._state(u_f, lam)
+            work = 0.5 * float((f_int_prev + f_int) @ (u_new - self.u))
+            work_stage += work
+            steps += 1
+            dlam_prev, d_prev = lam - self.lam, d
+            self.prev = u_f - self.u[free]
+            self.u, self.lam = u_new, lam
+            self.peak = max(self.peak, lam)
+            self.dissipated += d
+            f_int_prev = f_int
+            m.commit()
+            meter.mark_start()
+            self.solver.stats.steps += 1
+            self.solver.stats.arc_length_steps += 1
+            self.record(self.u, lam, f_int, f_ext)
+            shrinks, own_tried, failed_at, cuts_here = 0, False, None, 0
+            if not controlled:
+                tau = float(np.clip(tau * math.sqrt(TARGET_ITERATIONS["dissipation"] / max(its, 1)),
+                                    tau / 2.0, 2.0 * tau))
+                # the stage's steps set the resolution: a step dissipates at most that part of the energy the
+                # model has taken in the stage (a long snap-back in few steps misses the curve's shape)
+                tau = max(min(tau, max(work_stage, self.dissipated) / st.steps), tau_min)
+            else:
+                h = min(nominal, 2.0 * h)
+                # (against the stage's work too: a step that does next to no work dissipates round-off)
+                if not switched and work_stage > 0 and d > DISSIPATION_SWITCH * max(abs(work), 1e-6 * work_stage):
+                    # the joints dissipate: from now on every step dissipates about as much
+                    tau, tau_min = d, d / 2.0 ** s.max_step_cuts
+                    by_dissipation = switched = True
+            if lam < 0.0:  # unloaded completely
+                break
+        return self.u, self.lam, steps
+
+    def _dissipation_step(self, meter, tau, d_prev, dlam_prev):
+        """One step whose joints dissipate ``tau`` (J): (ok, u_f, lambda, iterations, f_int, f_ext, D).
+        Each iteration solves ``K du_r = r``, ``K du_q = q`` and takes ``dlambda`` from the linearised
+        constraint ``D + g . (du_r + dlambda du_q) + dlambda g_p . Delta_p = tau`` (g: :meth:`JointDissipation
+        .of_step`'s gradient, its prescribed part moving with lambda). Where the linearisation cannot steer
+        the first iteration (every joint point elastic at the start, so g = 0, or a load-factor increment of
+        more than one nominal step), the predictor is the last step's increment scaled by ``tau / D_last``."""
+        s, m, free, st = self.solver.s, self.m, self.free, self.st
+        u0_f = self.u[free].copy()
+        u_f, lam = u0_f.copy(), self.lam
+        prescribed = st.prescribed
+        nominal = 1.0 / st.steps
+        ref0 = None
+        for it in range(s.max_iterations + 1):
+            u, f_ext = self._state(u_f, lam)
+            try:
+                f_int, K = m.evaluate(u, want_tangent=True)
+            except NumericalError:
+                if it == 0:
+                    raise
+                return False, None, None, it, None, None, None
+            r = (f_ext - f_int)[free]
+            if not np.isfinite(r).all():
+                raise NumericalError("NaN or infinity in the residual (check loads and stiffnesses)")
+            d, grad = meter.of_step(want_gradient=True)
+            rn = float(np.linalg.norm(r))
+            ref = max(float(np.linalg.norm(f_ext)), float(np.linalg.norm(f_int)), 1e-30)
+            ref0 = rn if ref0 is None else ref0
+            if it > 0 and rn <= s.force_tolerance * max(ref, ref0) and abs(d - tau) <= DISSIPATION_TOLERANCE * tau:
+                return True, u_f, lam, it, f_int, f_ext, d
+            if it == s.max_iterations:
+                break
+            try:
+                fact = self.solver._factorize(K)
+                du_r = fact.solve(r)
+                du_q = fact.solve(self._q())
+            except SingularMatrix:
+                return False, None, None, it, None, None, None
+            self.solver.stats.iterations += 1
+            g_q = float(grad[free] @ du_q) + float(grad[prescribed] @ self.delta_p[prescribed])
+            g_r = float(grad[free] @ du_r)
+            dlam = (tau - d - g_r) / g_q if g_q != 0.0 else math.inf
+            if it == 0 and not abs(dlam) <= nominal and self.prev is not None and dlam_prev is not None:
+                # (a last step that dissipated next to nothing: its own increment)
+                scale = tau / d_prev if d_prev is not None and d_prev > DISSIPATION_SWITCH * tau else 1.0
+                du, dlam = scale * self.prev, scale * dlam_prev
+            elif not math.isfinite(dlam):
+                return False, None, None, it, None, None, None
+            else:
+                du = du_r + dlam * du_q
+            u_f = u_f + du
+            lam = lam + dlam
+        return False, None, None, s.max_iterations, None, None, None

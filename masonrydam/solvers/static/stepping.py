@@ -96,7 +96,8 @@ class StaticStage:
     duration: float = 0.0
     #: "load": the stage's own control (loads, prescribed displacements), switching to arc-length control
     #: where a step finds no equilibrium after its cuts; "arc_length": arc-length control from the start
-    #: (:mod:`.arc_length`); "opening": indirect displacement control on the opening of the cracking joints
+    #: (:mod:`.arc_length`); "opening": indirect displacement control on the opening of the cracking joints;
+    #: "dissipation": every step dissipates a chosen energy in the joints (:mod:`.dissipation`)
     control: str = "load"
 
 
@@ -106,6 +107,11 @@ class StaticStage:
 #: in 5 general iterations, 2.2 s condensed with 1 954 columns; the 3D dam example, 39 744 equations:
 #: 63 s general, 20 s condensed)
 STATIC_COLUMNS_MIN_EQUATIONS = 20_000
+
+
+#: path-following controls (:mod:`.arc_length`), in the order tried where load control stalls: the global arc
+#: first, then the cracks' opening, then the joints' dissipation
+ARC_MODES = ("cylindrical", "opening", "dissipation")
 
 
 @dataclass
@@ -126,7 +132,7 @@ class SolveStats:
     step_cuts: int = 0
     line_searches: int = 0
     stabilized_steps: int = 0
-    arc_length_steps: int = 0  # steps taken under arc-length control
+    arc_length_steps: int = 0  # steps taken under path-following control (arc length, opening, dissipation)
     arc_length_switches: int = 0  # stages that switched to arc-length control where load control stalled
     wall_time_s: float = 0.0
     per_stage: list = field(default_factory=list)
@@ -482,7 +488,15 @@ class StaticSolver:
         # load-factor increment (which is an unknown of the step and may be negative past a peak)
         self.model.time_step = st.duration / st.steps
         arc = ArcLengthStage(self, st, u, u_start, f_base, lam, record, dl0=dl0, direction=direction, mode=mode)
-        u, lam, _ = arc.run()
+        try:
+            u, lam, _ = arc.run()
+        except (ConvergenceError, NumericalError, SingularMatrix) as exc:
+            exc.reached = (arc.u, arc.lam, arc.prev)  # its last converged (committed) state and increment
+            raise
+        finally:
+            if mode == "dissipation":  # the joints' plastic work over the stage's steps (J)
+                stage_stats["joint_dissipation_J"] = (stage_stats.get("joint_dissipation_J", 0.0)
+                                                      + getattr(arc, "dissipated", 0.0))
         if lam < 1.0 - 1e-12:  # the path peaked below 1 and came down: the stage's end is not on it
             what = (f"arc-length control: the load factor peaked at {arc.peak:.4g} and came back to {lam:.4g} "
                     "along the descending branch")
@@ -493,6 +507,21 @@ class StaticSolver:
             self.stats.per_stage.append(dict(stage_stats, iterations=self.stats.iterations
                                              + self.stats.joint_space_iterations))
         return u, max(lam, 1.0) if lam >= 1.0 - 1e-12 else lam
+
+    def _other_arcs(self, si, st, u, u_start, f_base, lam, stage_stats, last_du, modes):
+        """The stage from ``(u, lam)`` (a converged, committed state; ``last_du`` its last free-DOF increment)
+        under the path-following controls ``modes`` in turn, the first that gets through: (u, lam, None), or
+        (u, lam, failures) unchanged where none does (each failure a line)."""
+        failures = []
+        for mode in modes:
+            try:
+                u_end, lam_end = self._arc_length(si, st, u, u_start, f_base, lam, stage_stats,
+                                                  float(np.linalg.norm(last_du)) / 2.0, last_du, mode)
+                return u_end, lam_end, None
+            except (ConvergenceError, NumericalError, SingularMatrix) as exc:
+                self.model.revert()
+                failures.append(f"{mode}: {exc}")
+        return u, lam, failures
 
     def _line_search(self, u, du, r0, f_ext, max_tries=6):
         """Secant line search on g(s) = du . r(u + s du) (Crisfield 1991, sec. 9.3.1)."""
@@ -559,9 +588,23 @@ class StaticSolver:
             stage_stats = {"stage": st.name, "steps": 0, "iterations": 0, "step_cuts": 0}
             it_before = self.stats.iterations + self.stats.joint_space_iterations
             last_du = None  # the free-DOF increment of the last converged step (arc-length's direction)
-            if st.control in ("arc_length", "opening"):
-                u, lam = self._arc_length(si, st, u, u_start, f_base, lam, stage_stats, None, None,
-                                          "cylindrical" if st.control == "arc_length" else "opening")
+            if st.control in ("arc_length", "opening", "dissipation"):
+                mode = {"arc_length": "cylindrical"}.get(st.control, st.control)
+                try:
+                    u, lam = self._arc_length(si, st, u, u_start, f_base, lam, stage_stats, None, None, mode)
+                except (ConvergenceError, NumericalError, SingularMatrix) as exc:
+                    u_r, lam_r, du_r = getattr(exc, "reached", (None, lam, None))
+                    if u_r is None or du_r is None or not float(np.linalg.norm(du_r)) > 0:
+                        raise
+                    # where the chosen control cannot go on, the other path-following controls from its last
+                    # converged state (as where load control stalls)
+                    m.revert()
+                    self.stats.arc_length_switches += 1
+                    u, lam, failures = self._other_arcs(si, st, u_r, u_start, f_base, lam_r, stage_stats, du_r,
+                                                        [x for x in ARC_MODES if x != mode])
+                    if failures is not None:
+                        raise ConvergenceError(f"{exc}; from load factor {lam_r:.4g} the other path-following "
+                                               "controls did not get through either (" + "; ".join(failures) + ")")
                 if self.limit is not None:
                     return u
             while lam < 1.0 - 1e-12:
@@ -630,20 +673,12 @@ class StaticSolver:
                     # load control stalled (a limit point, a snap): the rest of the stage under arc-length
                     # control from the last converged state, with the arc of its last increment
                     self.stats.arc_length_switches += 1
-                    tried = []
-                    for mode in ("cylindrical", "opening"):  # the global arc first, then the cracks' opening
-                        try:
-                            u, lam = self._arc_length(si, st, u, u_start, f_base, lam, stage_stats,
-                                                      float(np.linalg.norm(last_du)) / 2.0, last_du, mode)
-                            break
-                        except (ConvergenceError, NumericalError, SingularMatrix) as exc:
-                            m.revert()
-                            tried.append(f"{mode}: {exc}")
-                    else:
+                    u, lam, tried = self._other_arcs(si, st, u, u_start, f_base, lam, stage_stats, last_du,
+                                                     ARC_MODES)
+                    if tried is not None:
                         hint += (f"; arc-length control from load factor {lam:.4g} did not get through either ("
                                  + "; ".join(tried) + ")")
-                        tried = None
-                    if tried is not None:
+                    else:
                         if self.limit is not None:
                             return u
                         cuts = 0

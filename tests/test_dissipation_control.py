@@ -1,0 +1,122 @@
+"""Dissipation-based path following (``control = "dissipation"``, issue 18 sec. 2): every step dissipates a
+chosen energy in the joints (Gutierrez 2004, Commun. Numer. Meth. Eng. 20:19-29; Verhoosel, Remmers &
+Gutierrez 2009, Int. J. Numer. Meth. Eng. 77:1290-1321), the joints' plastic work measured point by point
+(masonrydam/solvers/static/dissipation.py).
+
+Closed forms:
+- a joint's plastic work: its traction on the plastic relative displacement ``p = delta - C_e t``; an
+  elastic step (unloading) dissipates nothing;
+- a bar pulled across one softening joint (tests/test_composite_joints.py): on the softening branch the
+  pulled end is at ``u(sigma) = sigma L / E + sigma / kn - (GfI / ft) ln(sigma / ft)``, a snap-back for
+  L = 10 m; once the crack is open the joint has dissipated its fracture energy, ``GfI A`` (Lourenco 1996,
+  ch. 4: exponential softening, ``int t dw_p = GfI``).
+"""
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import masonrydam
+from masonrydam.errors import SceneError
+from masonrydam.scene.build import build_mesh, build_model
+from masonrydam.scene.scene import Scene
+from masonrydam.solvers.static.dissipation import JointDissipation
+
+from test_composite_joints import E, FT, GF, KN, bar, end_curve
+
+
+def bar_model(joint=None):
+    sc = Scene(bar(0.1, 1e-4, joint=joint))
+    mesh = build_mesh(sc.normalized, sc.base_dir)
+    return build_model(sc.normalized, mesh), mesh
+
+
+def moved(model, mesh, slide, opening):
+    """Displacements with the upper block moved by (slide, opening) over the lower one (m)."""
+    u = np.zeros(model.n_dof)
+    g = model.igroups[0]
+    upper = mesh.points[:, 1] > 0.1 + 1e-9
+    upper[g.conn[:, g.conn.shape[1] // 2:]] = True  # the joint's top face: the upper block's nodes
+    u[np.flatnonzero(upper) * 2] = slide
+    u[np.flatnonzero(upper) * 2 + 1] = opening
+    return u
+
+
+def dissipation_at(model, meter, u, want_gradient=True):
+    model.evaluate(u, want_tangent=False)
+    return meter.of_step(want_gradient)
+
+
+@pytest.mark.parametrize("slide", [0.0, 2e-6, 4e-5])
+def test_dissipation_gradient_equals_finite_differences(slide):
+    """Cracking (and sliding) joint points: the assembled derivative of the step's dissipation equals central
+    differences of the dissipation itself, along the displacements of every node."""
+    model, mesh = bar_model({"cohesion": 0.5e6})
+    meter = JointDissipation(model, "test")
+    u0 = moved(model, mesh, 0.5 * slide, 1.5 * FT / KN)  # past the peak: a crack that has begun
+    model.evaluate(u0, want_tangent=False)
+    model.commit()
+    meter.mark_start()
+    u1 = moved(model, mesh, slide, 1.5 * FT / KN + 3e-6)
+    d, grad = dissipation_at(model, meter, u1)
+    assert d > 0
+    rng = np.random.default_rng(7)
+    for _ in range(3):
+        v = rng.standard_normal(model.n_dof) * 1e-6
+        h = 1e-4
+        dp, _ = dissipation_at(model, meter, u1 + h * v, False)
+        dm, _ = dissipation_at(model, meter, u1 - h * v, False)
+        assert float(grad @ v) == pytest.approx((dp - dm) / (2 * h), rel=1e-5)
+
+
+def test_elastic_step_dissipates_nothing_and_plastic_work_is_the_closed_form():
+    model, mesh = bar_model()
+    meter = JointDissipation(model, "test")
+    area = 0.1 * 1.0
+    w0 = 1.5 * FT / KN
+    model.evaluate(moved(model, mesh, 0.0, w0), want_tangent=False)
+    model.commit()
+    meter.mark_start()
+    t0 = model.igroups[0].traction[..., -1].mean()
+    # unloading: elastic, no dissipation, no gradient
+    d, grad = dissipation_at(model, meter, moved(model, mesh, 0.0, 0.5 * w0))
+    assert abs(d) <= 1e-12 * FT * w0 * area and np.abs(grad).max() <= 1e-9 * FT * area
+    # a small opening increment: the trapezoid of the traction over the plastic opening
+    w1 = w0 + 1e-7
+    d, _ = dissipation_at(model, meter, moved(model, mesh, 0.0, w1))
+    t1 = model.igroups[0].traction[..., -1].mean()
+    p0, p1 = w0 - t0 / KN, w1 - t1 / KN
+    exact = GF * (np.exp(-FT * p0 / GF) - np.exp(-FT * p1 / GF)) * area  # int t dw_p of the exponential law
+    assert d == pytest.approx(0.5 * (t0 + t1) * (p1 - p0) * area, rel=1e-12)
+    assert d == pytest.approx(exact, rel=1e-6)
+
+
+def test_snap_back_followed_by_dissipation_control():
+    """L = 10 m (a snap-back): the traced branch is the closed form, and the joint's dissipation adds up to
+    GfI A, converging as the stage's steps (its resolution) grow."""
+    L, width = 10.0, 0.5
+    errors = []
+    for steps in (20, 80):
+        ds = masonrydam.run(bar(L, 1.2e-3, control="dissipation", width=width, steps=steps))
+        u, sigma = end_curve(ds, L + width, width)
+        k = int(np.argmax(sigma))
+        post = np.arange(len(u)) > k
+        assert post.sum() >= 10 and u[post].min() < u[k] - 5e-5  # the end moved back: traced
+        closed = sigma[post] * (L + width) / E + sigma[post] / KN - (GF / FT) * np.log(sigma[post] / FT)
+        np.testing.assert_allclose(u[post], closed, rtol=0, atol=1e-9)
+        assert u[-1] == pytest.approx(1.2e-3, rel=1e-9) and ds.attrs["completed"] == "true"
+        dissipated = json.loads(ds.attrs["per_stage"])[0]["joint_dissipation_J"]
+        errors.append(abs(dissipated / (GF * width) - 1.0))
+        assert "dissipation-based arc-length" in ds.attrs["simulated_effects"]
+    assert errors[1] < 0.005 and errors[1] < 0.25 * errors[0]
+
+
+def test_dissipation_control_needs_softening_joints():
+    s = bar(0.1, 1e-4, control="dissipation", joint={"law": "linear"})
+    for k in ("tensile_strength", "mode_I_fracture_energy", "cohesion", "friction_angle", "mode_II_fracture_energy"):
+        s["joints"]["joints"].pop(k)
+    with pytest.raises(SceneError) as err:
+        masonrydam.run(s)
+    assert err.value.key == "stages[0].control" and "no composite or Mohr-Coulomb" in str(err.value)

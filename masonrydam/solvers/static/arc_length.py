@@ -231,38 +231,53 @@ class ArcLengthStage:
         ok, u_new, its, f_int = self.solver._newton_iterations(u, f_ext)
         return ok, u_new, its, f_int, f_ext
 
+    def _iterate(self, u_f, lam, it):
+        """The residual at an iterate of a step: (f_int, K, f_ext, r, |r|, force scale), or None where a law
+        gives up at an iterate past the first (one far off the path: the step is cut)."""
+        u, f_ext = self._state(u_f, lam)
+        try:
+            f_int, K = self.m.evaluate(u, want_tangent=True)
+        except NumericalError:
+            if it == 0:
+                raise
+            return None
+        r = (f_ext - f_int)[self.free]
+        if not np.isfinite(r).all():
+            raise NumericalError("NaN or infinity in the residual (check loads and stiffnesses)")
+        ref = max(float(np.linalg.norm(f_ext)), float(np.linalg.norm(f_int)), 1e-30)
+        return f_int, K, f_ext, r, float(np.linalg.norm(r)), ref
+
+    def _solve_pair(self, K, r):
+        """``(K^-1 r, K^-1 q)`` with one factorization (q: :meth:`_q`), or None where K is singular."""
+        try:
+            fact = self.solver._factorize(K)
+            pair = fact.solve(r), fact.solve(self._q())
+        except SingularMatrix:
+            return None
+        self.solver.stats.iterations += 1
+        return pair
+
     def _step(self, dl):
         """One arc-length step of length ``dl``: (ok, u_f, lambda, iterations, f_int, f_ext)."""
-        s, m, free = self.solver.s, self.m, self.free
+        s, free = self.solver.s, self.free
         u0_f = self.u[free].copy()
         u_f, lam = u0_f.copy(), self.lam
         Du = np.zeros_like(u0_f)
         ref0 = None
         for it in range(s.max_iterations + 1):
-            u, f_ext = self._state(u_f, lam)
-            try:
-                f_int, K = m.evaluate(u, want_tangent=True)
-            except NumericalError:
-                if it == 0:
-                    raise
+            at = self._iterate(u_f, lam, it)
+            if at is None:
                 return False, None, None, it, None, None  # an iterate far off the path: the arc is cut
-            r = (f_ext - f_int)[free]
-            if not np.isfinite(r).all():
-                raise NumericalError("NaN or infinity in the residual (check loads and stiffnesses)")
-            rn = float(np.linalg.norm(r))
-            ref = max(float(np.linalg.norm(f_ext)), float(np.linalg.norm(f_int)), 1e-30)
+            f_int, K, f_ext, r, rn, ref = at
             ref0 = rn if ref0 is None else ref0
             if it > 0 and rn <= s.force_tolerance * max(ref, ref0):
                 return True, u_f, lam, it, f_int, f_ext
             if it == s.max_iterations:
                 break
-            try:
-                fact = self.solver._factorize(K)
-                du_r = fact.solve(r)
-                du_q = fact.solve(self._q())
-            except SingularMatrix:
+            pair = self._solve_pair(K, r)
+            if pair is None:
                 return False, None, None, it, None, None
-            self.solver.stats.iterations += 1
+            du_r, du_q = pair
             if self.mode == "opening":  # linear constraint c . Delta u = dl: dlambda in closed form
                 cq = float(self.c @ du_q)
                 if cq == 0.0:
@@ -436,38 +451,27 @@ class ArcLengthStage:
         .of_step`'s gradient, its prescribed part moving with lambda). Where the linearisation cannot steer
         the first iteration (every joint point elastic at the start, so g = 0, or a load-factor increment of
         more than one nominal step), the predictor is the last step's increment scaled by ``tau / D_last``."""
-        s, m, free, st = self.solver.s, self.m, self.free, self.st
+        s, free, st = self.solver.s, self.free, self.st
         u0_f = self.u[free].copy()
         u_f, lam = u0_f.copy(), self.lam
         prescribed = st.prescribed
         nominal = 1.0 / st.steps
         ref0 = None
         for it in range(s.max_iterations + 1):
-            u, f_ext = self._state(u_f, lam)
-            try:
-                f_int, K = m.evaluate(u, want_tangent=True)
-            except NumericalError:
-                if it == 0:
-                    raise
+            at = self._iterate(u_f, lam, it)
+            if at is None:
                 return False, None, None, it, None, None, None
-            r = (f_ext - f_int)[free]
-            if not np.isfinite(r).all():
-                raise NumericalError("NaN or infinity in the residual (check loads and stiffnesses)")
+            f_int, K, f_ext, r, rn, ref = at
             d, grad = meter.of_step(want_gradient=True)
-            rn = float(np.linalg.norm(r))
-            ref = max(float(np.linalg.norm(f_ext)), float(np.linalg.norm(f_int)), 1e-30)
             ref0 = rn if ref0 is None else ref0
             if it > 0 and rn <= s.force_tolerance * max(ref, ref0) and abs(d - tau) <= DISSIPATION_TOLERANCE * tau:
                 return True, u_f, lam, it, f_int, f_ext, d
             if it == s.max_iterations:
                 break
-            try:
-                fact = self.solver._factorize(K)
-                du_r = fact.solve(r)
-                du_q = fact.solve(self._q())
-            except SingularMatrix:
+            pair = self._solve_pair(K, r)
+            if pair is None:
                 return False, None, None, it, None, None, None
-            self.solver.stats.iterations += 1
+            du_r, du_q = pair
             g_q = float(grad[free] @ du_q) + float(grad[prescribed] @ self.delta_p[prescribed])
             g_r = float(grad[free] @ du_r)
             dlam = (tau - d - g_r) / g_q if g_q != 0.0 else math.inf

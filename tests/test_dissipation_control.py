@@ -19,16 +19,24 @@ import numpy as np
 import pytest
 
 import masonrydam
-from masonrydam.errors import SceneError
+from masonrydam.errors import ConvergenceError, SceneError
 from masonrydam.scene.build import build_mesh, build_model
 from masonrydam.scene.scene import Scene
+from masonrydam.solvers.static import arc_length
 from masonrydam.solvers.static.dissipation import JointDissipation
 
 from test_composite_joints import E, FT, GF, KN, bar, end_curve
 
 
-def bar_model(joint=None):
-    sc = Scene(bar(0.1, 1e-4, joint=joint))
+MOHR_COULOMB = {"law": "mohr_coulomb", "normal_stiffness": KN, "shear_stiffness": KN / 2, "cohesion": 0.0,
+                "friction_angle": 30.0, "tensile_strength": 0.0}
+
+
+def bar_model(joint=None, law_spec=None):
+    s = bar(0.1, 1e-4, joint=joint)
+    if law_spec is not None:
+        s["joints"]["joints"] = dict(law_spec)
+    sc = Scene(s)
     mesh = build_mesh(sc.normalized, sc.base_dir)
     return build_model(sc.normalized, mesh), mesh
 
@@ -71,6 +79,30 @@ def test_dissipation_gradient_equals_finite_differences(slide):
         assert float(grad @ v) == pytest.approx((dp - dm) / (2 * h), rel=1e-5)
 
 
+def test_sliding_mohr_coulomb_joint_dissipates_friction_work():
+    """The seed's law (Mohr-Coulomb, no cohesion): a joint compressed by sigma slides by ds; the step dissipates
+    the friction work tan(phi) sigma ds A (its elastic energy does not change), and the gradient equals
+    central differences."""
+    model, mesh = bar_model(law_spec=MOHR_COULOMB)
+    meter = JointDissipation(model, "test")
+    closing = -1e-6  # m: sigma = kn 1e-6 = 0.1 MPa
+    sigma = KN * 1e-6
+    slip_elastic = np.tan(np.radians(30.0)) * sigma / (KN / 2)
+    model.evaluate(moved(model, mesh, 2 * slip_elastic, closing), want_tangent=False)
+    model.commit()
+    meter.mark_start()
+    ds = 1e-6
+    u1 = moved(model, mesh, 2 * slip_elastic + ds, closing)
+    d, grad = dissipation_at(model, meter, u1)
+    assert d == pytest.approx(np.tan(np.radians(30.0)) * sigma * ds * 0.1, rel=1e-9)
+    rng = np.random.default_rng(3)
+    v = rng.standard_normal(model.n_dof) * 1e-7
+    h = 1e-3
+    dp, _ = dissipation_at(model, meter, u1 + h * v, False)
+    dm, _ = dissipation_at(model, meter, u1 - h * v, False)
+    assert float(grad @ v) == pytest.approx((dp - dm) / (2 * h), rel=1e-6)
+
+
 def test_elastic_step_dissipates_nothing_and_plastic_work_is_the_closed_form():
     model, mesh = bar_model()
     meter = JointDissipation(model, "test")
@@ -110,7 +142,64 @@ def test_snap_back_followed_by_dissipation_control():
         dissipated = json.loads(ds.attrs["per_stage"])[0]["joint_dissipation_J"]
         errors.append(abs(dissipated / (GF * width) - 1.0))
         assert "dissipation-based arc-length" in ds.attrs["simulated_effects"]
+        assert ds.attrs["arc_length_switches"] == 0  # dissipation control got through on its own
     assert errors[1] < 0.005 and errors[1] < 0.25 * errors[0]
+
+
+def _on_the_snap_back_closed_form(ds, L, width):
+    u, sigma = end_curve(ds, L + width, width)
+    k = int(np.argmax(sigma))
+    post = np.arange(len(u)) > k
+    closed = sigma[post] * (L + width) / E + sigma[post] / KN - (GF / FT) * np.log(sigma[post] / FT)
+    np.testing.assert_allclose(u[post], closed, rtol=0, atol=1e-9)
+    assert post.sum() >= 5 and u[-1] == pytest.approx(1.2e-3, rel=1e-9) and ds.attrs["completed"] == "true"
+    return u, sigma
+
+
+def test_a_failing_control_hands_its_last_state_to_the_next(monkeypatch):
+    """The chosen control (Crisfield's arc) and then the next (the cracks' opening) are made to fail after three
+    steps each: each hands the state it reached to the next, and dissipation control finishes the stage through
+    the snap-back. A control restarted from an earlier state would record the elastic rise again after the
+    peak, off the closed form of the softening branch."""
+    taken = {"cylindrical": 0, "opening": 0}
+    step = arc_length.ArcLengthStage._step
+
+    def failing_after_three(self, dl):
+        if taken.get(self.mode, 0) >= 3:
+            return False, None, None, 0, None, None
+        out = step(self, dl)
+        if out[0] and self.mode in taken:
+            taken[self.mode] += 1
+        return out
+
+    monkeypatch.setattr(arc_length.ArcLengthStage, "_step", failing_after_three)
+    L, width = 10.0, 0.5
+    ds = masonrydam.run(bar(L, 1.2e-3, control="arc_length", width=width))
+    u, sigma = _on_the_snap_back_closed_form(ds, L, width)
+    k = int(np.argmax(sigma))
+    assert np.all(np.diff(u[:k + 1]) > 0)  # one rise to the peak
+    stage = json.loads(ds.attrs["per_stage"])[0]
+    assert taken == {"cylindrical": 3, "opening": 3} and stage["dissipation_control_steps"] > 5
+    assert stage["steps"] == len(u)  # every converged step of the three controls, recorded once
+
+
+def test_dissipation_control_takes_over_where_the_other_controls_fail(monkeypatch):
+    """Load control stalls at the bar's peak; the cylindrical arc and the opening control are made to fail at
+    once, so dissipation control starts from the stalled state (its first target from the work done so far)
+    and traces the snap-back."""
+    run = arc_length.ArcLengthStage.run
+
+    def only_dissipation(self):
+        if self.mode != "dissipation":
+            raise ConvergenceError(f"{self.mode} made to fail")
+        return run(self)
+
+    monkeypatch.setattr(arc_length.ArcLengthStage, "run", only_dissipation)
+    L, width = 10.0, 0.5
+    ds = masonrydam.run(bar(L, 1.2e-3, control="load", width=width))
+    _on_the_snap_back_closed_form(ds, L, width)
+    stage = json.loads(ds.attrs["per_stage"])[0]
+    assert stage["dissipation_control_steps"] > 10 and ds.attrs["arc_length_switches"] == 1
 
 
 def test_dissipation_control_needs_softening_joints():

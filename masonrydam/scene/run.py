@@ -807,8 +807,8 @@ def print_summary(sc, mesh, model, eff, solver, stats, path, ds, file=None, dyn_
     for ps in solver.stats.per_stage:
         lines.append(f"stage      : {ps['stage']}: {ps['steps']} steps, {ps['iterations']} Newton iterations, "
                      f"{ps['step_cuts']} step cuts"
-                     + (f", the joints dissipated {ps['joint_dissipation_J']:.4g} J under dissipation control"
-                        if "joint_dissipation_J" in ps else ""))
+                     + (f"; in its {ps['dissipation_control_steps']} steps under dissipation control the joints "
+                        f"dissipated {ps['joint_dissipation_J']:.4g} J" if "joint_dissipation_J" in ps else ""))
     lines.append(f"solver     : {solver.s.method}, {stats['factorizations']} factorization(s) "
                  f"[{resolve_backend(solver.s.linear_solver, n_dof=model.n_dof, dim=model.dim)}; "
                  f"{stats['symbolic_analyses']} symbolic analyses], {stats['newton_iterations']} general Newton "
@@ -816,7 +816,8 @@ def print_summary(sc, mesh, model, eff, solver, stats, path, ds, file=None, dyn_
     if stats["arc_length_steps"]:
         lines.append(f"arc length : {stats['arc_length_steps']} steps under path-following control (Crisfield's arc, "
                      "crack opening or joint dissipation)"
-                     + (f", {stats['arc_length_switches']} stage(s) switched to it where load control stalled"
+                     + (f", {stats['arc_length_switches']} switch(es) to it or between its controls where a "
+                        "control stalled"
                         if stats["arc_length_switches"] else ""))
     if stats["joint_space_size"]:
         lines.append(f"joint space: static steps on {stats['joint_space_size']} joint unknowns (set-up "

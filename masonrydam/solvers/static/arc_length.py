@@ -30,10 +30,11 @@ With ``mode = "dissipation"`` every step dissipates a chosen energy in the joint
 while the joints dissipate little; from the first step whose joints dissipate more than
 :data:`DISSIPATION_SWITCH` of the work done on the model in it (or where the stage's own control finds no
 equilibrium) each step dissipates ``Delta tau``, first that step's dissipation, then growing or shrinking
-with the iterations like the arc. A dissipation step that would raise the load factor by more than one
-nominal step (little is dissipated: elastic reloading, a joint that stopped) is taken under the stage's own
-control instead. The constraint is linear in the iteration's unknowns (``dlambda`` in closed form) and,
-unlike the cylindrical arc, has one root.
+with the iterations like the arc, at most ``1/steps`` of the energy the model has taken in the stage. A
+dissipation step that would raise the load factor by more than one nominal step (little is dissipated: elastic
+reloading, a joint that stopped) is retried with a target smaller in proportion, and then taken under the
+stage's own control (:meth:`ArcLengthStage._run_dissipation` has the whole hand-over). The constraint is
+linear in the iteration's unknowns (``dlambda`` in closed form) and, unlike the cylindrical arc, has one root.
 
 The stage ends at ``lambda = 1`` (the last step is a load- or displacement-controlled one onto it), or
 when ``lambda`` has come back below 0 (the structure unloaded completely), or after
@@ -89,7 +90,7 @@ class ArcLengthStage:
     nominal increment; ``record(u, lam, f_int, f_ext)``: called after every converged step."""
 
     def __init__(self, solver, stage, u, u_start, f_base, lam0, record, dl0=None, direction=None,
-                 mode="cylindrical"):
+                 mode="cylindrical", direction_dlam=None):
         self.solver, self.st = solver, stage
         self.m = solver.model
         self.u, self.u_start, self.f_base, self.lam = u.copy(), u_start, f_base, lam0
@@ -98,8 +99,9 @@ class ArcLengthStage:
         self.delta_p = np.where(stage.prescribed, stage.increment, 0.0)
         self.dl0 = dl0
         self.prev = direction  # the last converged increment of u_f (its direction steers the predictor)
-        #: "cylindrical" (|Delta u_f| = Delta l) or "opening" (indirect displacement control: the opening of
-        #: the joints that crack grows by Delta l per step, :meth:`_opening_vector`)
+        self.prev_dlam = direction_dlam  # and of the load factor, where known
+        #: "cylindrical" (|Delta u_f| = Delta l), "opening" (indirect displacement control: the opening of
+        #: the joints that crack grows by Delta l per step, :meth:`_opening_vector`) or "dissipation"
         self.mode = mode
         self.c = None
 
@@ -211,7 +213,7 @@ class ArcLengthStage:
                     dl /= 2.0
                     continue
             steps += 1
-            self.prev = u_f - self.u[free]
+            self.prev, self.prev_dlam = u_f - self.u[free], lam - self.lam
             self.u, _ = self._state(u_f, lam)
             self.lam = lam
             self.peak = max(self.peak, lam)
@@ -228,7 +230,7 @@ class ArcLengthStage:
     def _controlled(self, lam):
         """A step onto ``lam`` under the stage's own (load or displacement) control."""
         u, f_ext = self._state(self.u[self.free], lam)
-        ok, u_new, its, f_int = self.solver._newton_iterations(u, f_ext)
+        ok, u_new, its, f_int = self.solver._newton_plain(u, f_ext)
         return ok, u_new, its, f_int, f_ext
 
     def _iterate(self, u_f, lam, it):
@@ -329,7 +331,13 @@ class ArcLengthStage:
         s, m, free, st = self.solver.s, self.m, self.free, self.st
         meter = JointDissipation(m, f"stage '{st.name}'")
         u0, _ = self._state(self.u[free], self.lam)
-        f_int_prev, _ = m.evaluate(u0, want_tangent=False)  # (a converged state: its tractions start the step)
+        # the converged state's tractions start the first step: evaluated with no time, so that a viscous joint
+        # (Duvaut-Lions) gives its committed traction, not one relaxed further
+        dt, m.time_step = m.time_step, 0.0
+        try:
+            f_int_prev, _ = m.evaluate(u0, want_tangent=False)
+        finally:
+            m.time_step = dt
         m.revert()
         meter.mark_start()
         nominal = 1.0 / st.steps
@@ -337,12 +345,15 @@ class ArcLengthStage:
         h = nominal
         by_dissipation = switched = False
         tau = tau_min = None  # the target dissipation per step (J), once measured
-        d_prev = dlam_prev = None
-        work_stage = 0.0
+        d_prev, dlam_prev = None, self.prev_dlam  # (the last step of the control that handed over, if any)
+        # the work done on the model in the stage (J); where this control takes over part-way (a fallback), an
+        # estimate of what came before, from which a first target can be set
+        work_stage = 0.5 * abs(float(f_int_prev @ (u0 - self.u_start)))
         shrinks, own_tried, failed_at, cuts_here = 0, False, None, 0
         steps = 0
         self.peak = self.lam
         self.dissipated = 0.0
+        self.steps_taken = 0
 
         def own(target):
             """A step onto ``target`` under the stage's own control: (ok, u_f, lam, its, f_int, f_ext, D)."""
@@ -415,8 +426,9 @@ class ArcLengthStage:
             work = 0.5 * float((f_int_prev + f_int) @ (u_new - self.u))
             work_stage += work
             steps += 1
+            self.steps_taken = steps
             dlam_prev, d_prev = lam - self.lam, d
-            self.prev = u_f - self.u[free]
+            self.prev, self.prev_dlam = u_f - self.u[free], dlam_prev
             self.u, self.lam = u_new, lam
             self.peak = max(self.peak, lam)
             self.dissipated += d
@@ -450,7 +462,9 @@ class ArcLengthStage:
         constraint ``D + g . (du_r + dlambda du_q) + dlambda g_p . Delta_p = tau`` (g: :meth:`JointDissipation
         .of_step`'s gradient, its prescribed part moving with lambda). Where the linearisation cannot steer
         the first iteration (every joint point elastic at the start, so g = 0, or a load-factor increment of
-        more than one nominal step), the predictor is the last step's increment scaled by ``tau / D_last``."""
+        more than one nominal step), the predictor is the last step's increment scaled by ``tau / D_last``, or,
+        for the first step after another control handed over, the point of the tangent path
+        ``du_r + dlambda du_q`` nearest to that control's last increment."""
         s, free, st = self.solver.s, self.free, self.st
         u0_f = self.u[free].copy()
         u_f, lam = u0_f.copy(), self.lam
@@ -479,6 +493,14 @@ class ArcLengthStage:
                 # (a last step that dissipated next to nothing: its own increment)
                 scale = tau / d_prev if d_prev is not None and d_prev > DISSIPATION_SWITCH * tau else 1.0
                 du, dlam = scale * self.prev, scale * dlam_prev
+            elif it == 0 and not abs(dlam) <= nominal and self.prev is not None:
+                # handed over by another control (its last increment, but not its load factor's): the point of
+                # the tangent path nearest to that increment
+                nq = float(du_q @ du_q)
+                if not nq > 0:
+                    return False, None, None, it, None, None, None
+                dlam = float((self.prev - du_r) @ du_q) / nq
+                du = du_r + dlam * du_q
             elif not math.isfinite(dlam):
                 return False, None, None, it, None, None, None
             else:

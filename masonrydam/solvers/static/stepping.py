@@ -133,7 +133,9 @@ class SolveStats:
     line_searches: int = 0
     stabilized_steps: int = 0
     arc_length_steps: int = 0  # steps taken under path-following control (arc length, opening, dissipation)
-    arc_length_switches: int = 0  # stages that switched to arc-length control where load control stalled
+    #: hand-overs where a control stalled: from load control to path following, or from an explicitly chosen
+    #: path-following control to the others
+    arc_length_switches: int = 0
     wall_time_s: float = 0.0
     per_stage: list = field(default_factory=list)
 
@@ -215,6 +217,7 @@ class StaticSolver:
         self.model, self.s = model, settings
         self.on_step = on_step or (lambda *a: None)
         self.progress = progress
+        self._iterations_before = 0  # Newton iterations before the running stage (its per-stage count)
         self.stats = SolveStats()
         self._fact = None
         self._fact_data = None
@@ -472,7 +475,8 @@ class StaticSolver:
             last_energy = e
         return False, u, s.max_iterations, None
 
-    def _arc_length(self, si, st, u, u_start, f_base, lam, stage_stats, dl0, direction, mode="cylindrical"):
+    def _arc_length(self, si, st, u, u_start, f_base, lam, stage_stats, dl0, direction, mode="cylindrical",
+                    direction_dlam=None):
         """The stage from ``lam`` under arc-length control (:class:`~.arc_length.ArcLengthStage`); returns
         (u, lam) where it ended (lam >= 1: the stage is done). Every converged step is recorded."""
         from .arc_length import ArcLengthStage
@@ -487,41 +491,65 @@ class StaticSolver:
         # the pseudo-time of an arc step (rate-dependent laws): the stage's nominal step, whatever the arc's
         # load-factor increment (which is an unknown of the step and may be negative past a peak)
         self.model.time_step = st.duration / st.steps
-        arc = ArcLengthStage(self, st, u, u_start, f_base, lam, record, dl0=dl0, direction=direction, mode=mode)
+        arc = ArcLengthStage(self, st, u, u_start, f_base, lam, record, dl0=dl0, direction=direction, mode=mode,
+                             direction_dlam=direction_dlam)
         try:
             u, lam, _ = arc.run()
         except (ConvergenceError, NumericalError, SingularMatrix) as exc:
-            exc.reached = (arc.u, arc.lam, arc.prev)  # its last converged (committed) state and increment
+            # its last converged (committed) state and increment (free DOFs, load factor)
+            exc.reached = (arc.u, arc.lam, arc.prev, arc.prev_dlam)
             raise
         finally:
-            if mode == "dissipation":  # the joints' plastic work over the stage's steps (J)
+            if mode == "dissipation":  # the joints' plastic work in the steps of dissipation control (J)
                 stage_stats["joint_dissipation_J"] = (stage_stats.get("joint_dissipation_J", 0.0)
                                                       + getattr(arc, "dissipated", 0.0))
+                stage_stats["dissipation_control_steps"] = (stage_stats.get("dissipation_control_steps", 0)
+                                                            + getattr(arc, "steps_taken", 0))
         if lam < 1.0 - 1e-12:  # the path peaked below 1 and came down: the stage's end is not on it
             what = (f"arc-length control: the load factor peaked at {arc.peak:.4g} and came back to {lam:.4g} "
                     "along the descending branch")
             if not st.until_failure:
-                raise ConvergenceError(f"stage '{st.name}': {what} before reaching 1 (set until_failure = true "
+                exc = ConvergenceError(f"stage '{st.name}': {what} before reaching 1 (set until_failure = true "
                                        "to record the branch and keep the peak as the limit)")
+                exc.reached = (u, lam, arc.prev, arc.prev_dlam)
+                raise exc
             self.limit = {"stage": st.name, "load_factor": arc.peak, "failed_at": lam, "reason": what}
             self.stats.per_stage.append(dict(stage_stats, iterations=self.stats.iterations
-                                             + self.stats.joint_space_iterations))
+                                             + self.stats.joint_space_iterations - self._iterations_before))
         return u, max(lam, 1.0) if lam >= 1.0 - 1e-12 else lam
 
-    def _other_arcs(self, si, st, u, u_start, f_base, lam, stage_stats, last_du, modes):
-        """The stage from ``(u, lam)`` (a converged, committed state; ``last_du`` its last free-DOF increment)
+    def _other_arcs(self, si, st, u, u_start, f_base, lam, stage_stats, last_du, modes, last_dlam=None):
+        """The stage from ``(u, lam)`` (a converged, committed state; ``last_du`` its last free-DOF increment,
+        ``last_dlam`` that of the load factor)
         under the path-following controls ``modes`` in turn, the first that gets through: (u, lam, None), or
-        (u, lam, failures) unchanged where none does (each failure a line)."""
+        (u, lam, failures) where none does (each failure a line). A control that took steps before it failed
+        hands the next one its last converged state (the model's committed state is that one, and its steps
+        are recorded)."""
         failures = []
         for mode in modes:
             try:
                 u_end, lam_end = self._arc_length(si, st, u, u_start, f_base, lam, stage_stats,
-                                                  float(np.linalg.norm(last_du)) / 2.0, last_du, mode)
+                                                  float(np.linalg.norm(last_du)) / 2.0, last_du, mode, last_dlam)
                 return u_end, lam_end, None
             except (ConvergenceError, NumericalError, SingularMatrix) as exc:
                 self.model.revert()
                 failures.append(f"{mode}: {exc}")
+                u_r, lam_r, du_r, dlam_r = getattr(exc, "reached", (None, lam, None, None))
+                if u_r is not None and du_r is not None and float(np.linalg.norm(du_r)) > 0 \
+                        and (lam_r != lam or not np.array_equal(u_r, u)):
+                    u, lam, last_du, last_dlam = u_r, lam_r, du_r, dlam_r
         return u, lam, failures
+
+    def _newton_plain(self, u, f_ext):
+        """General Newton iterations of one step from the committed state, with no joint-space start and no
+        state-dependent load, the open points' tangent regular before and after: a step of the stage's own
+        control inside path following (:mod:`.arc_length`)."""
+        self._state_load = None
+        self.model.set_open_tangent(OPEN_TANGENT_REGULAR)
+        try:
+            return self._newton_iterations(u, f_ext)
+        finally:
+            self.model.set_open_tangent(OPEN_TANGENT_REGULAR)
 
     def _line_search(self, u, du, r0, f_ext, max_tries=6):
         """Secant line search on g(s) = du . r(u + s du) (Crisfield 1991, sec. 9.3.1)."""
@@ -587,13 +615,15 @@ class StaticSolver:
             cuts = 0
             stage_stats = {"stage": st.name, "steps": 0, "iterations": 0, "step_cuts": 0}
             it_before = self.stats.iterations + self.stats.joint_space_iterations
-            last_du = None  # the free-DOF increment of the last converged step (arc-length's direction)
+            self._iterations_before = it_before
+            # the free-DOF and load-factor increments of the last converged step (arc-length's direction)
+            last_du = last_dlam = None
             if st.control in ("arc_length", "opening", "dissipation"):
                 mode = {"arc_length": "cylindrical"}.get(st.control, st.control)
                 try:
                     u, lam = self._arc_length(si, st, u, u_start, f_base, lam, stage_stats, None, None, mode)
                 except (ConvergenceError, NumericalError, SingularMatrix) as exc:
-                    u_r, lam_r, du_r = getattr(exc, "reached", (None, lam, None))
+                    u_r, lam_r, du_r, dlam_r = getattr(exc, "reached", (None, lam, None, None))
                     if u_r is None or du_r is None or not float(np.linalg.norm(du_r)) > 0:
                         raise
                     # where the chosen control cannot go on, the other path-following controls from its last
@@ -601,10 +631,11 @@ class StaticSolver:
                     m.revert()
                     self.stats.arc_length_switches += 1
                     u, lam, failures = self._other_arcs(si, st, u_r, u_start, f_base, lam_r, stage_stats, du_r,
-                                                        [x for x in ARC_MODES if x != mode])
+                                                        [x for x in ARC_MODES if x != mode], dlam_r)
                     if failures is not None:
                         raise ConvergenceError(f"{exc}; from load factor {lam_r:.4g} the other path-following "
-                                               "controls did not get through either (" + "; ".join(failures) + ")")
+                                               "controls did not get through either (" + "; ".join(failures) + ")"
+                                               ) from exc
                 if self.limit is not None:
                     return u
             while lam < 1.0 - 1e-12:
@@ -628,7 +659,7 @@ class StaticSolver:
                 except SingularMatrix as exc:
                     ok, singular = False, exc
                 if ok:
-                    last_du = (u_new - u)[m.dofmap.free]
+                    last_du, last_dlam = (u_new - u)[m.dofmap.free], target - lam
                     u = u_new
                     if state_load is not None:  # (the trial states are those of the converged solution)
                         f_ext = f_ext + state_load()
@@ -674,7 +705,7 @@ class StaticSolver:
                     # control from the last converged state, with the arc of its last increment
                     self.stats.arc_length_switches += 1
                     u, lam, tried = self._other_arcs(si, st, u, u_start, f_base, lam, stage_stats, last_du,
-                                                     ARC_MODES)
+                                                     ARC_MODES, last_dlam)
                     if tried is not None:
                         hint += (f"; arc-length control from load factor {lam:.4g} did not get through either ("
                                  + "; ".join(tried) + ")")

@@ -376,3 +376,19 @@ def test_each_monolith_base_is_a_section_of_its_own():
     assert list(ds.section.values) == ["base_joint/1", "base_joint/2"]
     np.testing.assert_allclose(ds.section_x.values, [5.0, 15.0])
     np.testing.assert_allclose(ds.normal_force.isel(step=-1).values, W * 10.0, rtol=1e-3)
+
+
+@pytest.mark.parametrize("control", ["arc_length", "dissipation"])
+def test_path_following_is_refused_where_it_would_drop_the_water(control):
+    """Path following ramps one load factor (masonrydam/solvers/static/arc_length.py) and does not carry the
+    reservoir's loads, which follow the level and the cracks: a stage with water under it is refused by name,
+    the stage that raises the water and a later one alike, rather than run without its water."""
+    for index, stages in ((1, [{"name": "gravity", "loads": [{"type": "self_weight"}]},
+                               {"name": "water", "steps": 4, "control": control, "loads": [{"type": "reservoir"}]}]),
+                          (2, [{"name": "gravity", "loads": [{"type": "self_weight"}]},
+                               {"name": "water", "steps": 4, "loads": [{"type": "reservoir"}]},
+                               {"name": "push", "control": control, "loads": [
+                                   {"type": "self_weight", "acceleration": [0.5, 0.0], "factor": 1.0}]}])):
+        with pytest.raises(SceneError) as err:
+            masonrydam.run(dam_scene(stages=stages))
+        assert err.value.key == f"stages[{index}].control" and "water" in str(err.value)

@@ -437,6 +437,10 @@ def build_stages(scene: dict, mesh: Mesh, model: Model, base_dir: Path | None = 
             raise SceneError(f"stages[{i}].duration", f"joint sets {relaxing} have a relaxation_time (viscous "
                                                       "regularisation): a static stage needs its duration (s), the "
                                                       "time over which its load is applied")
+        if water is not None and st.get("control", "load") != "load":
+            raise SceneError(f"stages[{i}].control", f"\"{st['control']}\": path following does not carry the reservoir's "
+                             "water on this stage (its loads follow the level and the cracks, not one load factor); "
+                             "use \"load\"")
         if st.get("control") == "dissipation":
             softening = [g for g in model.igroups if g.nonlinear]
             large = [g.name for g in softening if g.kinematics != "small"]

@@ -431,7 +431,8 @@ _STATIC = Section("[[stages]] type = \"static\"", "A static stage applies its lo
     _k("stages[].control", "string", "`load`: load and displacement control, switching to arc length where a step "
        "finds no equilibrium; `arc_length`: Crisfield's cylindrical arc length from the start; `opening`: indirect "
        "displacement control on the opening of the cracking joints; `dissipation`: every step dissipates a chosen "
-       "energy in the joints (the stage's own control until they dissipate)", default="load",
+       "energy in the joints (the stage's own control until they dissipate); path following is refused on a stage "
+       "with reservoir water", default="load",
        choices=STATIC_CONTROLS),
     _k("stages[].until_failure", "bool", "last stage only: run until no equilibrium is found and record the peak "
        "(a reservoir stage: the level reached)", default=False),

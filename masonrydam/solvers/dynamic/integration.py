@@ -202,6 +202,7 @@ from .kernels import (joint_step_energy, joint_stored_energy, newmark_kinematics
                               woodbury_apply, woodbury_factor)
 from .joint_space import (MAX_INITIAL_STIFFNESS_ITERATIONS, SPLIT_INITIAL_STIFFNESS_ITERATIONS, JointSpace,
                           joint_space_size)
+from ..chatter import ChatterGuard
 from ..linear.direct import DIRECT_SOLVERS, Factorization, SingularMatrix, SymmetricFactorization, resolve_backend
 from .modal import MassMatrix, RayleighDamping, add_to_pattern, elastic_joint_full, elastic_tangent_data
 
@@ -210,7 +211,6 @@ INTEGRATORS = ("newmark_average", "newmark_linear", "hht", "generalized_alpha", 
 
 #: open-joint tangent factor in dynamics: 0 (consistent; the mass keeps K_eff regular)
 OPEN_TANGENT_DYNAMIC = 0.0
-OPEN_TANGENT_STABILIZED = 1.0
 #: a modified-Newton iteration (old factorization) is repeated only if it reduced the residual norm
 #: at least by this factor; otherwise the next iteration refactorizes (or uses a low-rank update)
 MODIFIED_NEWTON_CONTRACTION = 0.25
@@ -1661,13 +1661,13 @@ class DynamicSolver:
         def evaluate(u):
             """(f_int, tangent values or None for the all-stick tangent)."""
             if nonlinear:
-                if hint[0] and not stabilized:
+                if hint[0] and not guard.stabilized:
                     # joints sticking so far: forces only, and the elastic tangent if all still stick
                     f, _ = m.evaluate(u, want_tangent=False)
                     if self._all_stick():
                         return f, None
                 f, K = m.evaluate(u, want_tangent=True)
-                if stabilized:
+                if guard.stabilized:
                     m.latch_broken_bonds()
                 hint[0] = False
                 return f, K.data
@@ -1677,7 +1677,7 @@ class DynamicSolver:
         u = st.u.copy()
         f_int, Kdata = st.f_int, st.Kdata
         hint = [Kdata is None]  # the step starts with every joint sticking
-        seen, stabilized, prev_sig, toggles, same = set(), False, None, 0, 0
+        guard = ChatterGuard(m, OPEN_TANGENT_DYNAMIC)
         if m.rate_dependent:  # viscous blocks relax over the step even where u does not move: their force
             f_int, Kdata = evaluate(u)  # at the predictor is not the one the step started with
         kind_prev, rn_prev, allow_modified = None, math.inf, s.modified_newton
@@ -1745,34 +1745,14 @@ class DynamicSolver:
                         why += f"; {nchg} joint point(s) changed state in the step"
                     return False, None, why
                 if nonlinear:
-                    sig = m.state_signature()
-                    if not stabilized and sig != prev_sig and sig in seen and toggles < 4:
-                        # cycling: a joint-state pattern seen before, other than the last one (a state
-                        # that stays the same from one iteration to the next is ordinary convergence):
-                        # open points get their initial stiffness in the iteration matrix (residual
-                        # unchanged) and broken bonds stay broken
-                        stabilized = True
-                        toggles += 1
-                        same = 0
-                        self.stats.stabilized_steps += 1
-                        m.set_open_tangent(OPEN_TANGENT_STABILIZED)
-                        m.latch_broken_bonds()
+                    # cycling: the stabilized iteration; settled: back to the consistent tangent (the
+                    # guard's module docstring); either way the iteration matrix and residual again
+                    action = guard.observe()
+                    if action is not None:
+                        self.stats.stabilized_steps += action == "stabilize"
                         f_int, Kdata = evaluate(u)
                         R, a1, v1, ma_norm = residual(u, f_int)
                         rn = float(np.linalg.norm(R))
-                    elif stabilized:
-                        # the pattern has settled: back to the consistent tangent (quadratic
-                        # convergence; the initial stiffness of open points converges only linearly)
-                        same = same + 1 if sig == prev_sig else 0
-                        if same >= 2:
-                            stabilized = False
-                            m.set_open_tangent(OPEN_TANGENT_DYNAMIC)
-                            f_int, Kdata = evaluate(u)
-                            R, a1, v1, ma_norm = residual(u, f_int)
-                            rn = float(np.linalg.norm(R))
-                            seen = set()
-                    seen.add(sig)
-                    prev_sig = sig
                 # modified Newton (the latest factorization, only with modified_newton) while it
                 # contracts well; once it does not, exact iteration matrices for the rest of the step
                 if kind_prev == "modified" and rn > MODIFIED_NEWTON_CONTRACTION * rn_prev:
@@ -1835,9 +1815,9 @@ class DynamicSolver:
         except NumericalError as exc:
             return False, None, str(exc)
         finally:
-            if stabilized:
+            if guard.stabilized:
                 m.set_open_tangent(OPEN_TANGENT_DYNAMIC)
-        retangent = stabilized  # tangent for the next step's predictor with the ordinary open tangent
+        retangent = guard.stabilized  # tangent for the next step's predictor with the ordinary open tangent
         new = _StepState(st.t - st.tau + t_end, t_end, u, np.zeros_like(st.v), np.zeros_like(st.a), f_int,
                          Kdata.copy() if Kdata is not None else None, ag1)
         new.v[free] = v1

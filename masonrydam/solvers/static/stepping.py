@@ -32,6 +32,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from ...errors import ConvergenceError, MechanismError, NumericalError
+from ..chatter import ChatterGuard
 from ..diagnostics import find_free_parts
 from ..linear.iterative import rigid_body_modes
 from ..linear.direct import SingularMatrix, make_solver, resolve_backend
@@ -40,10 +41,6 @@ from ..linear.direct import SingularMatrix, make_solver, resolve_backend
 #: tangent only (tractions stay zero) so that a block resting on a single contact point does not make
 #: the tangent singular; the converged solution does not depend on it.
 OPEN_TANGENT_REGULAR = 1e-6
-#: tangent factor once the step's state pattern repeats (chatter guard, see _newton_iterations)
-OPEN_TANGENT_STABILIZED = 1.0
-#: times a step may switch to the stabilized iteration (see StaticSolver._newton_iterations)
-MAX_STABILIZATIONS = 4
 #: the joint-space iteration of a step converges to this fraction of the force tolerance: the general
 #: path then accepts its solution on the force residual alone (its energy test needs an iteration), so
 #: the solution is converged this much further, as far as the general path's energy test takes it
@@ -382,24 +379,16 @@ class StaticSolver:
         first residual (the force scale of a step with no load, see the module docstring), where the
         iterations start from a later iterate (the joint-space solution).
 
-        Chatter guard: when the joint state pattern of an iteration repeats one seen before in this
-        step other than the previous iteration's (Newton cycling), (1) open points get their initial
-        stiffness in the tangent (``P_OPEN_TANGENT``; residual unchanged, linear convergence) and (2)
-        bonds that break stay broken (``latch_broken_bonds``): with cohesion the shear traction jumps
-        from up to c to 0 when a point opens, and letting iterations "un-break" a bond cycles across
-        that jump. Bonds are not latched before chatter is seen, so transient tension in early iterates
-        does not destroy cohesion. Once the pattern has stayed the same for two iterations the
-        consistent tangent comes back (the latched bonds stay broken), at most MAX_STABILIZATIONS
-        times a step, as in the dynamic solver.
+        Chatter guard (:class:`~masonrydam.solvers.chatter.ChatterGuard`, shared with the dynamic solver):
+        where the joint-state pattern cycles, open points get their initial stiffness in the tangent and bonds
+        that break stay broken, until the pattern settles. Bonds are not latched before chatter is seen, so
+        transient tension in early iterates does not destroy cohesion.
         """
         m, s = self.model, self.s
         free = m.dofmap.free
         energy0 = None
         last_energy = None
-        seen = set()
-        prev_sig = None
-        stabilized = False
-        toggles = same = 0
+        guard = ChatterGuard(m, OPEN_TANGENT_REGULAR)
         for it in range(s.max_iterations + 1):
             want_K = s.method == "newton" or self._initial is None
             try:
@@ -410,7 +399,7 @@ class StaticSolver:
                 # not converge; the last such message goes into the error if the cuts do not help
                 self._law_failure = str(exc)
                 return False, u, it, None
-            if stabilized:
+            if guard.stabilized:
                 m.latch_broken_bonds()
             f_now = self._with_state_load(f_ext)
             r_full = f_now - f_int
@@ -429,31 +418,13 @@ class StaticSolver:
             if it == s.max_iterations:
                 break
             if m.nonlinear:
-                sig = m.state_signature()
-                if not stabilized and sig != prev_sig and sig in seen and toggles < MAX_STABILIZATIONS:
-                    # cycling: a pattern seen before other than the last one (a pattern that stays from
-                    # one iteration to the next is ordinary convergence)
-                    stabilized = True
-                    toggles += 1
-                    same = 0
-                    self.stats.stabilized_steps += 1
-                    m.set_open_tangent(OPEN_TANGENT_STABILIZED)
-                    m.latch_broken_bonds()
+                # cycling: the stabilized iteration; settled: back to the consistent tangent (the guard's
+                # module docstring); either way the iteration matrix and residual are evaluated again
+                action = guard.observe()
+                if action is not None:
+                    self.stats.stabilized_steps += action == "stabilize"
                     f_int, K = m.evaluate(u, want_tangent=True)
                     r = (self._with_state_load(f_ext) - f_int)[free]
-                elif stabilized:
-                    # the pattern has settled: back to the consistent tangent. The initial stiffness of
-                    # open points converges only linearly, and where many points are open (contraction
-                    # joints of a 3D dam) it stalled Newton at 1-4 % per iteration
-                    same = same + 1 if sig == prev_sig else 0
-                    if same >= 2:
-                        stabilized = False
-                        m.set_open_tangent(OPEN_TANGENT_REGULAR)
-                        f_int, K = m.evaluate(u, want_tangent=True)
-                        r = (self._with_state_load(f_ext) - f_int)[free]
-                        seen = set()
-                seen.add(sig)
-                prev_sig = sig
             if s.method == "modified_newton":
                 if self._initial is None:
                     self._initial = self._linear_solver(K)

@@ -213,19 +213,27 @@ class ArcLengthStage:
                     dl /= 2.0
                     continue
             steps += 1
-            self.prev, self.prev_dlam = u_f - self.u[free], lam - self.lam
-            self.u, _ = self._state(u_f, lam)
-            self.lam = lam
-            self.peak = max(self.peak, lam)
-            m.commit()
-            self.solver.stats.steps += 1
-            self.solver.stats.arc_length_steps += 1
-            self.record(self.u, lam, f_int, f_ext)
+            self._accept(u_f, lam, f_int, f_ext)
             dl = float(np.clip(dl * math.sqrt(TARGET_ITERATIONS[self.mode] / max(its, 1)), dl / 2.0, 2.0 * dl))
             dl = min(max(dl, dl_min), dl_max)
             if lam < 0.0:  # unloaded completely: the rest of the stage is not on this path
                 break
         return self.u, self.lam, steps
+
+    def _accept(self, u_f, lam, f_int, f_ext, on_commit=None):
+        """Take a converged step onto ``(u_f, lam)``: its increment kept as the next predictor's direction, the
+        model's state committed (then ``on_commit()``, before anything reads the state again), the step
+        counted and recorded."""
+        self.prev, self.prev_dlam = u_f - self.u[self.free], lam - self.lam
+        self.u, _ = self._state(u_f, lam)
+        self.lam = lam
+        self.peak = max(self.peak, lam)
+        self.m.commit()
+        if on_commit is not None:
+            on_commit()
+        self.solver.stats.steps += 1
+        self.solver.stats.arc_length_steps += 1
+        self.record(self.u, lam, f_int, f_ext)
 
     def _controlled(self, lam):
         """A step onto ``lam`` under the stage's own (load or displacement) control."""
@@ -422,22 +430,14 @@ class ArcLengthStage:
                     by_dissipation = switched = True
                     continue
             _, u_f, lam, its, f_int, f_ext, d = step
-            u_new, _ = self._state(u_f, lam)
-            work = 0.5 * float((f_int_prev + f_int) @ (u_new - self.u))
+            work = 0.5 * float((f_int_prev + f_int) @ (self._state(u_f, lam)[0] - self.u))
             work_stage += work
             steps += 1
             self.steps_taken = steps
             dlam_prev, d_prev = lam - self.lam, d
-            self.prev, self.prev_dlam = u_f - self.u[free], dlam_prev
-            self.u, self.lam = u_new, lam
-            self.peak = max(self.peak, lam)
             self.dissipated += d
             f_int_prev = f_int
-            m.commit()
-            meter.mark_start()
-            self.solver.stats.steps += 1
-            self.solver.stats.arc_length_steps += 1
-            self.record(self.u, lam, f_int, f_ext)
+            self._accept(u_f, lam, f_int, f_ext, on_commit=meter.mark_start)
             shrinks, own_tried, failed_at, cuts_here = 0, False, None, 0
             if not controlled:
                 tau = float(np.clip(tau * math.sqrt(TARGET_ITERATIONS["dissipation"] / max(its, 1)),

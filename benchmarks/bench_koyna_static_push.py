@@ -55,7 +55,7 @@ def substitution_time(element_size: float) -> tuple[float, int]:
     from masonrydam.scene.build import build_mesh, build_model, build_stages
     from masonrydam.scene.scene import Scene
     from masonrydam.solvers.linear.direct import SymmetricFactorization
-    from masonrydam.solvers.dynamic.modal import elastic_tangent_data
+    from masonrydam.assembly.elastic import elastic_tangent_data
 
     sc = Scene(scene(0.01, 1, element_size, "auto"))
     mesh = build_mesh(sc.normalized, sc.base_dir)

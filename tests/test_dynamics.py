@@ -32,8 +32,8 @@ from masonrydam.assembly.model import Model
 from masonrydam.materials.elastic import elasticity_matrix
 from masonrydam.scene.build import build_mesh, build_model, build_stages
 from masonrydam.scene.scene import Scene
-from masonrydam.solvers.dynamic.integration import DynamicSettings, DynamicSolver, DynamicStage, GroundMotion
-from masonrydam.solvers.dynamic.modal import RayleighDamping, modal_analysis, rayleigh_coefficients
+from masonrydam.assembly.damping import RayleighDamping, rayleigh_coefficients
+from masonrydam.solvers.dynamic import DynamicSettings, DynamicSolver, DynamicStage, GroundMotion, modal_analysis
 
 G = 9.80665
 

@@ -34,7 +34,7 @@ from masonrydam.effects import foundation as F
 from masonrydam.errors import SceneError
 from masonrydam.materials.elastic import elasticity_matrix
 from masonrydam.mesh.model import CellBlock, FacetSet, Mesh
-from masonrydam.solvers.dynamic.modal import MassMatrix
+from masonrydam.assembly.mass import MassMatrix
 
 RHO, NU = 2500.0, 0.25
 C_S = 1000.0

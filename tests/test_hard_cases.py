@@ -30,7 +30,7 @@ import masonrydam
 from masonrydam.effects import loads as L
 from masonrydam.errors import ConvergenceError, MechanismError
 from masonrydam.materials import mohr_coulomb as mc
-from masonrydam.solvers.dynamic.integration import DynamicSettings, DynamicSolver, DynamicStage, GroundMotion
+from masonrydam.solvers.dynamic import DynamicSettings, DynamicSolver, DynamicStage, GroundMotion
 from test_dynamics import B, H, rocking_model, sliding_scene
 from test_system import BASE, BLOCK, _direction_changes, block_scene, top_force
 

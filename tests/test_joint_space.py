@@ -1,4 +1,4 @@
-"""Joint-space (condensed) Newton of the dynamic solver, masonrydam.solvers.dynamic.joint_space.
+"""Joint-space (condensed) Newton of the dynamic solver, masonrydam.solvers.joint_space.
 
 The condensed step must reproduce the general Newton path: both solve the same discrete equations
 (HHT step of Hilber, Hughes & Taylor 1977 with the seed's Mohr-Coulomb joints), so the two time
@@ -20,10 +20,10 @@ import masonrydam
 from masonrydam.errors import STATUS_NAN, SceneError
 from masonrydam.scene.build import build_mesh, build_model, build_stages
 from masonrydam.scene.scene import Scene
-from masonrydam.solvers.dynamic.kernels import STATUS_SINGULAR, woodbury_apply, woodbury_factor
-from masonrydam.solvers.dynamic.joint_space import capacitance_lu, joint_operator, joint_space_size
-from masonrydam.solvers.dynamic.joint_space_kernels import (STATUS_TOO_MANY_CHANGES, apply_correction,
-                                                    capacitance_update_solve, joint_space_correction)
+from masonrydam.solvers.linear.dense_lu import STATUS_SINGULAR, woodbury_apply, woodbury_factor
+from masonrydam.solvers.joint_space import capacitance_lu, joint_operator, joint_space_size
+from masonrydam.solvers.joint_space.kernels import (STATUS_TOO_MANY_CHANGES, apply_correction,
+                                            capacitance_update_solve, joint_space_correction)
 
 G = 9.80665
 
@@ -234,7 +234,7 @@ def test_recovery_from_stored_columns_equals_the_substitution(monkeypatch):
     from the stored columns of ``K_ref^-1 B^T`` (the default) equal those of a second substitution
     (columns not stored) to round-off, on the sliding block of reference problem 1 (every step of the
     pulse slides); the run reports the recoveries and the memory of the columns."""
-    from masonrydam.solvers.dynamic import joint_space as js
+    from masonrydam.solvers.joint_space import condensation as js
 
     hist, attrs = {}, {}
     for stored in (True, False):
@@ -309,7 +309,7 @@ def test_held_points_stick_whatever_their_displacement():
     (seed eq. 11), in the residual as in the tangent, however far its displacement has gone into
     slip or opening; the same points not held follow the Mohr-Coulomb law (seed sec. 3.4)."""
     from masonrydam.materials import mohr_coulomb as mc
-    from masonrydam.solvers.dynamic.joint_space_kernels import joint_points_evaluate
+    from masonrydam.solvers.joint_space.kernels import joint_points_evaluate
 
     ks, kn, tan_phi, w = 2e10, 5e10, 0.6, 0.25
     params = np.zeros((1, mc.N_JOINT_PARAMS))
@@ -347,7 +347,7 @@ def test_reevaluating_some_points_equals_a_full_residual_evaluation():
     equals a full ``joint_space_evaluate_residual`` with the new flags, for a mix of sliding, open and
     sticking points (seed eqs. 11-12, sec. 3.4) and a non-symmetric S."""
     from masonrydam.materials import mohr_coulomb as mc
-    from masonrydam.solvers.dynamic.joint_space_kernels import joint_space_evaluate_residual, joint_space_reevaluate_points
+    from masonrydam.solvers.joint_space.kernels import joint_space_evaluate_residual, joint_space_reevaluate_points
 
     rng = np.random.default_rng(11)
     P, dim = 40, 2
@@ -421,7 +421,7 @@ def test_holding_flipping_points_cuts_the_iterations_of_a_cracking_dam(monkeypat
     iterations and halved steps than plain Newton with line search (FLIPS_BEFORE_HOLD made
     unreachable), and every step must still converge in joint space: a held state is never
     accepted (the caller checks every step against the full residual with the true law)."""
-    import masonrydam.solvers.dynamic.joint_space as js_module
+    import masonrydam.solvers.joint_space.condensation as js_module
 
     held = masonrydam.run(_koyna_scene(300)).attrs
     monkeypatch.setattr(js_module, "FLIPS_BEFORE_HOLD", 10**9)
@@ -439,7 +439,7 @@ def test_no_point_stays_held_after_a_step():
     later step never starts from a held law."""
     from types import SimpleNamespace
 
-    from masonrydam.solvers.dynamic.joint_space import JointSpace
+    from masonrydam.solvers.joint_space import JointSpace
 
     seen = {}
 

@@ -1,7 +1,7 @@
 """The joint flexibility computed column by column when a step first needs it (large joint sets).
 
 Above ``JOINT_SPACE_MAX`` joint unknowns the dense flexibility ``S = B K_ref^-1 B^T`` (8 m^2 bytes) is
-not set up; :class:`~masonrydam.solvers.dynamic.joint_space.FlexibilityColumns` computes the columns that an
+not set up; :class:`~masonrydam.solvers.joint_space.FlexibilityColumns` computes the columns that an
 iteration reads and keeps them in a bounded store. These tests check that the columns are those of
 ``S``, that the store evicts the columns used longest ago and refuses a step that needs more than it
 holds, and that runs with the store give the histories of the dense flexibility and the closed form
@@ -16,9 +16,9 @@ import pytest
 import scipy.sparse as sp
 
 import masonrydam
-from masonrydam.solvers.dynamic import joint_space as js_module
+from masonrydam.solvers.joint_space import condensation as js_module
 from masonrydam.solvers.static import stepping as static_module
-from masonrydam.solvers.dynamic.joint_space import ColumnStoreFull, FlexibilityColumns
+from masonrydam.solvers.joint_space import ColumnStoreFull, FlexibilityColumns
 from test_dynamics import sliding_scene  # reference problem 1: a block on a joint with mu = 0.2, a 0.2 s pulse
 
 G = 9.80665

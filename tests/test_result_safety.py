@@ -248,7 +248,7 @@ def test_sigkill_leaves_the_earlier_result_and_a_readable_running_file(tmp_path)
 def test_second_request_aborts_at_once(tmp_path, monkeypatch):
     """Two requests inside one step: the run stops in that step, without converging it, keeps the steps
     before it and raises RunStopped (what the command line turns into one line and exit 130)."""
-    from masonrydam.solvers.dynamic.integration import DynamicSolver
+    from masonrydam.solvers.dynamic import DynamicSolver
 
     calls = {"n": 0}
     original = DynamicSolver._maybe_emit

@@ -16,7 +16,8 @@ import pytest
 
 import masonrydam
 from masonrydam.errors import AccuracyWarning, SceneError
-from masonrydam.solvers.dynamic.integration import DynamicSettings, GroundMotion, RayleighDamping
+from masonrydam.assembly.damping import RayleighDamping
+from masonrydam.solvers.dynamic import DynamicSettings, GroundMotion
 from test_dynamics import G, chopra_recurrence, run_sdof, sliding_scene
 
 A_PULSE, MU, T_PULSE = 0.4 * G, 0.2, 0.2

@@ -142,7 +142,7 @@ class Model:
     @property
     def joint_space_capable(self) -> bool:
         """Every nonlinear joint set follows the seed's Mohr-Coulomb law, the one the joint-space kernels
-        carry (:mod:`masonrydam.solvers.dynamic.joint_space_kernels`)."""
+        carry (:mod:`masonrydam.solvers.joint_space.kernels`)."""
         return all(g.law != "composite" for g in self.igroups)
 
     @property

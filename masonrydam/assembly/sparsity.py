@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numba
 import numpy as np
+import scipy.sparse as sp
 
 
 def build_pattern(element_dofs: list[np.ndarray], eq_of_dof: np.ndarray, n_eq: int, dim: int | None = None):
@@ -171,3 +172,49 @@ def scatter_vector(fe, dofs, out):
         for a in range(nd):
             out[dofs[e, a]] += fe[e, a]
     return 0
+
+
+def full_matrix(n_dof: int, parts) -> sp.csr_matrix:
+    """Full-DOF CSR matrix (n_dof, n_dof) summed from ``parts``: pairs ``(dofs, ke)`` of element DOFs
+    (ne, nd) int and element matrices (ne, nd, nd), in the units of ``ke``."""
+    rows, cols, vals = [], [], []
+    for dofs, ke in parts:
+        nd = dofs.shape[1]
+        rows.append(np.repeat(dofs, nd, axis=1).ravel())
+        cols.append(np.tile(dofs, (1, nd)).ravel())
+        vals.append(ke.reshape(len(ke), -1).ravel())
+    if not rows:
+        return sp.csr_matrix((n_dof, n_dof))
+    M = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n_dof, n_dof))
+    M.sum_duplicates()
+    return M
+
+
+def add_to_pattern(A: sp.spmatrix, indptr: np.ndarray, indices: np.ndarray, data: np.ndarray, what: str) -> None:
+    """Add the free-DOF matrix ``A`` (n_eq, n_eq) into ``data`` (values of the CSR pattern ``indptr``,
+    ``indices``, column indices sorted in each row); a ValueError names ``what`` if an entry of ``A``
+    lies outside the pattern."""
+    A = sp.coo_matrix(A)
+    if A.nnz == 0:
+        return
+    n = len(indptr) - 1
+    rows = np.repeat(np.arange(n, dtype=np.int64), np.diff(indptr))
+    keys = rows * n + indices
+    want = A.row.astype(np.int64) * n + A.col
+    pos = np.searchsorted(keys, want)
+    pos = np.minimum(pos, len(keys) - 1)
+    if not np.array_equal(keys[pos], want):
+        raise ValueError(f"the {what} couples DOFs that the model's sparsity pattern does not (a coupling must "
+                         "be declared with Model.add_coupling before set_constraints)")
+    np.add.at(data, pos, A.data)
+
+
+def diagonal_positions(indptr: np.ndarray, indices: np.ndarray) -> np.ndarray:
+    """Position of the diagonal entry of every row in a CSR ``data`` array (the model's pattern has
+    every diagonal entry, see :func:`masonrydam.assembly.sparsity.build_pattern`)."""
+    n = len(indptr) - 1
+    rows = np.repeat(np.arange(n), np.diff(indptr))
+    pos = np.nonzero(indices == rows)[0]
+    if len(pos) != n:
+        raise ValueError("the stiffness pattern lacks diagonal entries")
+    return pos

@@ -18,7 +18,7 @@ Matrices (full DOF, kg; DOF index ``node * dim + component``):
   ``dim x dim`` (``n n^T``): diagonal only on faces normal to a coordinate axis.
 
 The added mass enters the mass matrix of the dynamic stages and of the modal stage
-(:class:`masonrydam.solvers.dynamic.modal.MassMatrix`): it multiplies the relative acceleration in the
+(:class:`masonrydam.assembly.mass.MassMatrix`): it multiplies the relative acceleration in the
 inertia and the ground acceleration in the effective earthquake forces ``-M iota a_g``, which is
 Westergaard's ``-m_a n n^T (u'' + a_g)`` on the face. The hydrodynamic force on the dam
 (``hydrodynamic_force`` in the results) is ``-M_a a_abs`` summed over the face nodes, and the face

@@ -17,7 +17,7 @@ multiplied at the stage time ``t`` (s, from the stage's start):
   for ``s = t - start >= 0`` (and ``s <= duration`` when given; phase in degrees), 0 before.
 
 The load vector is assembled once per load (the consistent nodal forces of :mod:`.loads`) and scaled in
-time: :func:`load_history` gives the stage's ``force(t)`` (:class:`masonrydam.solvers.dynamic.integration.DynamicTerms`),
+time: :func:`load_history` gives the stage's ``force(t)`` (:class:`masonrydam.solvers.dynamic.DynamicTerms`),
 whose work the energy balance counts as ``input``. Closed forms that check it (tests/test_dynamic_loads.py):
 an undamped oscillator under a suddenly applied constant force, ``u = F/k (1 - cos(omega t))``, and under a
 harmonic force, ``u = F/k / (1 - b^2) (sin(Omega t) - b sin(omega t))``, ``b = Omega/omega`` (Chopra,

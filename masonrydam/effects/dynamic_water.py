@@ -136,7 +136,7 @@ class DynamicWater:
         if self.acoustic is None or self.incompressible:
             return None
         if self._fluid_step is None:
-            from ..solvers.dynamic.fluid import AcousticStep
+            from ..solvers.dynamic import AcousticStep
 
             A = self.acoustic
             self._fluid_step = AcousticStep(A.G, A.H, A.L, A.Q, A.B_face, A.B_bottom, self.density)

@@ -263,7 +263,7 @@ def build_ground_motion(spec: dict, component: int, key: str, stage_dt: float, b
     (``records.provenance_attrs``)."""
     from .. import records as rec
     from ..records import RecordError
-    from ..solvers.dynamic.integration import GroundMotion
+    from ..solvers.dynamic import GroundMotion
 
     try:
         src = spec["source"]
@@ -316,9 +316,9 @@ def build_ground_motion(spec: dict, component: int, key: str, stage_dt: float, b
 def dynamic_settings(st: dict, index: int, linear_solver: str = "auto"):
     """DynamicSettings of a normalised dynamic stage; ``linear_solver``: the scene's ``solver.linear_solver``
     (an iterative choice applies to the static stages; dynamic stages use a direct solver)."""
-    from ..solvers.dynamic.integration import DynamicSettings
+    from ..solvers.dynamic import DynamicSettings
     from ..solvers.linear.direct import DIRECT_SOLVERS
-    from ..solvers.dynamic.modal import RayleighDamping
+    from ..assembly.damping import RayleighDamping
 
     if linear_solver not in DIRECT_SOLVERS:
         linear_solver = "auto"
@@ -340,12 +340,12 @@ def dynamic_settings(st: dict, index: int, linear_solver: str = "auto"):
 
 
 def build_stages(scene: dict, mesh: Mesh, model: Model, base_dir: Path | None = None) -> list:
-    """Stage objects in scene order: :class:`StaticStage` and :class:`~masonrydam.solvers.dynamic.integration.DynamicStage`.
+    """Stage objects in scene order: :class:`StaticStage` and :class:`~masonrydam.solvers.dynamic.DynamicStage`.
 
     A dynamic stage keeps the supports and holds the DOFs prescribed by the last static stage at their
     values (they move with the ground); its ground motion is read and scaled here."""
     from ..effects import loads as L
-    from ..solvers.dynamic.integration import DynamicStage
+    from ..solvers.dynamic import DynamicStage
 
     dim = mesh.dim
     supports = np.zeros(model.n_dof, dtype=bool)
@@ -365,7 +365,7 @@ def build_stages(scene: dict, mesh: Mesh, model: Model, base_dir: Path | None = 
         reservoir = Reservoir(scene["reservoir"], mesh, model, scene["model"]["thickness"])
     for i, st in enumerate(scene["stages"]):
         if st["type"] == "modal":
-            from ..solvers.dynamic.modal import ModalStage
+            from ..solvers.dynamic import ModalStage
 
             stages.append(ModalStage(st["name"], st["modes"], st["mass"] == "lumped", supports | held))
             continue

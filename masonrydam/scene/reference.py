@@ -31,7 +31,7 @@ from ..effects.reservoir import DEFAULT_FACE, DEFAULT_TAILWATER_FACE, DYNAMIC, M
 from ..effects.uplift import CRACKED, EARTHQUAKE
 from ..elements.quadrature import QUADRATURE_SCHEMES
 from ..results.writer import OutputOptions
-from ..solvers.dynamic.integration import ADAPTIVE_DEFAULT_LEVELS, JOINT_SPACE_MODES
+from ..solvers.dynamic import ADAPTIVE_DEFAULT_LEVELS, JOINT_SPACE_MODES
 from ..solvers.linear.direct import LINEAR_SOLVERS
 from .schema import (_COMPOSITE_KEYS, AUTO_DT_MAX_DEFAULT, AUTO_TOLERANCE_DEFAULT, G_STANDARD, HYPOTHESES, INTEGRATORS,
                      JOINT_LAWS, PROCESSING_STEPS, PULSE_SHAPES, STAGE_TYPES, STATIC_CONTROLS, SUPPORT_KINDS)

@@ -18,7 +18,7 @@ from ..materials import mohr_coulomb as mc
 from ..results.files import check_output_path, claim_working_file, partial_path, settle_partial
 from ..results.writer import OutputOptions, ResultWriter
 from ..solvers.linear.direct import resolve_backend
-from ..solvers.dynamic.integration import DynamicStage
+from ..solvers.dynamic import DynamicStage
 from ..solvers.static.stepping import SolverSettings, StaticSolver
 from .build import build_mesh, build_model, build_stages, effects
 from .scene import as_scene
@@ -162,7 +162,7 @@ def run(scene, output: str | os.PathLike | None = None, progress: bool = False, 
     mesh = build_mesh(s, sc.base_dir)
     model = build_model(s, mesh)
     stages = build_stages(s, mesh, model, sc.base_dir)
-    from ..solvers.dynamic.modal import ModalStage
+    from ..solvers.dynamic import ModalStage
 
     static_stages = [st for st in stages if not isinstance(st, (DynamicStage, ModalStage))]
     dyn_stages = [st for st in stages if isinstance(st, DynamicStage)]
@@ -446,7 +446,7 @@ def _massless(s) -> tuple:
 
 
 def _mass(model, lumped, moving, massless=()):
-    from ..solvers.dynamic.modal import MassMatrix
+    from ..assembly.mass import MassMatrix
 
     if moving is None:
         return MassMatrix(model, lumped, massless=massless)
@@ -469,11 +469,11 @@ def _earthquake_uplift(water):
 
 
 def _dynamic_terms(moving, rock, stage, state_force):
-    """What the effects add to the dynamic ``stage`` (:class:`~masonrydam.solvers.dynamic.integration.DynamicTerms`);
+    """What the effects add to the dynamic ``stage`` (:class:`~masonrydam.solvers.dynamic.DynamicTerms`);
     with a foundation of mass, the stage's supports lose the DOFs of the absorbing boundaries (each
     stage's free field starts with its own record at its start: waves of the stage before that are still
     travelling outside the model are not carried over)."""
-    from ..solvers.dynamic.integration import DynamicTerms
+    from ..solvers.dynamic import DynamicTerms
 
     terms = DynamicTerms(state_force=state_force)
     if moving is not None:
@@ -498,7 +498,7 @@ def _run_dynamic(model, static_stages, dyn_stages, stages, u, writer, nodes, jgr
     (the static water and pore forces stay applied); ``moving``: the reservoir moving with the dam
     (:class:`~masonrydam.effects.dynamic_water.DynamicWater`) or None; ``rock``: the foundation with mass
     (:class:`~masonrydam.effects.foundation.Foundation`) or None; ``massless``: groups without mass."""
-    from ..solvers.dynamic.integration import DynamicSolver
+    from ..solvers.dynamic import DynamicSolver
 
     f_static = np.zeros(model.n_dof)
     for st in static_stages:
@@ -557,7 +557,7 @@ def _run_modal(model, stage, u, writer, nodes, dim, moving=None, massless=()):
     """The modes of the static state ``u`` (joint states as committed), written to the result file;
     with the reservoir moving with the dam (``moving``) its added mass, or the coupled dam-water modes
     of a compressible reservoir."""
-    from ..solvers.dynamic.modal import coupled_modal_analysis, modal_analysis
+    from ..solvers.dynamic import coupled_modal_analysis, modal_analysis
 
     model.set_constraints(stage.supports)
     if moving is not None and moving.fluid_step() is not None:
@@ -765,10 +765,10 @@ def _limit_text(solver) -> str:
 
 
 def _energy_warnings(dyn_solvers):
-    """The energy warnings of the run (:func:`~masonrydam.solvers.dynamic.integration.energy_warnings`): the energy
+    """The energy warnings of the run (:func:`~masonrydam.solvers.dynamic.energy_warnings`): the energy
     terms are cumulative over the dynamic stages, so the last stage's solver speaks for the run, with the
     largest balance error of any stage."""
-    from ..solvers.dynamic.integration import energy_warnings
+    from ..solvers.dynamic import energy_warnings
 
     if not dyn_solvers:
         return []

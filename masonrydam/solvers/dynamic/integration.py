@@ -103,7 +103,7 @@ in docs/accuracy.md.
 Fast path (how a step with sticking joints costs about as much as a linear step)
 --------------------------------------------------------------------------------
 The continuum is linear, so the nonlinearity of a step sits in the joint law alone. At the nominal
-step size a step is first solved in *joint space* (:mod:`.joint_space`, ``joint_space = "auto"``):
+step size a step is first solved in *joint space* (:mod:`masonrydam.solvers.joint_space`, ``joint_space = "auto"``):
 the step's equations condensed on the local relative displacements of the nonlinear joint points
 through the dense flexibility ``S = B K_ref^-1 B^T`` of the all-stick effective matrix (set up once
 per stage: one multi-right-hand-side substitution per joint unknown). A step whose points all stick
@@ -116,7 +116,7 @@ gets its own joint-space system, set up the first time it is needed); at the las
 on from its last iterate in the general path below. ``"auto"`` (the same as ``"on"``) condenses any
 number of joint unknowns: up to ``JOINT_SPACE_MAX`` the flexibility S is set up at once (8 m^2
 bytes), above it its columns are computed when a step first needs them and kept in a bounded store
-(:class:`~masonrydam.solvers.dynamic.joint_space.FlexibilityColumns`); ``"off"`` forces the general path.
+(:class:`~masonrydam.solvers.joint_space.FlexibilityColumns`); ``"off"`` forces the general path.
 
 Because the all-stick matrix is symmetric positive definite and solved once or twice per step for
 the whole record, it is factorized as a sparse ``L D L^T`` with numba substitutions
@@ -198,13 +198,16 @@ import scipy.sparse.linalg as spla
 from threadpoolctl import threadpool_limits
 
 from ...errors import ConvergenceError, NumericalError, RunStopped, SceneError
-from .kernels import (joint_step_energy, joint_stored_energy, newmark_kinematics, newmark_residual, step_works,
-                              woodbury_apply, woodbury_factor)
-from .joint_space import (MAX_INITIAL_STIFFNESS_ITERATIONS, SPLIT_INITIAL_STIFFNESS_ITERATIONS, JointSpace,
-                          joint_space_size)
+from ...assembly.damping import RayleighDamping
+from ...assembly.elastic import elastic_joint_full, elastic_tangent_data
+from ...assembly.mass import MassMatrix
+from ...assembly.sparsity import add_to_pattern
+from .kernels import joint_step_energy, joint_stored_energy, newmark_kinematics, newmark_residual, step_works
 from ..chatter import ChatterGuard
+from ..joint_space import (MAX_INITIAL_STIFFNESS_ITERATIONS, SPLIT_INITIAL_STIFFNESS_ITERATIONS, JointSpace,
+                          joint_space_size)
+from ..linear.dense_lu import woodbury_apply, woodbury_factor
 from ..linear.direct import DIRECT_SOLVERS, Factorization, SingularMatrix, SymmetricFactorization, resolve_backend
-from .modal import MassMatrix, RayleighDamping, add_to_pattern, elastic_joint_full, elastic_tangent_data
 
 JOINT_SPACE_MODES = ("auto", "on", "off")
 INTEGRATORS = ("newmark_average", "newmark_linear", "hht", "generalized_alpha", "central_difference")
@@ -259,7 +262,7 @@ class DynamicSettings:
     Woodbury update before refactorizing (0: refactorize whenever the matrix changes);
     stability_safety: fraction of the critical step allowed for conditionally stable schemes;
     joint_space: "auto" | "on" | "off" - Newton condensed on the nonlinear joints
-    (:mod:`.joint_space`; "auto" and "on": whenever the model has nonlinear joints);
+    (:mod:`masonrydam.solvers.joint_space`; "auto" and "on": whenever the model has nonlinear joints);
     adaptive: dt = "auto" (``dt`` is then the largest step, ``tolerance`` the relative local error per step
     and ``dt_min`` (s) the smallest step, default dt / 2^ADAPTIVE_DEFAULT_LEVELS; see
     :meth:`DynamicSolver._run_adaptive`);
@@ -1264,7 +1267,7 @@ class DynamicSolver:
         return DynamicState(st.t, st.u, st.v, st.a, st.energy, st.fluid, st.fw)
 
     def _setup_joint_space(self, ref):
-        """Condense the nominal step on the nonlinear joints (:mod:`.joint_space`) if the settings and
+        """Condense the nominal step on the nonlinear joints (:mod:`masonrydam.solvers.joint_space`) if the settings and
         the size allow (``self._js_by_h`` stays empty otherwise)."""
         self._js_by_h = {}
         s, m = self.s, self.model
@@ -1689,7 +1692,7 @@ class DynamicSolver:
             r0 = float(np.linalg.norm(R))
             js = self._joint_space_for(h)
             if js is not None:
-                # condensed on the joints (module .joint_space): the step's solution from one or two
+                # condensed on the joints (masonrydam.solvers.joint_space): the step's solution from one or two
                 # substitutions; verified below against the full residual like any Newton iterate
                 ref = force_scale(ma_norm, f_int)
                 try:

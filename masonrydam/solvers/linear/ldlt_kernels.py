@@ -181,7 +181,7 @@ def ldlt_solve_block_supernodal(Lp, Li, Lx, d, perm, starts, offsets, panels, B,
     (forward) or ``W[s:e] -= L_below^T W[below]`` (backward) through BLAS ``dgemm``.
 
     Why: a block of right-hand sides is what the joint space computes its flexibility columns with
-    (:class:`~masonrydam.solvers.dynamic.joint_space.FlexibilityColumns`), and entry by entry every stored
+    (:class:`~masonrydam.solvers.joint_space.FlexibilityColumns`), and entry by entry every stored
     entry of L streams a whole row of the block through memory. A product by supernode reads each
     row of the block once per supernode instead of once per entry: on the 3D dam factor (39 744
     equations, 21.8 million entries, supernodes at most 64 wide) a block of 256 took 0.88 s against

@@ -6,5 +6,5 @@
 - :mod:`.arc_length`: Crisfield's cylindrical arc-length and indirect displacement control on the opening of the
   cracking joints, past peaks and through snap-backs.
 
-Imports the linear and dynamic rooms (joint space, elastic tangents); neither imports this one.
+Imports the linear and joint-space rooms and assembly's elastic tangents; never the dynamic room.
 """

@@ -30,12 +30,15 @@ import time
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
+import scipy.sparse as sp
 
+from ...assembly.elastic import elastic_tangent_data
 from ...errors import ConvergenceError, MechanismError, NumericalError
 from ..chatter import ChatterGuard
 from ..diagnostics import find_free_parts
+from ..joint_space import MAX_INITIAL_STIFFNESS_ITERATIONS, JointSpace, joint_space_size, lazy_flexibility
 from ..linear.iterative import rigid_body_modes
-from ..linear.direct import SingularMatrix, make_solver, resolve_backend
+from ..linear.direct import SingularMatrix, SymmetricFactorization, make_solver, resolve_backend
 
 #: tangent factor of open joint points in ordinary Newton iterations: a tiny stiffness in the
 #: tangent only (tractions stay zero) so that a block resting on a single contact point does not make
@@ -299,19 +302,17 @@ class StaticSolver:
             status(f"{self._where}, {text}")
 
     def _joint_space(self):
-        """The joint-space system (:class:`~masonrydam.solvers.dynamic.joint_space.JointSpace`) of the current
+        """The joint-space system (:class:`~masonrydam.solvers.joint_space.JointSpace`) of the current
         constraint set, set up when first needed; None where it does not apply.
 
         Why: the blocks are linear elastic, so a load step is nonlinear only in the joint law, and the
         step can be solved on the relative displacements of the nonlinear joints, condensed from the
         all-stick stiffness ``K_ref`` (factorized once per constraint set, L D L^T), as the dynamic
-        solver does with its effective matrix (:mod:`.joint_space`): no sparse factorization per
+        solver does with its effective matrix (:mod:`masonrydam.solvers.joint_space`): no sparse factorization per
         iteration. It applies with ``joint_space = "auto"``, full Newton, a direct solver and nonlinear
         joints (above JOINT_SPACE_MAX joint unknowns the columns of the flexibility are computed as the
-        iterations need them, :class:`~masonrydam.solvers.dynamic.joint_space.FlexibilityColumns`, in models of
+        iterations need them, :class:`~masonrydam.solvers.joint_space.FlexibilityColumns`, in models of
         at least STATIC_COLUMNS_MIN_EQUATIONS equations)."""
-        from ..dynamic.joint_space import JointSpace, joint_space_size
-
         m, s = self.model, self.s
         if s.joint_space == "off" or s.method != "newton" or not m.nonlinear or not m.condensable \
                 or not m.joint_space_capable:
@@ -321,16 +322,9 @@ class StaticSolver:
         self._js, self._js_dofmap = None, m.dofmap
         if resolve_backend(s.linear_solver, n_dof=len(m.dofmap.free), dim=m.dim) == "amg":
             return None
-        from ..dynamic import joint_space
-
-        if (joint_space_size(m) > joint_space.JOINT_SPACE_MAX
+        if (lazy_flexibility(joint_space_size(m))
                 and len(m.dofmap.free) < STATIC_COLUMNS_MIN_EQUATIONS):
             return None
-        import scipy.sparse as sp
-
-        from ..linear.direct import SymmetricFactorization
-        from ..dynamic.modal import elastic_tangent_data
-
         t0 = time.perf_counter()
         n = len(m.dofmap.free)
         K_ref = sp.csr_matrix((elastic_tangent_data(m), m.indices, m.indptr), shape=(n, n))
@@ -351,8 +345,6 @@ class StaticSolver:
         returned where the joint-space iteration converged (the general Newton iterations check it
         against the full residual and go on from it if needed), else ``u`` itself, with the joint
         states as committed."""
-        from ..dynamic.joint_space import MAX_INITIAL_STIFFNESS_ITERATIONS
-
         m, free = self.model, self.model.dofmap.free
         f_int, _ = m.evaluate(u, want_tangent=False)
         R = (f_int - self._with_state_load(f_ext))[free]

@@ -56,8 +56,8 @@ from scipy.linalg.lapack import dgetrf
 
 from ...errors import STATUS_NAN, STATUS_OK
 from ...materials import mohr_coulomb as mc
-from .kernels import STATUS_SINGULAR
-from .joint_space_kernels import (active_components, add_flexibility_product, apply_correction, capacitance_assemble,
+from ..linear.dense_lu import STATUS_SINGULAR
+from .kernels import (active_components, add_flexibility_product, apply_correction, capacitance_assemble,
                                   capacitance_update_solve, condensed_residual, joint_points_evaluate,
                                   joint_space_correction, joint_space_reevaluate_points, state_key,
                                   subtract_columns_product)
@@ -112,9 +112,9 @@ SINGULAR_PIVOT = 1e-14
 
 def capacitance_lu(ST, slot, rows, qt):
     """``(status, J, piv)``: LU factors of the capacitance matrix ``I + Qt_a S_:a`` of the active
-    components ``rows`` (see :func:`.joint_space_kernels.capacitance_assemble`), in ``J`` (na, na),
+    components ``rows`` (see :func:`.kernels.capacitance_assemble`), in ``J`` (na, na),
     Fortran order, with the 0-based row swaps ``piv`` (na,) int64 in LAPACK's order, for
-    :func:`.joint_space_kernels.joint_space_correction`.
+    :func:`.kernels.joint_space_correction`.
 
     The factorization is LAPACK's ``dgetrf`` (partial pivoting; Golub & Van Loan 2013, Alg. 3.4.1),
     not a loop written out in numba: it is blocked and about 9x faster at the sizes met here (0.29 ms
@@ -145,6 +145,12 @@ def capacitance_lu(ST, slot, rows, qt):
 def joint_space_size(model) -> int:
     """Number of joint unknowns ``m`` (points x dim) of the nonlinear joint sets of ``model``."""
     return sum(g.n_elem * g.nip * model.dim for g in model.igroups if g.nonlinear)
+
+
+def lazy_flexibility(m: int) -> bool:
+    """Whether the flexibility of ``m`` joint unknowns is computed column by column as iterations need it
+    (above :data:`JOINT_SPACE_MAX`) rather than set up dense at once."""
+    return m > JOINT_SPACE_MAX
 
 
 def joint_operator(model) -> tuple[sp.csr_matrix, np.ndarray, np.ndarray, np.ndarray]:
@@ -194,7 +200,7 @@ class ColumnStoreFull(Exception):
 class FlexibilityColumns:
     """Columns of the joint flexibility ``S = B_f K_ref^-1 B_f^T`` (m x m, m/N), as rows of ``ST``
     (capacity, m) with ``slot`` (m,) int64 (column ``j`` is ``ST[slot[j]]``, ``-1``: not stored; the
-    layout of :mod:`.joint_space_kernels`).
+    layout of :mod:`.kernels`).
 
     Why: the dense S takes ``8 m^2`` bytes and ``m`` substitutions to set up (4.7 GB and about 24 000
     substitutions for the 3D dam of ``examples/dam_3d_gravity.toml``), but an iteration reads only
@@ -320,7 +326,7 @@ class JointSpace:
         n_eq = len(free)
         nnz_factor = getattr(factorization, "nnz_factor", 0)
         #: the store is dense (every column computed now) up to JOINT_SPACE_MAX unknowns, else lazy
-        lazy = m > JOINT_SPACE_MAX
+        lazy = lazy_flexibility(m)
         capacity = max(1, int(column_memory_share * FLEXIBILITY_MEMORY_MAX) // (8 * m)) if lazy else m
         #: (m, n_eq) the transpose of X = K_ref^-1 B_f^T, or None (not kept: too big, not asked for, or a
         #: factorization that does not report its fill)

@@ -1,20 +1,20 @@
-"""Numba kernels of the joint-space (condensed) Newton solver, :mod:`masonrydam.solvers.dynamic.joint_space`.
+"""Numba kernels of the joint-space (condensed) Newton solver, :mod:`masonrydam.solvers.joint_space.condensation`.
 
 Notation (see that module): the ``P`` joint integration points of the nonlinear joint sets, each with
 ``dim`` local relative-displacement components, give ``m = P * dim`` joint unknowns ``delta``
 (local frame, m). Columns of the joint flexibility ``S = B K_ref^-1 B^T`` (m/N) are rows of ``ST``
 (k, m), so that a column is contiguous: column ``j`` of ``S`` is ``ST[slot[j]]``, with ``slot`` (m,)
 int64 (``slot = arange(m)`` when every column is stored; ``-1`` for a column not in the store, which
-no kernel reads: :class:`~masonrydam.solvers.dynamic.joint_space.FlexibilityColumns` fetches the columns a
+no kernel reads: :class:`~masonrydam.solvers.joint_space.condensation.FlexibilityColumns` fetches the columns a
 call needs first). ``q`` (P, dim) is the joint force
 correction ``w (t - D0 delta)`` (N) and ``qt`` (P, dim, dim) its derivative ``w (C - D0)`` (N/m), with
 ``w`` the point's tributary area (m^2), ``D0 = diag(ks, [ks,] kn)`` and ``t``, ``C`` the traction and
 tangent of the joint law.
 
 All kernels are single-threaded and deterministic (docs/architecture.md) and return a status code.
-The LU of the capacitance matrix is LAPACK's ``getrf`` (called from :mod:`.joint_space`, pinned to
+The LU of the capacitance matrix is LAPACK's ``getrf`` (called from :mod:`.condensation`, pinned to
 one BLAS thread); the substitutions with its factors and the small LU of a Woodbury update are
-written out here (:func:`lu_solve_colmajor`, :func:`.kernels.lu_solve_inplace`).
+written out here (:func:`lu_solve_colmajor`, :func:`masonrydam.solvers.linear.dense_lu.lu_solve_inplace`).
 """
 from __future__ import annotations
 
@@ -25,7 +25,7 @@ from ...errors import STATUS_NAN, STATUS_OK
 from ...materials.mohr_coulomb import (P_COHESION, P_KN, P_KS, P_KS_RESIDUAL, P_OPEN_TANGENT, P_TAN_PHI,
                                       P_TENSILE_STRENGTH, S_BACK_STRESS, S_BOND_BROKEN, S_CODE, S_PLASTIC_SLIP,
                                       STICK, mohr_coulomb_point, write_tangent, write_trial)
-from .kernels import lu_factor_inplace, lu_forward_inplace, lu_solve_inplace
+from ..linear.dense_lu import lu_factor_inplace, lu_forward_inplace, lu_solve_inplace
 from ..linear.ldlt_kernels import UNSIGNED
 
 #: more rows changed than allowed for an update of the reference LU: refactorize instead
@@ -129,7 +129,7 @@ def joint_points_evaluate(params_table, param_index, weight, delta, state_base, 
     the point sticks (its correction then never enters the condensed system). A point with
     ``held[p] != 0`` (P,) int8 is held sticking whatever its ``delta``: elastic traction
     ``D0 (delta - s_p)``, committed state otherwise (an iteration device of
-    :meth:`~masonrydam.solvers.dynamic.joint_space.JointSpace.solve_step`, never a converged state). Returns
+    :meth:`~masonrydam.solvers.joint_space.condensation.JointSpace.solve_step`, never a converged state). Returns
     STATUS_OK, or STATUS_NAN with the point in ``info[0]``."""
     return joint_law_at_points(_ALL_POINTS, delta.shape[0], params_table, param_index, weight, delta, state_base,
                                state_trial, traction, q, qt, codes, info, held)
@@ -289,7 +289,7 @@ def joint_space_correction(ST, slot, F, rows, qt, J, piv, z, step):
 
     With ``z = Qt_a D`` on the components ``rows`` where ``Qt`` has a nonzero row (the other
     components of ``Qt D`` vanish): ``D = -F - S_:a z`` and ``(I + Qt_a S_:a) z = -Qt_a F``, solved with
-    the LU factors of :func:`~masonrydam.solvers.dynamic.joint_space.capacitance_lu` in ``J``, ``piv`` (row
+    the LU factors of :func:`~masonrydam.solvers.joint_space.condensation.capacitance_lu` in ``J``, ``piv`` (row
     swaps in LAPACK's order, 0-based); ``z`` (>= na) is work space.
     Returns STATUS_OK or STATUS_NAN."""
     dim = qt.shape[1]

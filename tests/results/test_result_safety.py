@@ -1,0 +1,394 @@
+"""A run never destroys a result, and a stopped run keeps every converged step (issue 22, part 1).
+
+- the working file ``NAME.partial.nc`` is moved over the target only when the run completes: a failing
+  run leaves an earlier result byte for byte, also while another process holds it open;
+- Ctrl-C (SIGINT) and SIGTERM stop a real ``masonrydam run`` process at the end of a step with exit
+  code 130 / 143, one line naming the step and the file, and no traceback; the steps kept equal those
+  of an uninterrupted run (the kernels are deterministic);
+- a second request aborts at once; SIGKILL leaves the earlier result and a readable working file
+  that :func:`masonrydam.results.files.open_result` reports as left by a run that did not finish.
+
+The physics of the scene (the Newmark sliding block of test_dynamics) is checked there; here the
+kept steps are compared with a complete run of the same scene.
+"""
+from __future__ import annotations
+
+import hashlib
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+import warnings
+
+import numpy as np
+import pytest
+import xarray as xr
+
+import masonrydam
+from masonrydam.cli.main import main
+from masonrydam.errors import RunStopped
+from masonrydam.results.files import IncompleteResultWarning, open_result, partial_path
+from masonrydam.scene.stopping import StopRequests
+from scenes import sliding_block
+
+#: the sliding block of test_dynamics (Newmark 1965; mu = 0.2, a 0.4 g rectangular pulse of 0.2 s),
+#: as a TOML scene for the command line; its duration is set per test
+SLIDING_TOML = """
+[model]
+name = "sliding_block"
+thickness = 1.0
+[mesh]
+generator = "blocks_2d"
+parameters = {{ blocks = [{{ x0 = 0, y0 = 0, x1 = 2, y1 = 0.25, group = "base" }},
+               {{ x0 = 0, y0 = 0.25, x1 = 2, y1 = 0.75, group = "block" }}], element_size = 0.25 }}
+[materials.base]
+youngs_modulus = 3e10
+poisson_ratio = 0.2
+density = 2000
+[materials.block]
+youngs_modulus = 3e10
+poisson_ratio = 0.2
+density = 2000
+[joints.joints]
+normal_stiffness = 1e10
+shear_stiffness = 1e10
+friction_angle = 11.309932474020215
+[[supports]]
+set = "base"
+[[stages]]
+name = "gravity"
+loads = [{{ type = "self_weight" }}]
+[[stages]]
+name = "pulse"
+type = "dynamic"
+dt = 0.002
+duration = {duration}
+integrator = "newmark_average"
+ground_motion.x.pulse = {{ shape = "rectangular", amplitude = 3.92266, duration = 0.2 }}
+"""
+
+
+def sha256(path) -> str:
+    return hashlib.sha256(open(path, "rb").read()).hexdigest()
+
+
+def failing_scene():
+    """Fails after validation, in its first dynamic steps: one Newton iteration allowed, no sub-steps,
+    and the block starts to slide (as in test_dynamics' non-converging test)."""
+    return sliding_block(duration=0.2, dt=0.002, max_iterations=1, max_substeps=0, joint_space="off")
+
+
+def write_earlier_result(path):
+    ds = masonrydam.run(sliding_block(duration=0.05), output=path)
+    assert ds.attrs["completed"] == "true"
+    return ds
+
+
+def test_failing_run_keeps_an_open_earlier_result(tmp_path):
+    """Another process holds the earlier result open (lazily, with xarray); a run that fails after
+    validation leaves that file byte for byte, the reader reads its old values, and the failed run's
+    converged steps go to out.partial.nc, which the error names."""
+    out = tmp_path / "out.nc"
+    old = write_earlier_result(out)
+    digest = sha256(out)
+    reader = subprocess.Popen(
+        [sys.executable, "-c",
+         "import sys, xarray as xr; ds = xr.open_dataset(sys.argv[1]); print('open', flush=True); "
+         "sys.stdin.readline(); u = ds.displacement.values; print(repr(float(abs(u).sum())), u.shape[0], "
+         "ds.attrs['completed'], flush=True)", str(out)],
+        stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+    try:
+        assert reader.stdout.readline().strip() == "open"
+        with pytest.raises(masonrydam.ConvergenceError) as ei:
+            masonrydam.run(failing_scene(), output=out)
+        answer, _ = reader.communicate("go\n", timeout=60)
+    finally:
+        reader.kill()
+    total, steps, completed = answer.split()
+    assert float(total) == float(np.abs(old.displacement.values).sum())
+    assert int(steps) == old.sizes["step"] and completed == "true"
+    assert sha256(out) == digest
+    notes = " ".join(getattr(ei.value, "__notes__", []))
+    partial = partial_path(out)
+    assert str(partial) in notes and "unchanged" in notes
+    with pytest.warns(IncompleteResultWarning, match="status 'failed'"):
+        ds = open_result(partial)
+    assert ds.attrs["completed"] == "false" and ds.attrs["status"] == "failed"
+    assert "ConvergenceError" in ds.attrs["status_reason"]
+    assert ds.sizes["step"] >= 2 and np.isfinite(ds.displacement.values).all()
+
+
+def test_failing_run_without_earlier_result_keeps_its_steps_at_the_target(tmp_path):
+    out = tmp_path / "out.nc"
+    with pytest.raises(masonrydam.ConvergenceError) as ei:
+        masonrydam.run(failing_scene(), output=out)
+    assert f"kept in {out}" in " ".join(ei.value.__notes__)
+    assert not partial_path(out).exists()
+    ds = xr.load_dataset(out)
+    assert ds.attrs["status"] == "failed" and ds.sizes["step"] >= 2
+
+
+def test_completed_run_replaces_the_result_and_leaves_no_working_file(tmp_path):
+    """A completed run moves its working file over the earlier result (a stale working file of an
+    earlier stopped run is overwritten), and the new result is the new scene's."""
+    out = tmp_path / "out.nc"
+    write_earlier_result(out)
+    partial_path(out).write_bytes(b"left by an earlier stopped run")
+    ds = masonrydam.run(sliding_block(duration=0.1), output=out)
+    assert not partial_path(out).exists()
+    again = xr.load_dataset(out)
+    assert again.attrs["completed"] == "true" and again.sizes["step"] == ds.sizes["step"]
+    assert float(again.time.values[-1]) == pytest.approx(0.1)
+
+
+def test_output_path_errors_come_before_any_work(tmp_path, monkeypatch):
+    run_module = sys.modules["masonrydam.scene.run"]
+
+    def _forbidden(*a, **k):
+        raise AssertionError("the mesh was built although the output path is unusable")
+
+    monkeypatch.setattr(run_module, "build_mesh", _forbidden)
+    with pytest.raises(masonrydam.MasonrydamError, match="is a folder"):
+        masonrydam.run(sliding_block(), output=tmp_path)
+    with pytest.raises(masonrydam.MasonrydamError, match="does not exist; create it first"):
+        masonrydam.run(sliding_block(), output=tmp_path / "missing" / "out.nc")
+
+
+# ------------------------------------------------------------------------------------------------
+# stopping a real process
+# ------------------------------------------------------------------------------------------------
+def start_cli_run(tmp_path, duration=600.0):
+    scene = tmp_path / "slide.toml"
+    scene.write_text(SLIDING_TOML.format(duration=duration))
+    out = tmp_path / "out.nc"
+    proc = subprocess.Popen([sys.executable, "-m", "masonrydam.cli.main", "run", str(scene), "-o", str(out),
+                             "--no-progress"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    return proc, out
+
+
+def wait_for_steps(proc, work, settle=2.0, timeout=120.0):
+    """Wait until the working file exists, then ``settle`` seconds more (the run is stepping)."""
+    deadline = time.time() + timeout
+    while not work.exists():
+        assert proc.poll() is None, "the run ended by itself: " + proc.stderr.read()
+        assert time.time() < deadline, "no working file appeared"
+        time.sleep(0.05)
+    time.sleep(settle)
+    assert proc.poll() is None, "the run ended by itself"
+
+
+@pytest.mark.parametrize("sig, code, status", [(signal.SIGINT, 130, "interrupted"),
+                                               (signal.SIGTERM, 143, "terminated")])
+def test_signal_stops_at_the_end_of_a_step_and_keeps_the_steps(tmp_path, sig, code, status):
+    """SIGINT / SIGTERM on `masonrydam run` over an earlier result: exit 130 / 143, one line naming the
+    step, the time and the file, no traceback; the earlier result stays byte for byte; the kept steps
+    are those of an uninterrupted run, the last one the step it stopped at."""
+    proc, out = start_cli_run(tmp_path)
+    out.write_bytes(b"an earlier result")
+    work = partial_path(out)
+    wait_for_steps(proc, work)
+    proc.send_signal(sig)
+    stdout, stderr = proc.communicate(timeout=120)
+    assert proc.returncode == code, stderr
+    assert "Traceback" not in stderr and len(stderr.strip().splitlines()) == 1, stderr
+    line = stderr.strip()
+    assert line.startswith("masonrydam: stopped at step ") and f"kept in {work}" in line, line
+    assert "(t = " in line and "of 300000" in line
+    assert out.read_bytes() == b"an earlier result"
+    with pytest.warns(IncompleteResultWarning, match=f"status '{status}'"):
+        ds = open_result(work)
+    assert ds.attrs["completed"] == "false" and ds.attrs["status"] == status
+    k = int(line.split("stopped at step ")[1].split()[0])
+    assert ds.attrs["status_reason"].startswith(f"stopped at step {k} of 300000")
+    t_last = float(ds.time.values[-1])
+    assert t_last == pytest.approx(0.002 * k)
+    assert f"{ds.sizes['step']} recorded steps kept" in line
+    # the kept history equals an uninterrupted run of the same scene up to the step it stopped at (to
+    # round-off: the static solve's last bits differ between processes with a threaded direct solver)
+    ref = masonrydam.run(sliding_block(duration=t_last, dt=0.002, integrator="newmark_average"))
+    assert ref.sizes["step"] == ds.sizes["step"]
+    u_ref = ref.displacement.values
+    np.testing.assert_allclose(ds.displacement.values, u_ref, rtol=0, atol=1e-8 * np.abs(u_ref).max())
+    np.testing.assert_array_equal(ds.joint_state.values, ref.joint_state.values)
+
+
+def test_two_quick_ctrl_c_end_the_process_without_a_traceback(tmp_path):
+    """Two SIGINT in a row (the second stops at once if the step has not ended yet): exit 130, one
+    line, no traceback, and a readable file with the steps converged before."""
+    proc, out = start_cli_run(tmp_path)
+    wait_for_steps(proc, partial_path(out))
+    proc.send_signal(signal.SIGINT)
+    proc.send_signal(signal.SIGINT)
+    _, stderr = proc.communicate(timeout=120)
+    assert proc.returncode == 130, stderr
+    assert "Traceback" not in stderr and len(stderr.strip().splitlines()) == 1, stderr
+    assert stderr.startswith("masonrydam: stopped ") and f"kept in {out}" in stderr
+    with pytest.warns(IncompleteResultWarning, match="status 'interrupted'"):
+        ds = open_result(out)
+    assert ds.sizes["step"] >= 3 and np.isfinite(ds.displacement.values).all()
+
+
+def test_sigkill_leaves_the_earlier_result_and_a_readable_running_file(tmp_path):
+    proc, out = start_cli_run(tmp_path)
+    write_earlier_result(out)
+    digest = sha256(out)
+    work = partial_path(out)
+    wait_for_steps(proc, work)
+    proc.kill()
+    proc.communicate(timeout=60)
+    assert sha256(out) == digest
+    with pytest.warns(IncompleteResultWarning, match="did not finish .status 'running'.*killed"):
+        ds = open_result(work)
+    assert ds.attrs["completed"] == "false" and ds.sizes["step"] >= 3
+    assert np.isfinite(ds.displacement.values).all()
+
+
+def test_second_request_aborts_at_once(tmp_path, monkeypatch):
+    """Two requests inside one step: the run stops in that step, without converging it, keeps the steps
+    before it and raises RunStopped (what the command line turns into one line and exit 130)."""
+    from masonrydam.solvers.dynamic import DynamicSolver
+
+    calls = {"n": 0}
+    original = DynamicSolver._maybe_emit
+
+    def emit_then_signal(self, stage, k, st, n_steps):
+        original(self, stage, k, st, n_steps)
+        calls["n"] += 1
+        if calls["n"] == 5:  # inside the sixth step: two Ctrl-C before it converges
+            os.kill(os.getpid(), signal.SIGINT)
+            os.kill(os.getpid(), signal.SIGINT)
+
+    previous = signal.getsignal(signal.SIGINT)
+    monkeypatch.setattr(DynamicSolver, "_maybe_emit", emit_then_signal)
+    out = tmp_path / "out.nc"
+    with pytest.raises(RunStopped) as ei:
+        masonrydam.run(sliding_block(duration=1.0), output=out)
+    assert signal.getsignal(signal.SIGINT) is previous, "the run must restore the signal handlers"
+    err = ei.value
+    assert err.status == "interrupted" and err.exit_code == 130 and "at once" in str(err)
+    assert err.kept == out
+    ds = xr.load_dataset(out)
+    assert ds.attrs["status"] == "interrupted" and "at once" in ds.attrs["status_reason"]
+    # gravity step, the initial state and the five converged dynamic steps; none half written
+    assert ds.sizes["step"] == err.steps == 7
+    assert np.isfinite(ds.displacement.values).all() and np.isfinite(ds.energy_kinetic.values[1:]).all()
+
+
+def test_an_abort_waits_for_the_end_of_a_write():
+    stops = StopRequests()
+    stops._handle(signal.SIGTERM, None)
+    assert stops.requested() == "terminated"
+    with pytest.raises(KeyboardInterrupt):
+        with stops.writing():
+            stops._handle(signal.SIGINT, None)  # deferred: the write is not cut
+            written = True
+    assert written and stops.requested() == "terminated"
+    with pytest.raises(KeyboardInterrupt):
+        stops._handle(signal.SIGINT, None)
+
+
+# ------------------------------------------------------------------------------------------------
+# command-line messages
+# ------------------------------------------------------------------------------------------------
+def cli(capsys, *argv):
+    code = main([str(a) for a in argv])
+    err = capsys.readouterr().err
+    assert "Traceback" not in err
+    return code, err
+
+
+def test_file_system_mistakes_are_one_line_messages(tmp_path, capsys):
+    scene = tmp_path / "slide.toml"
+    scene.write_text(SLIDING_TOML.format(duration=0.01))
+    missing = tmp_path / "missing"
+    cases = [
+        (("run", scene, "-o", tmp_path), "is a folder"),
+        (("run", scene, "-o", missing / "out.nc"), f"the folder '{missing}' does not exist"),
+        (("run", tmp_path, "-o", tmp_path / "x.nc"), "is a folder; give a scene TOML file"),
+        (("check", tmp_path), "is a folder; give a scene TOML file"),
+        (("export-mesh", scene, "-o", missing / "mesh.vtu"), "does not exist"),
+        (("records", "show", "elcentro_1940_ns_peknold", "-o", missing / "r.png"), "does not exist"),
+    ]
+    for argv, text in cases:
+        code, err = cli(capsys, *argv)
+        assert code == 2 and text in err and len(err.strip().splitlines()) == 1, (argv, err)
+
+
+def test_plot_names_what_is_wrong_with_the_file(tmp_path, capsys):
+    text = tmp_path / "notes.nc"
+    text.write_text("not a result")
+    code, err = cli(capsys, "plot", text)
+    assert code == 2 and "is not a netCDF file" in err
+    empty = tmp_path / "empty.nc"
+    s = sliding_block()
+    s["supports"] = []  # a mechanism before the first step: a result file without steps
+    with pytest.raises(masonrydam.MechanismError):
+        masonrydam.run(s, output=empty)
+    code, err = cli(capsys, "plot", empty)
+    assert code == 2 and "has no steps to plot" in err
+    good = tmp_path / "good.nc"
+    write_earlier_result(good)
+    code, err = cli(capsys, "plot", good, "-o", tmp_path / "missing" / "p.png")
+    assert code == 2 and "does not exist" in err
+    code, err = cli(capsys, "plot", good, "-o", tmp_path / "p.png")
+    assert code == 0 and (tmp_path / "p.png").stat().st_size > 1000
+
+
+def test_version(capsys):
+    with pytest.raises(SystemExit) as ei:
+        main(["--version"])
+    assert ei.value.code == 0
+    assert capsys.readouterr().out.strip() == f"masonrydam {masonrydam.__version__}"
+
+
+def test_open_result_of_a_completed_run_is_silent(tmp_path):
+    out = tmp_path / "out.nc"
+    write_earlier_result(out)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        ds = open_result(out)
+    assert ds.attrs["status"] == "completed"
+
+
+def test_a_run_never_truncates_another_runs_working_file(tmp_path):
+    """A working file that another run is writing (HDF5's exclusive lock) is refused with a message; one
+    left by an earlier run and open in a reader is replaced by a new file, the reader keeps its copy."""
+    import netCDF4
+
+    out = tmp_path / "out.nc"
+    work = partial_path(out)
+    busy = netCDF4.Dataset(work, "w")  # as a run writing to the same output holds it
+    busy.createDimension("step", None)
+    busy.sync()
+    try:
+        with pytest.raises(masonrydam.MasonrydamError, match="being written by another run"):
+            masonrydam.run(sliding_block(duration=0.05), output=out)
+    finally:
+        busy.close()
+    assert netCDF4.Dataset(work).dimensions["step"].isunlimited()
+    write_earlier_result(out)
+    with pytest.raises(masonrydam.ConvergenceError):
+        masonrydam.run(failing_scene(), output=out)  # its steps stay in out.partial.nc
+    stale = xr.open_dataset(work)  # a reader of the failed run's steps
+    try:
+        masonrydam.run(sliding_block(duration=0.1), output=out)
+        assert not work.exists() and xr.load_dataset(out).attrs["completed"] == "true"
+        assert stale.attrs["status"] == "failed" and np.isfinite(stale.displacement.values).all()
+        assert stale.sizes["step"] >= 2
+    finally:
+        stale.close()
+
+
+def test_progress_shows_what_a_static_step_is_doing(capsys):
+    """The progress bar names the stage, the load factor, the Newton iteration and the residual of the
+    step being solved, so that a long first step is visibly alive."""
+    sc = sliding_block(duration=0.01)
+    sc["solver"] = {"joint_space": "off"}
+    masonrydam.run(sc, progress=True)
+    err = capsys.readouterr().err
+    assert "gravity: load factor 1, iteration 0, residual " in err
+    # the last iteration shown is the converged one: the residual below the force tolerance (1e-6)
+    last = re.findall(r"gravity: load factor 1, iteration (\d+), residual ([0-9.e+-]+)", err)[-1]
+    assert int(last[0]) >= 1 and float(last[1]) < 1e-6

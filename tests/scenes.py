@@ -1,0 +1,214 @@
+"""Scene builders shared by the tests: each returns a fresh scene dictionary (what ``masonrydam.run`` takes)
+of one reference problem, with its physical parameters as keywords and any other entry changed through
+``overrides``.
+
+``overrides`` is a mapping merged into the scene by :func:`merged`: a dotted key names one entry
+(``{"stages.1.dt": 0.001}``, list items by their index), a nested dictionary is merged key by key
+(``{"joints": {"joints": {"cohesion": 1e5}}}``), any other value replaces the entry. Use it for changes that
+do not alter the problem's identity; a test that needs another problem writes its own scene.
+
+The problems (shared/reference/PROBLEMS.md numbers in brackets):
+
+- :func:`sliding_block`: Newmark's (1965) rigid block on a Coulomb joint under a ground-acceleration pulse [1];
+- :func:`rocking_block`, :func:`rocking_block_model`: Housner's (1963) slender block on a no-tension,
+  no-slip joint [3];
+- :func:`tilted_block`: the same kind of block under a growing horizontal body force (a tilted table) [3];
+- :func:`block_on_elastic_joint`: a rigid block on linear joint springs with a modal stage (Chopra 2012,
+  sec. 10.2).
+"""
+from __future__ import annotations
+
+import copy
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+#: standard gravity (m/s2), the one the scenes' default gravity uses
+G = 9.80665
+
+
+# ----------------------------------------------------------------------------------------------
+# overrides
+# ----------------------------------------------------------------------------------------------
+
+def merged(scene: dict, overrides: Mapping | None) -> dict:
+    """``scene`` with ``overrides`` merged into it (in place; ``scene`` is returned). A key with dots is a
+    path (``"stages.1.output.stride"``; an integer part indexes a list); a dictionary value merges into a
+    dictionary entry key by key; any other value replaces the entry (lists are replaced whole)."""
+    for key, value in (overrides or {}).items():
+        parts = key.split(".")
+        parent = scene
+        for part in parts[:-1]:
+            parent = _child(parent, part, key)
+        _assign(parent, parts[-1], copy.deepcopy(value), key)
+    return scene
+
+
+def _child(container, part, key):
+    if isinstance(container, list):
+        return container[_index(container, part, key)]
+    return container.setdefault(part, {})
+
+
+def _assign(container, part, value, key):
+    if isinstance(container, list):
+        container[_index(container, part, key)] = value
+    elif isinstance(value, Mapping) and isinstance(container.get(part), dict):
+        merged(container[part], value)
+    else:
+        container[part] = value
+
+
+def _index(items: list, part: str, key: str) -> int:
+    if not part.lstrip("-").isdigit():
+        raise KeyError(f"override {key!r}: {part!r} is not an index of a list")
+    return int(part)
+
+
+# ----------------------------------------------------------------------------------------------
+# Newmark's sliding block (reference problem 1)
+# ----------------------------------------------------------------------------------------------
+
+def sliding_block(*, shape="rectangular", amplitude=0.4 * G, pulse=0.2, mu=0.2, dt=0.002, duration=0.6,
+                  integrator="hht", kn=1e10, damping=None, output=None, overrides=None, **pulse_stage):
+    """A 2 x 0.5 m block on a fixed 2 x 0.25 m base (E = 30 GPa, 2000 kg/m3, quad4 of 0.25 m), joined by a
+    cohesionless Coulomb joint of friction coefficient ``mu`` and stiffness ``kn`` (normal and shear): a
+    gravity stage, then a dynamic stage ``"pulse"`` of ``duration`` s under one horizontal ground
+    acceleration pulse (``shape``, ``amplitude`` in m/s2, ``pulse`` s long). Newmark (1965), Geotechnique
+    15:139-160: once the ground acceleration exceeds mu g the block slips, a rigid block's permanent slip
+    is a closed form of the pulse. ``damping``, ``output`` and the other keywords (``max_iterations``,
+    ``joint_space``, ``mass``, integrator parameters, ...) are keys of the dynamic stage."""
+    phi = math.degrees(math.atan(mu))
+    stage = {"name": "pulse", "type": "dynamic", "dt": dt, "duration": duration, "integrator": integrator,
+             "ground_motion": {"x": {"pulse": {"shape": shape, "amplitude": amplitude, "duration": pulse}}}}
+    if damping:
+        stage["damping"] = damping
+    if output:
+        stage["output"] = output
+    stage.update(pulse_stage)
+    scene = {
+        "model": {"name": "sliding_block", "thickness": 1.0},
+        "mesh": {"generator": "blocks_2d", "parameters": {"blocks": [
+            {"x0": 0, "y0": 0, "x1": 2, "y1": 0.25, "group": "base"},
+            {"x0": 0, "y0": 0.25, "x1": 2, "y1": 0.75, "group": "block"}], "element_size": 0.25}},
+        "materials": {"base": {"youngs_modulus": 30e9, "poisson_ratio": 0.2, "density": 2000},
+                      "block": {"youngs_modulus": 30e9, "poisson_ratio": 0.2, "density": 2000}},
+        "joints": {"joints": {"normal_stiffness": kn, "shear_stiffness": kn, "friction_angle": phi}},
+        "supports": [{"set": "base", "components": ["x", "y"]}],
+        "stages": [{"name": "gravity", "loads": [{"type": "self_weight"}]}, stage],
+    }
+    return merged(scene, overrides)
+
+
+# ----------------------------------------------------------------------------------------------
+# Housner's rocking block (reference problem 3)
+# ----------------------------------------------------------------------------------------------
+
+#: the rocking block's width 2b and height 2h (m): b/h = 0.2
+ROCKING_BLOCK_WIDTH, ROCKING_BLOCK_HEIGHT = 0.3, 1.5
+
+
+def rocking_block(stages, *, overrides=None):
+    """A 0.3 x 1.5 m block (b/h = 0.2) standing at (0, 0) on a 0.5 x 0.1 m base, both nearly rigid
+    (E = 200 GPa, 2000 kg/m3, quad4 of 0.05 m), on a cohesionless, no-tension joint (kn = ks = 1e12 Pa/m)
+    whose friction (45 degrees) is well above b/h, so that the block rocks and does not slide (Housner
+    1963, BSSA 53(2):403-417: it starts to rock when the base acceleration exceeds g b/h). ``stages`` are
+    the scene's stages."""
+    b, h = ROCKING_BLOCK_WIDTH, ROCKING_BLOCK_HEIGHT
+    scene = {"model": {"name": "rocking", "thickness": 1.0},
+             "mesh": {"generator": "blocks_2d", "parameters": {"blocks": [
+                 {"x0": -0.1, "y0": -0.1, "x1": b + 0.1, "y1": 0.0, "group": "base"},
+                 {"x0": 0.0, "y0": 0.0, "x1": b, "y1": h, "group": "block"}], "element_size": 0.05}},
+             "materials": {"base": {"youngs_modulus": 200e9, "poisson_ratio": 0.2, "density": 2000},
+                           "block": {"youngs_modulus": 200e9, "poisson_ratio": 0.2, "density": 2000}},
+             # no-tension, cohesionless joint, friction well above b/h so that the block rocks, not slides
+             "joints": {"joints": {"normal_stiffness": 1e12, "shear_stiffness": 1e12, "friction_angle": 45.0}},
+             "supports": [{"set": "base", "components": ["x", "y"]}],
+             "stages": stages}
+    return merged(scene, overrides)
+
+
+def rocking_block_model():
+    """The model of :func:`rocking_block` (no loads), its supports and the block's node numbers, for tests
+    that drive the dynamic solver directly: ``(model, supports, block_nodes)``."""
+    from masonrydam.scene import build_mesh, build_model, build_stages
+    from masonrydam.scene.scene import Scene
+
+    sc = Scene(rocking_block([{"name": "gravity", "loads": []}]))
+    mesh = build_mesh(sc.normalized, ".")
+    model = build_model(sc.normalized, mesh)
+    supports = build_stages(sc.normalized, mesh, model)[0].supports
+    block = np.unique(model.cgroups[[g.name for g in model.cgroups].index("block")].conn)
+    return model, supports, block
+
+
+def tilted_block(kinematics, dim=2, *, overrides=None):
+    """A 0.5 x 2 m block (2D; a 0.5 x 0.5 x 2 m prism in 3D) on a 0.25 m thick base, quad4/hex8 of 0.25 m,
+    E = 30 GPa, 2400 kg/m3, on a joint that cannot slide (friction 80 degrees, tan = 5.7 > b/h = 0.25):
+    gravity, then a stage ``"tilt"`` of 100 steps, until failure, of weight plus a horizontal body force
+    0.5 g lambda, a table tilted by tan(alpha) = 0.5 lambda (the block topples at tan(alpha) = b/h).
+    ``kinematics`` is ``[model] kinematics`` ("small" or "large")."""
+    if dim == 2:
+        model = {"name": "tilt", "thickness": 1.0, "kinematics": kinematics}
+        mesh = {"generator": "blocks_2d", "parameters": {"element_size": 0.25, "blocks": [
+            {"x0": 0.0, "y0": -0.25, "x1": 0.5, "y1": 0.0, "group": "base"},
+            {"x0": 0.0, "y0": 0.0, "x1": 0.5, "y1": 2.0, "group": "block"}]}}
+    else:
+        model = {"name": "tilt", "dimension": 3, "kinematics": kinematics}
+        mesh = {"generator": "blocks_3d", "parameters": {"element_size": 0.25, "blocks": [
+            {"x0": 0.0, "y0": 0.0, "z0": -0.25, "x1": 0.5, "y1": 0.5, "z1": 0.0, "group": "base"},
+            {"x0": 0.0, "y0": 0.0, "z0": 0.0, "x1": 0.5, "y1": 0.5, "z1": 2.0, "group": "block"}]}}
+    scene = {"model": model, "mesh": mesh,
+             "materials": {g: {"youngs_modulus": 3e10, "poisson_ratio": 0.2, "density": 2400.0}
+                           for g in ("base", "block")},
+             "joints": {"joints": {"normal_stiffness": 1e12, "shear_stiffness": 1e12, "friction_angle": 80.0}},
+             "supports": [{"set": "base"}],
+             "stages": [{"name": "gravity", "loads": [{"type": "self_weight"}]},
+                        {"name": "tilt", "steps": 100, "until_failure": True,
+                         "loads": [{"type": "self_weight", "acceleration": [0.5 * G] + [0.0] * (dim - 1)}]}]}
+    return merged(scene, overrides)
+
+
+# ----------------------------------------------------------------------------------------------
+# a rigid block on an elastic joint, with a modal stage
+# ----------------------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class ElasticJointBlock:
+    """Dimensions and properties of :func:`block_on_elastic_joint` (SI units)."""
+
+    width: float = 2.0
+    height: float = 1.0
+    density: float = 2000.0
+    normal_stiffness: float = 1e9
+    shear_stiffness: float = 4e8
+    thickness: float = 1.0
+    element_size: float = 0.125
+
+
+ELASTIC_JOINT_BLOCK = ElasticJointBlock()
+
+
+def block_on_elastic_joint(modes=6, mass="consistent", *, overrides=None):
+    """A 2 x 1 m block on a 2 x 0.5 m fixed base, both rigid against the joint (E = 1e14 Pa: E A / H =
+    2e14 N/m against kn A = 2e9 N/m), on a linear joint (kn = 1e9, ks = 4e8 Pa/m): gravity, then a modal
+    stage ``"modes"`` of ``modes`` modes with ``mass`` ("consistent" or "lumped"). A rigid body on
+    distributed springs (Chopra, Dynamics of Structures, 4th ed., sec. 10.2): a vertical mode
+    omega^2 = kn A / m and two coupled sliding-rocking modes."""
+    p = ELASTIC_JOINT_BLOCK
+    material = {"youngs_modulus": 1e14, "poisson_ratio": 0.2, "density": p.density}
+    scene = {
+        "model": {"name": "block_modes", "thickness": p.thickness},
+        "mesh": {"generator": "blocks_2d", "parameters": {"element_size": p.element_size, "blocks": [
+            {"x0": 0.0, "y0": -0.5, "x1": p.width, "y1": 0.0, "group": "base"},
+            {"x0": 0.0, "y0": 0.0, "x1": p.width, "y1": p.height, "group": "block"}]}},
+        "materials": {"base": dict(material), "block": dict(material)},
+        "joints": {"joints": {"law": "linear", "normal_stiffness": p.normal_stiffness,
+                              "shear_stiffness": p.shear_stiffness}},
+        "supports": [{"set": "base"}],
+        "stages": [{"name": "gravity", "loads": [{"type": "self_weight"}]},
+                   {"name": "modes", "type": "modal", "modes": modes, "mass": mass}],
+    }
+    return merged(scene, overrides)

@@ -4,8 +4,10 @@ dotted key when the value is wrong. Quantities go to SI through :mod:`masonrydam
 from __future__ import annotations
 
 import difflib
+import os
+from pathlib import Path
 
-from .errors import SceneError
+from .errors import OutputError, SceneError
 from .units import finite, plausible, quantity
 
 COMPONENT_NAMES = ("x", "y", "z")
@@ -96,3 +98,20 @@ def seconds(value, key, allow_zero=False):
         except ValueError:
             raise SceneError(key, f"cannot read {value!r} as a time") from None
     return plausible(number(value, key, 0.0, open_min=not allow_zero), "time", key, given)
+
+
+def check_output_path(path, option: str = "-o") -> Path:
+    """``path`` as a :class:`~pathlib.Path` once it is known that a file can be written there: it is
+    not a folder, and its folder exists and is writable. The error names ``option`` (the CLI option or
+    the argument that gave the path). Nothing is created."""
+    p = Path(path)
+    if p.is_dir():
+        raise OutputError(f"{option} {str(p)!r} is a folder; give a file path")
+    folder = p.parent if str(p.parent) else Path(".")
+    if not folder.exists():
+        raise OutputError(f"{option} {str(p)!r}: the folder {str(folder)!r} does not exist; create it first")
+    if not folder.is_dir():
+        raise OutputError(f"{option} {str(p)!r}: {str(folder)!r} is not a folder")
+    if not os.access(folder, os.W_OK | os.X_OK):  # results are written beside the target, then renamed
+        raise OutputError(f"{option} {str(p)!r}: the folder {str(folder)!r} is not writable")
+    return p

@@ -22,6 +22,7 @@ import warnings
 from importlib import resources
 from pathlib import Path
 
+from ..checks import check_output_path
 from ..errors import MasonrydamError, RunStopped
 
 
@@ -36,7 +37,6 @@ def _scene_arg(args):
 
 
 def _cmd_run(args):
-    from ..results.files import check_output_path
     from ..scene.run import run
 
     from ..scene.scene import with_overrides
@@ -48,7 +48,7 @@ def _cmd_run(args):
 
 
 def _cmd_check(args):
-    from ..scene.build import build_mesh, build_model, build_stages, effects
+    from ..scene import build_mesh, build_model, build_stages, effects
     from ..scene.scene import Scene
     from ..solvers.static.stepping import check_mechanisms
 
@@ -66,7 +66,7 @@ def _cmd_check(args):
 
 def _cmd_export(args):
     from ..mesh.io import check_mesh_output, write_mesh
-    from ..scene.build import build_mesh
+    from ..scene import build_mesh
     from ..scene.scene import Scene
 
     check_mesh_output(args.output, "-o")  # an extension meshio writes, an existing folder: before any work
@@ -81,7 +81,7 @@ def _cmd_export_results(args):
     """A result file as a ParaView time series: ``.xdmf`` (+ ``.h5``) or ``.pvd`` (+ one ``.vtu`` per step),
     with ``OUT.units.json`` beside it (:func:`masonrydam.results.paraview.export_results`)."""
     from ..results import paraview
-    from ..results.files import check_output_path, open_result
+    from ..results.files import open_result
 
     path = Path(args.result)
     out = check_output_path(args.output or f"{path.stem}.xdmf", "-o")
@@ -120,7 +120,6 @@ def _cmd_records(args):
             print("  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip())
         return 0
     from ..records.plotting import plot_record
-    from ..results.files import check_output_path
 
     name = args.name
     out = check_output_path(args.output or f"{Path(name).stem}.png", "-o")
@@ -155,7 +154,7 @@ def _cmd_plot(args):
     pushover curve; with ``--mode N`` the mode shape N of a result with a modal stage
     (:func:`masonrydam.results.mode_plot.mode_figure`); with ``--deformed`` the deformed blocks and joint
     states of one step (:func:`masonrydam.results.deformed.deformed_figure`)."""
-    from ..results.files import check_output_path, open_result
+    from ..results.files import open_result
 
     path = Path(args.result)
     quantity, select = getattr(args, "quantity", None), getattr(args, "select", None)
@@ -233,7 +232,6 @@ def _cmd_ensemble(args):
     """Run an ensemble file on dask (:func:`masonrydam.ensemble.runner.run_ensemble`): members already in the
     store beside the output are not run again."""
     from ..ensemble.runner import run_ensemble
-    from ..results.files import check_output_path
 
     path = Path(args.ensemble)
     out = check_output_path(args.output or f"{path.stem}.nc", "-o")
@@ -286,7 +284,7 @@ def _cmd_assess(args):
     of a load condition (:func:`masonrydam.results.assess.assessment_report`); exit code 0 whether or not
     the sections meet them."""
     from ..results import assess
-    from ..results.files import check_output_path, open_result
+    from ..results.files import open_result
 
     path = Path(args.result)
     csv_out = check_output_path(args.csv, "--csv") if args.csv else None

@@ -1,37 +1,28 @@
-"""The physical effects a scene can ask for, one module each, and their registry.
+"""The physical effects a scene can ask for, one module (or package) each, and their registry.
 
-Each effect module holds its part of the scene schema (a section such as ``[reservoir]`` or a load
-type such as ``{ type = "self_weight" }``), what it adds to the model (load vectors, pore pressures,
-...), the reference it follows and the words that go into the run's list of simulated effects. A
-scene that does not name an effect pays nothing for it: nothing of it is assembled or allocated,
-and the result attribute ``simulated_effects`` lists only what the scene asked for.
+Each effect holds its part of the scene schema (a section such as ``[reservoir]`` or a load type such as
+``{ type = "self_weight" }``), what it adds to a run (:class:`~masonrydam.effects.base.EffectRun`: loads,
+mass, dashpots, forces in time, coupled fields, result variables, the diagnosis of a failed stage), the
+reference it follows and the words that go into the run's list of simulated effects. A scene that does
+not name an effect pays nothing for it: nothing of it is assembled or allocated, and the result attribute
+``simulated_effects`` lists only what the scene asked for.
 
-Adding an effect: write its module (schema fragment, model contribution, :class:`Effect` entries
-with reference and test file), add the module to :data:`_MODULES`. The scene schema takes the
-sections and load types from here (:data:`SECTIONS`, :data:`LOAD_TYPES`); nothing in the solvers
-changes unless the effect needs a new kind of term.
+Adding an effect: write its module with :class:`Effect` entries (schema fragment, ``describe``,
+``activate`` returning an :class:`~masonrydam.effects.base.EffectRun`, reference, test file) in a list
+``EFFECTS`` and add the module to :func:`_modules`; or, from outside the package, :func:`register` the
+entries. Nothing in ``scene/``, ``results/`` or ``solvers/`` changes (docs/architecture.md).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Callable
 
+from .base import DynamicStageParts, Effect, EffectRun, ModelContext, RunContext, StaticStageLoads, add_force
 
-@dataclass(frozen=True)
-class Effect:
-    """One physical effect.
+__all__ = ["DynamicStageParts", "Effect", "EffectRun", "ModelContext", "RunContext", "StaticStageLoads", "activate",
+           "add_force", "load_types", "register", "registry", "sections", "simulated", "unregister"]
 
-    name: registry key; asked_by: how a scene asks for it (the keys); module: where it lives;
-    reference: the source of its formulas; tests: the test file that checks it against closed forms
-    or published data; describe(scene, model) -> list of lines for ``simulated_effects`` (empty when
-    the normalised scene does not ask for it)."""
-
-    name: str
-    asked_by: str
-    module: str
-    reference: str
-    tests: str
-    describe: Callable[[dict, object], list]
+#: effects registered from outside the package (:func:`register`), after the built-in ones
+_REGISTERED: list[Effect] = []
 
 
 def _modules():
@@ -42,14 +33,31 @@ def _modules():
             foundation)
 
 
+def register(effect: Effect) -> None:
+    """Add ``effect`` to the registry (after the built-in effects, in the order of registration); its
+    ``sections`` and ``load_types`` join the scene schema. A name already registered is an error."""
+    if effect.name in registry():
+        raise ValueError(f"effect '{effect.name}' is already registered")
+    _REGISTERED.append(effect)
+
+
+def unregister(name: str) -> None:
+    """Remove an effect added with :func:`register` (a built-in effect cannot be removed)."""
+    for k, e in enumerate(_REGISTERED):
+        if e.name == name:
+            del _REGISTERED[k]
+            return
+    raise ValueError(f"no effect '{name}' was registered with register()")
+
+
 def registry() -> dict[str, Effect]:
     """name -> :class:`Effect`, in the order the effects are listed in a run's summary."""
     out = {}
-    for mod in _modules():
-        for e in mod.EFFECTS:
-            if e.name in out:
-                raise RuntimeError(f"effect '{e.name}' registered twice ({out[e.name].module}, {e.module})")
-            out[e.name] = e
+    entries = [e for mod in _modules() for e in mod.EFFECTS] + list(_REGISTERED)
+    for e in entries:
+        if e.name in out:
+            raise RuntimeError(f"effect '{e.name}' registered twice ({out[e.name].module}, {e.module})")
+        out[e.name] = e
     return out
 
 
@@ -58,6 +66,8 @@ def sections() -> dict[str, Callable]:
     out = {}
     for mod in _modules():
         out.update(getattr(mod, "SECTIONS", {}))
+    for e in registry().values():
+        out.update(e.sections)
     return out
 
 
@@ -66,7 +76,33 @@ def load_types() -> dict[str, Callable]:
     out = {}
     for mod in _modules():
         out.update(getattr(mod, "LOAD_TYPES", {}))
+    for e in registry().values():
+        out.update(e.load_types)
     return out
+
+
+def stage_load_builders() -> dict[str, Callable]:
+    """Static load types: ``type`` -> ``(model_context, stage_loads, load, key) -> None`` (what the load adds to a
+    :class:`~masonrydam.effects.base.StaticStageLoads`)."""
+    out = {}
+    for e in registry().values():
+        out.update(e.stage_loads)
+    return out
+
+
+def finish_static_stage(context: ModelContext, stage_loads: StaticStageLoads) -> None:
+    """Let every effect finish a static stage's loads (:attr:`Effect.finish_stage`), in registry order."""
+    for e in registry().values():
+        if e.finish_stage is not None:
+            e.finish_stage(context, stage_loads)
+
+
+def build_dynamic_stage(context: ModelContext, spec: dict, index: int, parts: DynamicStageParts) -> None:
+    """Let every effect add its part to a dynamic stage being built (:attr:`Effect.dynamic_stage`): ground
+    motions, forces in time."""
+    for e in registry().values():
+        if e.dynamic_stage is not None:
+            e.dynamic_stage(context, spec, index, parts)
 
 
 def simulated(scene: dict, model) -> list[str]:
@@ -75,3 +111,15 @@ def simulated(scene: dict, model) -> list[str]:
     for e in registry().values():
         lines += e.describe(scene, model)
     return lines
+
+
+def activate(context: RunContext) -> list[EffectRun]:
+    """The :class:`~masonrydam.effects.base.EffectRun` of every effect the run's scene asks for, in registry
+    order (an effect whose ``activate`` gives None adds nothing to the run)."""
+    out = []
+    for e in registry().values():
+        run = None if e.activate is None else e.activate(context)
+        if run is not None:
+            run.name = e.name
+            out.append(run)
+    return out

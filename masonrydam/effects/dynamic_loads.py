@@ -12,7 +12,7 @@ multiplied at the stage time ``t`` (s, from the stage's start):
   motion's ``column`` does; ``#`` comments), a path relative to the scene file;
 - ``{ type = "pulse", shape = "rectangular" | "half_sine" | "triangular", duration = 0.05, start = 0 }``:
   1 (rectangular), ``sin(pi s / duration)`` (half sine) or a symmetric triangle of peak 1 for ``0 <= s <=
-  duration``, ``s = t - start``, and 0 outside;
+  duration``, ``s = t - start``, and 0 outside (:func:`masonrydam.pulses.unit_pulse`);
 - ``{ type = "harmonic", frequency = 2.0, phase = 0, start = 0, duration = ... }``: ``sin(2 pi f s + phase)``
   for ``s = t - start >= 0`` (and ``s <= duration`` when given; phase in degrees), 0 before.
 
@@ -34,9 +34,11 @@ import numpy as np
 from ..checks import check_keys, choice, number
 from ..checks import seconds as _seconds
 from ..errors import SceneError
+from ..pulses import PULSE_SHAPES, unit_pulse
+from .base import EffectRun, add_force
+from .loads import load_vector
 
 TIME_FUNCTIONS = ("table", "file", "pulse", "harmonic")
-PULSE_SHAPES = ("rectangular", "half_sine", "triangular")
 #: static load types a dynamic stage takes, with a time function
 DYNAMIC_LOAD_TYPES = ("nodal", "traction", "edge_traction", "pressure", "edge_pressure")
 
@@ -139,14 +141,7 @@ class TimeFunction:
             return float(np.interp(t, self.time, self.values))
         tau = t - s["start"]
         if s["type"] == "pulse":
-            d = s["duration"]
-            if tau < 0.0 or tau > d:
-                return 0.0
-            if s["shape"] == "rectangular":
-                return 1.0
-            if s["shape"] == "half_sine":
-                return math.sin(math.pi * tau / d)
-            return 1.0 - abs(2.0 * tau / d - 1.0)
+            return unit_pulse(s["shape"], tau, s["duration"])
         if tau < 0.0 or (s["duration"] is not None and tau > s["duration"]):
             return 0.0
         return math.sin(2.0 * math.pi * s["frequency"] * tau + math.radians(s["phase"]))
@@ -195,12 +190,45 @@ def _describe(scene, model):
     return lines
 
 
+def _add_loads_in_time(context, st: dict, i: int, stage_parts) -> None:
+    """``force(t)`` (n_dof,) N of a dynamic stage's loads given in time into ``stage_parts.loads`` (None without
+    such loads)."""
+    if not st.get("loads"):
+        return
+    parts = []
+    for j, ld in enumerate(st["loads"]):
+        key = f"stages[{i}].loads[{j}]"
+        kind = {"edge_traction": "traction", "edge_pressure": "pressure"}.get(ld["type"], ld["type"])
+        tf = TimeFunction.build(ld["time_function"], f"{key}.time_function", context.base_dir)
+        scale = time_scale(tf)
+        if st["dt"] > scale / STEPS_PER_TIME_SCALE:
+            what = "dt_max" if st.get("adaptive") else "dt"
+            raise SceneError(f"stages[{i}].{what}", f"{st['dt']:g} s is too long for {key}.time_function, which "
+                                                    f"changes within {scale:g} s: the steps could pass over it; use "
+                                                    f"{what} <= {scale / STEPS_PER_TIME_SCALE:g} s")
+        parts.append((load_vector(context, dict(ld, type=kind), key), tf))
+    stage_parts.loads = load_history(parts)
+
+
+class DynamicLoadsRun(EffectRun):
+    """Adds each dynamic stage's loads given in time (its ``loads``, built with the stage) to its forces."""
+
+    def dynamic_terms(self, stage, terms) -> None:
+        if stage.loads is not None:
+            add_force(terms, stage.loads)
+
+
+def _activate(context):
+    return DynamicLoadsRun() if any(st.loads is not None for st in context.dynamic_stages) else None
+
+
 def _effects():
     from . import Effect
 
     return [Effect("dynamic_loads", "a dynamic stage's 'loads' with a 'time_function'", __name__,
                    "consistent nodal forces scaled in time; closed forms of Chopra (2012), Dynamics of Structures, "
-                   "eqs. 3.1.6 and 4.3.2", "tests/test_dynamic_loads.py", _describe)]
+                   "eqs. 3.1.6 and 4.3.2", "tests/test_dynamic_loads.py", _describe, activate=_activate,
+                   dynamic_stage=_add_loads_in_time)]
 
 
 EFFECTS = _effects()

@@ -101,9 +101,10 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..checks import boolean, check_keys, choice
-from ..elements.quadrature import gauss_legendre_1d, tensor_rule, triangle_rule
-from ..elements.shapes import ELEMENT_TYPES, facet_area_normal, facet_outward_sign, shape_functions
+from ..elements.shapes import ELEMENT_TYPES, facet_outward_sign, facet_quadrature, facet_rule
 from ..errors import SceneError
+from ..mesh.facets import FACET_TYPES, boundary_owners
+from .base import EffectRun, add_force
 
 __all__ = ["normalize_section", "build", "Foundation", "Boundary", "wave_speeds", "dashpot_matrix", "describe",
            "DEFAULT_GROUP", "DEFAULT_BOTTOM", "DEFAULT_SIDES", "MOTIONS"]
@@ -114,8 +115,6 @@ DEFAULT_SIDES = "foundation_sides"
 #: what the ground motion record is: at a rock outcrop (or deconvolved to one) / inside the rock at the base
 MOTIONS = ("outcrop", "within")
 
-_FACET_TYPES = {2: ("line2", "line3"), 3: ("tri3", "tri6", "quad4", "quad8", "quad9")}
-_CORNERS = {"line2": 2, "line3": 2, "tri3": 3, "tri6": 3, "quad4": 4, "quad8": 4, "quad9": 4}
 #: facet types whose row-sum lumping has non-positive corner weights: diagonal scaling instead
 _HRZ_TYPES = ("tri6", "quad8")
 _AXES = "xyz"
@@ -228,15 +227,6 @@ class Boundary:
         self.inward = np.asarray(self.inward, dtype=np.float64).reshape(len(self.facets), -1)
 
 
-def _rule(facet_type):
-    if facet_type in ("line2", "line3"):
-        x, w = gauss_legendre_1d(3)
-        return x[:, None], w
-    if facet_type.startswith("quad"):
-        return tensor_rule("gauss", 3, 2)
-    return triangle_rule(6)
-
-
 @dataclass
 class _FacetPoints:
     """Integration points of a boundary: x (n, q, dim) m, normal (n, q, dim) outward unit, dA (n, q) m2
@@ -253,16 +243,14 @@ class _FacetPoints:
 
 def _facet_points(coords, b: Boundary, thickness: float) -> _FacetPoints:
     dim = coords.shape[1]
-    if b.type not in _FACET_TYPES[dim]:
+    if b.type not in FACET_TYPES[dim]:
         raise ValueError(f"facet set '{b.name}': type {b.type!r} is not a boundary facet in {dim}D "
-                         f"(use one of {_FACET_TYPES[dim]})")
-    pts, w = _rule(b.type)
-    N, dN = shape_functions(b.type, pts)
+                         f"(use one of {FACET_TYPES[dim]})")
+    pts, w = facet_rule(b.type, 3, triangle="symmetric")  # line 3 points, quadrilateral 3x3, triangle 6 points
     X = coords[b.facets]  # (n, nfn, dim)
-    x = np.einsum("qa,nad->nqd", N, X)
-    A = facet_area_normal(dN[None], X[:, None])  # (n, q, dim)
+    fq = facet_quadrature(b.type, X, pts, w)
+    N, x, A, J = fq.shape_values, fq.points, fq.area_normal, fq.jacobian  # (q, nfn), (n, q, dim), (n, q, dim), (n, q)
     sign, _ = facet_outward_sign(b.type, X, b.inward)
-    J = np.linalg.norm(A, axis=-1)
     if len(J) and not (J > 0).all():
         bad = int(np.nonzero((J <= 0).any(axis=1))[0][0])
         raise ValueError(f"facet set '{b.name}': degenerate facet {bad} (nodes {b.facets[bad].tolist()})")
@@ -611,46 +599,6 @@ class Foundation:
 # from the mesh
 
 
-def _facet_keys(facets, ftype):
-    nc = _CORNERS[ftype]
-    k = np.full((len(facets), 4), -1, dtype=np.int64)
-    k[:, :nc] = np.sort(facets[:, :nc], axis=1)
-    return k
-
-
-def _group_boundary(mesh, group, fs_facets, fs_type):
-    """For the facets of a facet set: (on the boundary of ``group``: (n,) bool, centroid of the owning
-    element of the group (n, dim))."""
-    from ..mesh.interfaces import element_facets
-
-    keys, in_group, cents = [], [], []
-    for b in mesh.blocks:
-        if b.is_interface or not len(b.cells):
-            continue
-        c = mesh.points[b.cells].mean(axis=1)
-        for ftype, local in element_facets(b.type):
-            keys.append(_facet_keys(b.cells[:, list(local)], ftype))
-            in_group.append(np.full(len(b.cells), b.name == group))
-            cents.append(c)
-    m = sum(len(k) for k in keys)
-    q = _facet_keys(fs_facets, fs_type)
-    allk = np.concatenate(keys + [q]) if keys else q
-    _, inv = np.unique(allk, axis=0, return_inverse=True)
-    inv = inv.ravel()
-    nu = int(inv.max()) + 1 if len(inv) else 0
-    ia, iq = inv[:m], inv[m:]
-    grp = np.concatenate(in_group) if keys else np.zeros(0, dtype=bool)
-    count_all = np.bincount(ia, minlength=nu)
-    count_grp = np.bincount(ia, weights=grp.astype(float), minlength=nu)
-    owner = np.full(nu, -1)
-    owner[ia[grp]] = np.nonzero(grp)[0]
-    ok = (count_grp[iq] == 1) & (count_all[iq] == 1)
-    cent = np.concatenate(cents) if keys else np.zeros((0, mesh.dim))
-    inward = np.zeros((len(q), mesh.dim))
-    inward[ok] = cent[owner[iq[ok]]]
-    return ok, inward
-
-
 def _boundary(mesh, name, key, group):
     """The :class:`Boundary` of the facet set ``name`` (or of a list of facet sets of one facet type)."""
     names = [name] if isinstance(name, str) else list(name)
@@ -666,7 +614,7 @@ def _boundary(mesh, name, key, group):
     name = "+".join(names)
     if not len(facets):
         raise SceneError(key, f"the facet set '{name}' is empty")
-    ok, inward = _group_boundary(mesh, group, facets, fs.type)
+    ok, inward = boundary_owners(mesh, fs.type, facets, group)
     if not ok.all():
         bad = np.nonzero(~ok)[0]
         raise SceneError(key, f"{len(bad)} facet(s) of '{name}' are not on the boundary of the element group '{group}' "
@@ -707,6 +655,60 @@ def build(spec: dict, mesh, materials: dict, model: dict, records=None) -> Found
                       vertical_axis=ax, z_top=z_top, z_bottom=z_b, group=group, records=records)
 
 
+class FoundationRun(EffectRun):
+    """What ``[foundation]`` adds to a run: with ``mass = false`` a massless rock group; with ``mass = true``
+    and dynamic stages the :class:`Foundation` (dashpots, free-field forces, released supports)."""
+
+    def __init__(self, context):
+        spec = context.scene["foundation"]
+        self.massless = () if spec["mass"] else (spec["group"],)
+        self.rock = None
+        if spec["mass"] and context.dynamic_stages:
+            self.rock = build(spec, context.mesh, context.scene["materials"], context.scene["model"])
+
+    def attrs(self) -> dict:
+        if self.rock is None:
+            return {}
+        out = {"foundation": "; ".join(self.rock.describe())}
+        if not self.rock.base_excitation:
+            out["time_history_conventions_foundation"] = (
+                "with [foundation] mass = true and an outcrop motion the ground motion enters as free-field forces "
+                "at the compliant base: displacement, velocity and acceleration of the dynamic steps are total, not "
+                "relative to the ground (acceleration_absolute = acceleration)")
+        return out
+
+    def mass_terms(self, lumped: bool) -> dict:
+        return {"massless": self.massless} if self.massless else {}
+
+    def carried_static_force(self, model, u, f_static) -> None:
+        if self.rock is None:
+            return
+        # the supports the absorbing boundaries replace keep their static reactions as constant loads
+        # (every dynamic stage, not only the first, which takes its constant load from f_int)
+        f_int, _ = model.evaluate(u, want_tangent=False)
+        released = self.rock.released_dofs
+        f_static[released] = f_int[released]
+
+    def dynamic_terms(self, stage, terms) -> None:
+        """Dashpots, free-field forces and the released supports; each stage's free field starts with its own
+        record at its start (waves of the stage before that still travel outside the model are not carried
+        over)."""
+        rock = self.rock
+        if rock is None:
+            return
+        rock.set_motion({g.component: (g.values, g.dt) for g in stage.ground_motion})
+        terms.dashpots = rock.dashpots
+        add_force(terms, rock.effective_force)
+        terms.support_excitation = rock.base_excitation
+        terms.bottom_acceleration = rock.surface_acceleration
+        stage.supports = stage.supports & ~rock.released_dofs
+
+
+def activate(context):
+    """The :class:`FoundationRun` of a scene with a ``[foundation]`` section, or None."""
+    return FoundationRun(context) if context.scene.get("foundation") else None
+
+
 # ---------------------------------------------------------------------------------------------
 # registry entry
 
@@ -742,7 +744,7 @@ def _effects():
     return [Effect("foundation", "[foundation] with mass = true", __name__,
                    "Lysmer & Kuhlemeyer 1969 (ASCE J. Eng. Mech. Div. 95(EM4)); Joyner & Chen 1975 (BSSA 65); "
                    "Nielsen 2006 (ABAQUS Users' Conf.); Lokke & Chopra 2018 (EESD 47)", "tests/test_foundation.py",
-                   describe)]
+                   describe, activate=activate)]
 
 
 EFFECTS = _effects()

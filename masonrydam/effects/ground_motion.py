@@ -7,6 +7,18 @@ dynamic stages simulate; a scene with static stages only simulates no inertia an
 """
 from __future__ import annotations
 
+from pathlib import Path
+
+import numpy as np
+import obspy
+from obspy.core.util import AttribDict
+
+from .. import records as rec
+from ..errors import SceneError
+from ..pulses import pulse_samples
+from ..records import RecordError
+from ..solvers.dynamic import GroundMotion
+
 _INTEGRATORS = {"newmark_average": "Newmark average acceleration", "newmark_linear": "Newmark linear acceleration",
                 "hht": "HHT-alpha", "generalized_alpha": "generalized-alpha", "central_difference": "central difference"}
 
@@ -86,6 +98,89 @@ def _modes(scene, model):
             "sticking joint points elastic, open points free)" for st in scene["stages"] if st["type"] == "modal"]
 
 
+def _synthetic_trace(values, dt, source: str, parameters: dict):
+    """An obspy Trace (m/s2) for a ground motion given in the scene (values or a pulse), with provenance."""
+    tr = obspy.Trace(data=np.ascontiguousarray(values, dtype=np.float64))
+    tr.stats.delta = dt
+    tr.stats.masonrydam = AttribDict(quantity="acceleration", units="m/s2", source_file=source,
+                                     format="scene", provenance=[{"step": "define", "parameters": parameters,
+                                                                  "function": "masonrydam.effects.ground_motion", "library": "masonrydam"}])
+    return tr
+
+
+#: scene processing step -> the function of masonrydam.records that does it (each records itself in
+#: the trace's provenance, which the result attributes carry)
+_PROCESSING = {"baseline": "baseline_correct", "taper": "taper", "bandpass": "bandpass", "resample": "resample",
+               "trim": "trim_significant_duration"}
+
+
+def build_ground_motion(spec: dict, component: int, key: str, stage_dt: float, base_dir: Path | None = None):
+    """A :class:`GroundMotion` from a normalised ground-motion component (record, file, values or pulse),
+    processed (baseline, taper, band-pass, resampling, significant-duration trim, in the scene's order)
+    and scaled as asked; its ``attrs`` hold the record's provenance with every step
+    (``records.provenance_attrs``)."""
+    from .. import records as rec
+    from ..records import RecordError
+    from ..solvers.dynamic import GroundMotion
+
+    try:
+        src = spec["source"]
+        if src == "record":
+            tr = rec.load_record(spec["record"])
+            name = spec["record"]
+        elif src == "file":
+            path = Path(spec["file"])
+            if not path.is_absolute() and base_dir is not None:
+                path = Path(base_dir) / path
+            # one trace: a file with several value columns needs the component's 'column' (0-based, the
+            # time column not counted); errors name the scene keys (stages[i].ground_motion.x.units)
+            tr = rec.read_trace(path, format=spec["format"], units=spec["units"], dt=spec["dt"],
+                                column=spec.get("column"), option_names=rec.readers.scene_option_names(key))
+            name = str(spec["file"]) if spec.get("column") is None else f"{spec['file']} column {spec['column']}"
+        elif src == "values":
+            q, unit, factor = rec.parse_units(spec["units"], f"{key}.units")
+            if q != "acceleration":
+                raise SceneError(f"{key}.units", f"must be an acceleration unit (g, m/s2, cm/s2, ...), got {spec['units']!r}")
+            tr = _synthetic_trace(np.asarray(spec["values"]) * factor, spec["dt"], "scene values",
+                                  {"units": spec["units"], "npts": len(spec["values"]), "dt": spec["dt"]})
+            name = "values"
+        else:
+            p = spec["pulse"]
+            dt = spec["dt"] or stage_dt
+            try:
+                samples = pulse_samples(p["shape"], p["amplitude"], p["duration"], dt)
+            except ValueError as exc:
+                raise SceneError("ground_motion.pulse.duration", str(exc)) from None
+            tr = _synthetic_trace(samples, dt, f"{p['shape']} pulse", dict(p, dt=dt))
+            name = f"{p['shape']}_pulse"
+        for j, step in enumerate(spec.get("processing", [])):
+            params = {k: v for k, v in step.items() if k != "step"}
+            if step["step"] == "bandpass":  # a low- or high-pass: the other corner is None
+                params = {"freqmin": None, "freqmax": None, **params}
+            try:
+                tr = getattr(rec, _PROCESSING[step["step"]])(tr, **params)
+            except RecordError as exc:
+                raise SceneError(f"{key}.processing[{j}]", str(exc)) from None
+        if spec["scale"] is not None:
+            tr = rec.scale(tr, spec["scale"], reason="scene")
+        elif spec["scale_to_pga"] is not None:
+            tr = rec.scale_to_pga(tr, spec["scale_to_pga"], units="m/s2")
+        elif spec.get("scale_to_sa") is not None:
+            t = spec["scale_to_sa"]
+            tr = rec.scale_to_sa(tr, t["sa"], t["period"], t["damping"], units="m/s2")
+    except RecordError as exc:
+        raise SceneError(key if exc.option is None else f"{key}.{exc.option}", str(exc)) from None
+    attrs = rec.provenance_attrs(tr, prefix="")
+    return GroundMotion(component, np.asarray(tr.data, dtype=np.float64), float(tr.stats.delta), name, attrs)
+
+
+def _add_ground_motion(context, spec: dict, index: int, parts) -> None:
+    """The ground motion of each component of the dynamic stage ``spec`` (scene order ``x``, ``y``, ``z``)."""
+    for c, g in spec["ground_motion"].items():
+        parts.ground_motion.append(build_ground_motion(g, "xyz".index(c), f"stages[{index}].ground_motion.{c}",
+                                                       parts.sample_dt, context.base_dir))
+
+
 def _effects():
     from . import Effect
 
@@ -102,7 +197,7 @@ def _effects():
                "tests/test_dynamics.py", _damping),
         Effect("ground_motion", "stages.ground_motion", __name__,
                "relative formulation, effective earthquake forces -M iota a_g (Chopra, sec. 9.4)",
-               "tests/test_dynamics.py, tests/test_records.py", _ground_motion),
+               "tests/test_dynamics.py, tests/test_records.py", _ground_motion, dynamic_stage=_add_ground_motion),
     ]
 
 

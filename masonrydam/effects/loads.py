@@ -13,9 +13,10 @@ import numpy as np
 
 from ..assembly.sparsity import scatter_vector
 from ..checks import check_keys, components, number, vector
-from ..elements.quadrature import gauss_legendre_1d
-from ..elements.shapes import facet_area_normal, shape_functions
+from ..elements.shapes import facet_quadrature, facet_rule
 from ..errors import SceneError
+from ..mesh.facets import owner_centroids
+from ..mesh.sets import facet_set, node_set
 from ..units import quantity
 
 
@@ -37,21 +38,6 @@ def nodal_force(model, nodes: np.ndarray, force) -> np.ndarray:
     return f
 
 
-def _facet_rule(facet_type: str):
-    """Gauss rule on the reference facet, exact for the products of shape functions and a linear
-    Jacobian: line 3 points, quadrilateral 3x3, triangle 6 points."""
-    from ..elements.quadrature import tensor_rule, triangle_rule
-
-    if facet_type in ("line2", "line3"):
-        xg, wg = gauss_legendre_1d(3)
-        return xg[:, None], wg
-    if facet_type in ("quad4", "quad8", "quad9"):
-        return tensor_rule("gauss", 3, 2)
-    if facet_type in ("tri3", "tri6"):
-        return triangle_rule(6)
-    raise ValueError(f"no traction rule for facet type '{facet_type}'")
-
-
 def facet_traction(model, facet_type: str, facets: np.ndarray, thickness: float = 1.0, traction=None,
                    pressure: float | None = None, owner_centroids: np.ndarray | None = None) -> np.ndarray:
     """Consistent nodal forces (n_dof,) of a traction on boundary facets: edges in 2D, faces in 3D.
@@ -63,19 +49,21 @@ def facet_traction(model, facet_type: str, facets: np.ndarray, thickness: float 
     boundaries; 3D: right-hand rule).
     """
     dim = model.dim
-    pts, wg = _facet_rule(facet_type)
-    N, dN = shape_functions(facet_type, pts)
+    # Gauss rule exact for the products of shape functions and a linear Jacobian: line 3 points,
+    # quadrilateral 3x3, triangle 6 points (degree 4)
+    pts, wg = facet_rule(facet_type, 3, triangle="symmetric")
     f = np.zeros(model.n_dof)
     facets = np.asarray(facets, dtype=np.int64)
-    X = model.coords[facets]  # (n, nfn, dim)
+    fq = facet_quadrature(facet_type, model.coords[facets], pts, wg)
+    N = fq.shape_values
     scale = thickness if dim == 2 else 1.0
     for q in range(len(wg)):
-        normal = facet_area_normal(dN[q], X)
-        jac = np.linalg.norm(normal, axis=1)
+        normal = fq.area_normal[:, q]
+        jac = fq.jacobian[:, q]
         if pressure is not None:
             outward = normal / jac[:, None]
             if owner_centroids is not None:
-                mid = np.einsum("j,njk->nk", N[q], X)
+                mid = fq.points[:, q]
                 flip = np.einsum("nk,nk->n", owner_centroids - mid, outward) > 0
                 outward[flip] *= -1
             t = -pressure * outward
@@ -156,6 +144,50 @@ def _describe(kind, text):
     return describe
 
 
+# ---------------------------------------------------------------------------------------------
+# what each load type adds to a static stage (masonrydam.effects.base.StaticStageLoads)
+
+
+def load_vector(context, ld: dict, key: str) -> np.ndarray:
+    """Consistent nodal force vector (n_dof,) N of a normalised ``nodal``, ``traction`` or ``pressure`` load
+    (``context``: :class:`~masonrydam.effects.base.ModelContext`; ``key``: the load's scene key for errors)."""
+    mesh, model = context.mesh, context.model
+    if ld["type"] == "nodal":
+        return nodal_force(model, node_set(mesh, ld["set"], f"{key}.set"), ld["force"])
+    fs = facet_set(mesh, ld["set"], f"{key}.set")
+    thickness = context.scene["model"]["thickness"]
+    if ld["type"] == "traction":
+        return facet_traction(model, fs.type, fs.facets, thickness, traction=ld["traction"])
+    return facet_traction(model, fs.type, fs.facets, thickness, pressure=ld["pressure"],
+                          owner_centroids=owner_centroids(mesh, fs.type, fs.facets))
+
+
+def _add_self_weight(context, stage, ld, key):
+    """Self-weight: the scene's gravity (one vector for all stages), or a body force in its own direction."""
+    if "acceleration" in ld:
+        stage.force += ld["factor"] * self_weight(context.model, ld["acceleration"])
+        return
+    if "self_weight" not in stage.carried:
+        stage.carried["self_weight"] = self_weight(context.model, context.scene["model"]["gravity"])
+    stage.force += ld["factor"] * stage.carried["self_weight"]
+
+
+def _add_force(context, stage, ld, key):
+    stage.force += load_vector(context, ld, key)
+
+
+def _add_displacement(context, stage, ld, key):
+    """Prescribed displacement increments of a node set (displacement control)."""
+    dim = context.mesh.dim
+    nodes = node_set(context.mesh, ld["set"], f"{key}.set")
+    for c, v in zip(ld["components"], ld["value"]):
+        d = nodes * dim + "xyz".index(c)
+        if stage.supports[d].any():
+            raise SceneError(f"{key}.set", f"prescribes component {c} on nodes that are supports")
+        stage.prescribed[d] = True
+        stage.increment[d] = v
+
+
 def _effects():
     from . import Effect
 
@@ -165,7 +197,11 @@ def _effects():
             ("pressure", "{facet} pressures", "load type 'pressure' (or 'edge_pressure')"),
             ("self_weight", "self-weight", "load type 'self_weight' (gravity of [model], or its acceleration)"),
             ("traction", "{facet} tractions", "load type 'traction' (or 'edge_traction')")]
-    return [Effect(name, asked, __name__, ref, "tests/test_system.py, tests/test_solid3d.py", _describe(name, text))
+    builders = {"displacement": {"displacement": _add_displacement}, "nodal": {"nodal": _add_force},
+                "pressure": {"pressure": _add_force}, "self_weight": {"self_weight": _add_self_weight},
+                "traction": {"traction": _add_force}}
+    return [Effect(name, asked, __name__, ref, "tests/test_system.py, tests/test_solid3d.py", _describe(name, text),
+                   stage_loads=builders[name])
             for name, text, asked in rows]
 
 

@@ -32,6 +32,8 @@ import numpy as np
 
 from ..checks import check_keys, choice, number, positive
 from ..errors import SceneError
+from ..mesh.facets import owner_centroids
+from ..materials.joint_laws import RESULT_OPEN, RESULT_SLIP
 from ..units import quantity
 from . import uplift as _uplift
 
@@ -148,15 +150,13 @@ class _Face:
     ``level`` (m) must lie above its lowest point (else a SceneError naming ``level_key``, with ``hint``)."""
 
     def __init__(self, mesh, name, key, vertical_axis, level, level_key, hint):
-        from ..scene.build import _owner_centroids
-
         if name not in mesh.facet_sets:
             what = "edge" if mesh.dim == 2 else "face"
             raise SceneError(key, f"no facet ({what}) set '{name}' in the mesh (facet sets: {sorted(mesh.facet_sets)})")
         fs = mesh.facet_sets[name]
         self.name, self.key, self.type = name, key, fs.type
         self.facets = np.asarray(fs.facets, dtype=np.int64)
-        self.inward = _owner_centroids(mesh, self.facets)
+        self.inward = owner_centroids(mesh, fs.type, self.facets)
         z = mesh.points[np.unique(self.facets), vertical_axis]
         self.bottom, self.top = float(z.min()), float(z.max())
         if level <= self.bottom:
@@ -276,8 +276,6 @@ class StageWater:
     def failure_hint(self) -> str:
         """The joint lines whose cracks grew most in the failed attempt of a step (trial states against
         the committed ones), in words, for the message of a stage that found no equilibrium."""
-        from ..materials.mohr_coulomb import OPEN, SLIP
-
         up = self.reservoir.uplift
         if up is None:
             return ""
@@ -287,8 +285,8 @@ class StageWater:
         words = []
         for trial in (False, True):
             codes = L.gather([g.result_states(trial=trial) for g in L.groups])
-            words.append((np.bincount(L.line, weights=w * (codes == OPEN), minlength=L.n_lines) / total,
-                          np.bincount(L.line, weights=w * (codes == SLIP), minlength=L.n_lines) / total))
+            words.append((np.bincount(L.line, weights=w * (codes == RESULT_OPEN), minlength=L.n_lines) / total,
+                          np.bincount(L.line, weights=w * (codes == RESULT_SLIP), minlength=L.n_lines) / total))
         (open0, _), (open1, slip1) = words
         order = np.argsort(-(open1 - open0))[:2]
         k = int(order[0])
@@ -323,13 +321,60 @@ def describe(scene, model) -> list[str]:
     return out
 
 
+def _reservoir(context, stage) -> "Reservoir":
+    """The run's :class:`Reservoir` (built once, kept with the stages' carried values)."""
+    if "reservoir" not in stage.carried:
+        stage.carried["reservoir"] = Reservoir(context.scene["reservoir"], context.mesh, context.model,
+                                               context.scene["model"]["thickness"])
+    return stage.carried["reservoir"]
+
+
+def _add_reservoir_load(context, stage, ld, key):
+    """A static stage raises (or lowers) the water to ``level``: the levels at its start and end."""
+    reservoir = _reservoir(context, stage)
+    levels = stage.carried.get("water_levels")
+    start = reservoir.empty() if levels is None else levels[1]
+    end = reservoir.full(ld["level"]) if levels is None else \
+        (ld["level"] if ld["level"] is not None else start[0],) + tuple(start[1:])
+    if levels is None and ld["level"] is not None and ld["level"] <= reservoir.face.bottom:
+        raise SceneError(f"{key}.level", f"{ld['level']:g} m is not above the lowest point of the face "
+                                         f"'{reservoir.face.name}' ({reservoir.face.bottom:g} m)")
+    stage.carried["water_levels"] = (start, end)
+
+
+def _finish_stage(context, stage):
+    """The water of a static stage (:class:`StageWater`, its ``varying`` load) once the water is on the
+    dam: later stages keep the water where the last one left it."""
+    if not context.scene.get("reservoir"):
+        return
+    _reservoir(context, stage)
+    levels = stage.carried.get("water_levels")
+    if levels is None:
+        return
+    start, end = levels
+    stage.varying = StageWater(stage.carried["reservoir"], start, end)
+    stage.carried["water_levels"] = (end, end)
+    control = stage.spec.get("control", "load")
+    if control != "load":
+        raise SceneError(f"stages[{stage.index}].control", f"\"{control}\": path following does not carry the "
+                         "reservoir's water on this stage (its loads follow the level and the cracks, not one load "
+                         "factor); use \"load\"")
+
+
+def _activate(context):
+    from .reservoir_run import activate
+
+    return activate(context)
+
+
 def _effects():
     from . import Effect
 
     return [Effect("reservoir", "[reservoir] with a { type = \"reservoir\" } load in a static stage", __name__,
                    "hydrostatics (White, Fluid Mechanics, ch. 2); USBR Design of Small Dams (1987) sec. 5.6; "
                    "USACE EM 1110-2-2200 (1995) ch. 3", "tests/test_reservoir.py, tests/test_hydrostatics.py",
-                   describe)]
+                   describe, activate=_activate, stage_loads={"reservoir": _add_reservoir_load},
+                   finish_stage=_finish_stage)]
 
 
 EFFECTS = _effects()

@@ -35,6 +35,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..checks import check_output_path
 from ..elements.shapes import ELEMENT_TYPES, MESHIO_TO_TYPE
 from ..errors import MasonrydamError, MeshError, SceneError
 from .interfaces import insert_interfaces, merge_map, partial_node_sets, remove_interfaces
@@ -260,10 +261,8 @@ def _extension(path: Path) -> str | None:
 
 def check_mesh_output(path: str | Path, option: str = "mesh file") -> Path:
     """Check that a mesh can be written to ``path`` (before any work): an extension meshio writes, and
-    a writable folder (:func:`~masonrydam.results.files.check_output_path`; errors name ``option``).
+    a writable folder (:func:`~masonrydam.checks.check_output_path`; errors name ``option``).
     Raises :class:`MasonrydamError` saying what is wrong."""
-    from ..results.files import check_output_path
-
     path = Path(path)
     if _extension(path) is None:
         what = f"unknown extension '{path.suffix}'" if path.suffix else "no extension"

@@ -32,9 +32,7 @@ def _candidates():
         out.append(resources.files("masonrydam._bundled_records"))
     except (ModuleNotFoundError, TypeError):
         pass
-    import masonrydam
-
-    out.append(Path(masonrydam.__file__).resolve().parent.parent / "records")
+    out.append(Path(__file__).resolve().parents[2] / "records")  # masonrydam/records/catalog.py -> the checkout
     return out
 
 

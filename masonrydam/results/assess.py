@@ -26,6 +26,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..materials.joint_laws import RESULT_OPEN
+
 #: the section variables: name -> (units, long name)
 SECTION_VARIABLES = {
     "normal_force": ("N", "resultant of the effective normal tractions on the joint line (compression positive; "
@@ -49,15 +51,16 @@ class SectionAssessment:
     ``cohesion``, ``tan_phi``: (n_points,) from the joint parameters of each point's group."""
 
     def __init__(self, model, lines):
-        from ..materials import mohr_coulomb as mc
-
         self.model, self.lines = model, lines
         dim = model.dim
         self.dim = dim
         L = lines
-        self.cohesion = L.gather([np.full((g.n_elem, g.nip), g.params_table[0, mc.P_COHESION]) for g in L.groups])
-        self.tan_phi = L.gather([np.full((g.n_elem, g.nip), g.params_table[0, mc.P_TAN_PHI]) for g in L.groups])
-        # a "linear" joint carries cohesion 1e300: no sliding check means anything there
+        # (the Coulomb limit of each group's law, InterfaceGroup.friction_strength; per element, repeated per point)
+        strength = [g.friction_strength() for g in L.groups]
+        self.cohesion = L.gather([np.repeat(c[:, None], g.nip, axis=1) for g, (c, _) in zip(L.groups, strength)])
+        self.tan_phi = L.gather([np.repeat(t[:, None], g.nip, axis=1) for g, (_, t) in zip(L.groups, strength)])
+        # a "linear" joint carries cohesion 1e300 (and a law without a Coulomb limit inf): no sliding check means
+        # anything there
         self.cohesion = np.where(self.cohesion > 1e200, np.inf, self.cohesion)
         scale = float(L.length.max()) if L.n_lines else 1.0
         tol = 1e-6 * max(scale, 1.0)
@@ -86,20 +89,18 @@ class SectionAssessment:
         """The section variables of the assessed lines (each (len(keep),)) at the joints' committed state
         (the last converged step). uplift_force: (n_lines,) N, the resultant pore pressure on every
         line, or None."""
-        from ..materials import mohr_coulomb as mc
-
         L, dim = self.lines, self.dim
         t = L.gather([g.traction.reshape(g.n_elem, g.nip, dim) for g in L.groups]) if L.n_points else np.zeros(0)
         t = t.reshape(-1, dim)
         state = L.gather([g.result_states() for g in L.groups])
-        broken = L.gather([g.state_committed[:, :, mc.S_BOND_BROKEN] for g in L.groups]) != 0
+        broken = L.gather([g.bond_broken() for g in L.groups])
         w = L.weight
         tn = t[:, -1]
         N = -self._sum(tn * w)
         # shear resultant in global components: sum over the points of the shear tractions along their axes
         shear = np.einsum("pj,pjk->pk", t[:, :-1], self.shear_axes) * w[:, None]
         T = np.sqrt(sum(self._sum(shear[:, k]) ** 2 for k in range(dim)))
-        compressed = (tn < 0) & ~broken & (state != mc.OPEN)
+        compressed = (tn < 0) & ~broken & (state != RESULT_OPEN)
         cA = self._sum(np.where(compressed, self.cohesion * w, 0.0))
         with np.errstate(divide="ignore", invalid="ignore"):
             resisting = cA + np.maximum(N, 0.0) * self.tan_phi_line
@@ -107,27 +108,12 @@ class SectionAssessment:
             pos = np.where(N > 0, self._sum(-tn * w * L.s) / N, np.nan)
             heel = self._sum(np.where(self.heel, tn, 0.0)) / self.n_heel
             toe = self._sum(np.where(self.toe, tn, 0.0)) / self.n_toe
-        cracked = self._sum(np.where(state == mc.OPEN, w, 0.0)) / np.maximum(self.area, 1e-300)
+        cracked = self._sum(np.where(state == RESULT_OPEN, w, 0.0)) / np.maximum(self.area, 1e-300)
         uplift = np.zeros(L.n_lines) if uplift_force is None else uplift_force
         out = {"normal_force": N, "shear_force": T, "sliding_safety_factor": sf, "resultant_position": pos,
                "cracked_length_ratio": cracked, "heel_normal_stress": heel, "toe_normal_stress": toe,
                "uplift_force": uplift}
         return {k: v[self.keep] for k, v in out.items()}
-
-
-def assessed_lines(model, reservoir):
-    """The joint lines of ``model`` under ``reservoir`` (:class:`~masonrydam.effects.reservoir.Reservoir`)
-    to assess: those of the uplift joint sets where the scene has uplift, else those of every joint
-    set; of them, :class:`SectionAssessment` keeps the lines closer to horizontal than to vertical
-    (``JointLines.horizontal``: base and lift joints, not contraction joints or bench risers). None for a
-    model without joints."""
-    from ..assembly.joint_lines import JointLines
-
-    if reservoir.uplift is not None:
-        return reservoir.uplift.lines
-    if not model.igroups:
-        return None
-    return JointLines(model, model.igroups, reservoir.downstream, reservoir.vertical)
 
 
 def criteria_flags(ds_step, condition: str = "usual") -> dict:

@@ -30,23 +30,6 @@ class IncompleteResultWarning(UserWarning):
     """A result file that is not a completed run: stopped, failed, or left by a killed process."""
 
 
-def check_output_path(path, option: str = "-o") -> Path:
-    """``path`` as a :class:`~pathlib.Path` once it is known that a file can be written there: it is
-    not a folder, and its folder exists and is writable. The error names ``option`` (the CLI option or
-    the argument that gave the path). Nothing is created."""
-    p = Path(path)
-    if p.is_dir():
-        raise OutputError(f"{option} {str(p)!r} is a folder; give a file path")
-    folder = p.parent if str(p.parent) else Path(".")
-    if not folder.exists():
-        raise OutputError(f"{option} {str(p)!r}: the folder {str(folder)!r} does not exist; create it first")
-    if not folder.is_dir():
-        raise OutputError(f"{option} {str(p)!r}: {str(folder)!r} is not a folder")
-    if not os.access(folder, os.W_OK | os.X_OK):  # results are written beside the target, then renamed
-        raise OutputError(f"{option} {str(p)!r}: the folder {str(folder)!r} is not writable")
-    return p
-
-
 def partial_path(target) -> Path:
     """The working file of a run whose result goes to ``target``: ``out.nc`` -> ``out.partial.nc``
     (``out`` -> ``out.partial``), in the same folder, so that :func:`os.replace` is an atomic rename."""

@@ -44,6 +44,7 @@ import netCDF4
 import numpy as np
 
 from .._version import __version__
+from .variables import ResultDimension
 
 #: joint states (``InterfaceGroup.result_states``); 3 (crush: on the compression cap) only with composite joints
 STATE_FLAGS = {"flag_values": np.array([0, 1, 2, 3], dtype=np.int8), "flag_meanings": "stick slip open crush"}
@@ -112,14 +113,12 @@ class ResultWriter:
     """
 
     #: step variables of time-history files that static steps leave NaN
-    _DYNAMIC_ONLY = frozenset(["time", "velocity", "acceleration", "acceleration_absolute", "ground_acceleration",
-                               "hydrodynamic_force", "face_pressure"]
+    _DYNAMIC_ONLY = frozenset(["time", "velocity", "acceleration", "acceleration_absolute", "ground_acceleration"]
                               + [f"energy_{name}" for name in ENERGY_VARIABLES])
 
     def __init__(self, path, coords, nodes, joint_points, dim, attrs: dict, dynamic: bool = False,
-                 options: OutputOptions | None = None, sections: dict | None = None, water: bool = False,
-                 pore_pressure: bool = False, elements: dict | None = None, modes: int | None = None,
-                 hydrodynamic: dict | None = None, driven: np.ndarray | None = None, blocks: dict | None = None):
+                 options: OutputOptions | None = None, elements: dict | None = None, modes: int | None = None,
+                 driven: np.ndarray | None = None, blocks: dict | None = None, variables=()):
         self.path = str(path)
         self.dim = dim
         self.dynamic = bool(dynamic)
@@ -187,23 +186,16 @@ class ResultWriter:
         v = self._var("joint_state", "i1", ("step", "joint_point"), "1", "joint state: 0 stick, 1 slip, 2 open, 3 crush")
         v.flag_values = STATE_FLAGS["flag_values"]
         v.flag_meanings = STATE_FLAGS["flag_meanings"]
-        if pore_pressure:
-            self._var("joint_pore_pressure", "f8", ("step", "joint_point"), "Pa",
-                      "pore pressure (uplift) inside the joint; joint_traction_normal is the effective traction")
-        if water:
-            self._var("reservoir_level", "f8", ("step",), "m", "reservoir water level (vertical coordinate)")
-            self._var("tailwater_level", "f8", ("step",), "m", "tailwater level (vertical coordinate; NaN: none)",
-                      fill_value=np.nan)
-        if sections:
-            self._section_variables(sections)
+        dynamic_only = set()
+        for item in variables:  # what the effects of the run record (masonrydam.results.variables)
+            if self._declare(item):
+                dynamic_only.add(item.name)
         if elements:
             self._element_variables(elements)
         if modes:
             self._mode_variables(modes)
         if self.dynamic:
             self._dynamic_variables()
-            if hydrodynamic:
-                self._hydrodynamic_variables(hydrodynamic)
         nc.Conventions = "CF-1.8"
         nc.title = attrs.get("title", "masonrydam analysis")
         nc.source = f"masonrydam {__version__}"
@@ -225,7 +217,7 @@ class ResultWriter:
         self.block_steps = max(1, min(options.buffer_steps, BUFFER_BYTES_MAX // max(record_bytes, 1)))
         self._buffers = {name: np.empty((self.block_steps,) + v.shape[1:], dtype=v.dtype)
                          for name, v in self._step_vars.items()}
-        self._dynamic_names = [name for name in self._step_vars if name in self._DYNAMIC_ONLY]
+        self._dynamic_names = [name for name in self._step_vars if name in self._DYNAMIC_ONLY or name in dynamic_only]
         self._in_buffer = 0  # steps in the buffers, not yet in the file
         self._last_flush = time.monotonic()
         self._fast_append = hasattr(netCDF4.Variable, "_put")
@@ -263,37 +255,22 @@ class ResultWriter:
                   "face shape function of each face node at the joint point (interpolation weight of the "
                   "face displacement; 0: padding)")[:] = shape
 
-    def _section_variables(self, sec):
-        """The joint lines assessed for stability (:mod:`masonrydam.results.assess`): dimension ``section``
-        with its names, lengths and joint sets, and a variable per measure on (step, section)."""
-        from .assess import SECTION_VARIABLES
-
-        self.nc.createDimension("section", len(sec["names"]))
-        self._string_coord("section", ("section",), sec["names"], "joint line (joint set, or set/k from the bottom)")
-        self._string_coord("section_joint_set", ("section",), sec["set_names"], "joint set of the joint line")
-        self._var("section_length", "f8", ("section",), "m", "length of the joint line from its upstream to its "
-                                                              "downstream end")[:] = sec["length"]
-        comps = ["x", "y", "z"][: self.dim]
-        for k, c in enumerate(comps):
-            self._var(f"section_{c}", "f8", ("section",), "m", f"{c} coordinate of the centre of the joint line")[:] = \
-                sec["centre"][:, k]
-        for name, (units, long_name) in SECTION_VARIABLES.items():
-            self._var(name, "f8", ("step", "section"), units, long_name)
-
-    def _hydrodynamic_variables(self, hd):
-        """The moving reservoir (``[reservoir] dynamic``): dimension ``face_node`` (the wetted face nodes,
-        ``hd["nodes"]`` model node indices, ``hd["coords"]`` (n, dim) m) and, per dynamic step, the
-        resultant of the hydrodynamic pressure on the dam and the pressure at the face nodes."""
-        self.nc.createDimension("face_node", len(hd["nodes"]))
-        self._var("face_node", "i8", ("face_node",), "1", "model node index of the wetted face node")[:] = hd["nodes"]
-        for k, c in enumerate(["x", "y", "z"][: self.dim]):
-            self._var(f"face_{c}", "f8", ("face_node",), "m", f"{c} coordinate of the wetted face node")[:] = \
-                hd["coords"][:, k]
-        self._var("hydrodynamic_force", "f8", ("step", "component"), "N",
-                  "resultant of the hydrodynamic water pressure on the dam (static pressure excluded; per unit "
-                  "thickness in 2D)")
-        self._var("face_pressure", "f8", ("step", "face_node"), "Pa",
-                  "hydrodynamic water pressure on the wetted face (compression positive; static pressure excluded)")
+    def _declare(self, item) -> bool:
+        """Create a :class:`~masonrydam.results.variables.ResultDimension` or
+        :class:`~masonrydam.results.variables.ResultVariable`; True for a step variable that static steps
+        leave NaN."""
+        if isinstance(item, ResultDimension):
+            self.nc.createDimension(item.name, item.size)
+            return False
+        if item.dtype is str:
+            self._string_coord(item.name, item.dims, item.values, item.long_name)
+            return False
+        v = self._var(item.name, item.dtype, item.dims, item.units, item.long_name, fill_value=item.fill_value)
+        for k, val in item.attrs.items():
+            v.setncattr(k, val)
+        if item.values is not None and not item.per_step:
+            v[:] = item.values
+        return item.per_step and item.dynamic_only
 
     def _element_variables(self, el):
         """Continuum stress per element (``[output] stress = "element"``): dimension ``element`` (every
@@ -449,8 +426,7 @@ class ResultWriter:
         plastic_slip, t_normal, t_shear, state; dynamic (time-history files, dynamic steps): dict time
         (s), velocity, acceleration, acceleration_absolute (n_out, dim), ground_acceleration (dim,),
         energy (dict name -> J); extra: values of the optional step variables the writer was created
-        with (``joint_pore_pressure``, ``reservoir_level``, ``tailwater_level``, the section measures,
-        ``stress``)."""
+        with (``stress`` and the step variables of ``variables``, name -> value)."""
         if dynamic is not None and not self.dynamic:
             raise ValueError("this writer was created without dynamic=True")
         i = self._in_buffer

@@ -23,18 +23,20 @@ from generators.walls import BONDS
 
 from ..effects import load_types
 from ..effects.dynamic_loads import DYNAMIC_LOAD_TYPES, TIME_FUNCTIONS
-from ..effects.dynamic_loads import PULSE_SHAPES as TIME_PULSE_SHAPES
 from ..effects.foundation import DEFAULT_BOTTOM, DEFAULT_GROUP, DEFAULT_SIDES, MOTIONS
 from ..effects.large_kinematics import JOINT_FRAMES, KINEMATICS
 from ..effects.plasticity import CONTINUUM_LAWS
 from ..effects.reservoir import DEFAULT_FACE, DEFAULT_TAILWATER_FACE, DYNAMIC, MAX_FREQUENCY, SOUND_SPEED
 from ..effects.uplift import CRACKED, EARTHQUAKE
 from ..elements.quadrature import QUADRATURE_SCHEMES
+from ..pulses import PULSE_SHAPES
+from ..pulses import PULSE_SHAPES
+from ..materials import joint_laws as jl
 from ..results.writer import OutputOptions
 from ..solvers.dynamic import ADAPTIVE_DEFAULT_LEVELS, JOINT_SPACE_MODES
 from ..solvers.linear.direct import LINEAR_SOLVERS
-from .schema import (_COMPOSITE_KEYS, AUTO_DT_MAX_DEFAULT, AUTO_TOLERANCE_DEFAULT, G_STANDARD, HYPOTHESES, INTEGRATORS,
-                     JOINT_LAWS, PROCESSING_STEPS, PULSE_SHAPES, STAGE_TYPES, STATIC_CONTROLS, SUPPORT_KINDS)
+from .schema import (AUTO_DT_MAX_DEFAULT, AUTO_TOLERANCE_DEFAULT, G_STANDARD, HYPOTHESES, INTEGRATORS,
+                     PROCESSING_STEPS, STAGE_TYPES, STATIC_CONTROLS, SUPPORT_KINDS)
 
 __all__ = ["Key", "Section", "REQUIRED", "ABSENT", "SECTIONS", "keys", "render_markdown", "main"]
 
@@ -346,54 +348,39 @@ _MATERIALS = Section("[materials.&lt;group&gt;]", "One table per element group o
 ), "law")
 
 
-# -- joints -----------------------------------------------------------------------------------------------
-_COMPOSITE_MEANINGS = {
-    "mode_I_fracture_energy": ("fracture energy in tension", REQUIRED),
-    "residual_friction_angle": ("friction angle after shear softening (default: `friction_angle`)", ABSENT),
-    "dilatancy_angle": ("dilatancy angle", 0.0),
-    "dilatancy_confinement": ("compressive normal stress at which the dilatancy vanishes (default: no decay)",
-                              ABSENT),
-    "dilatancy_decay": ("decay of the dilatancy with the plastic slip (1/m)", 0.0),
-    "mode_II_fracture_energy": ("fracture energy in shear", REQUIRED),
-    "compressive_strength": ("strength of the compression cap (default: no cap)", ABSENT),
-    "cap_shear_factor": ("shear contribution to the cap", 9.0),
-    "cap_fracture_energy": ("fracture energy of the cap (required with a cap)", ABSENT),
-    "cap_peak_plastic_strain": ("plastic relative displacement at the cap's peak (required with a cap)", ABSENT),
-    "shear_stiffness_2": ("3D: stiffness of the second shear direction (default: `shear_stiffness`)", ABSENT),
-    "relaxation_time": ("Duvaut-Lions viscosity that regularises the softening (0: none; > 0: static stages need "
-                        "a `duration`)", 0.0),
-}
-_DIM_UNITS = {"stress": "Pa", "fracture_energy": "N/m", "angle": "deg", "length": "m", "stiffness": "N/m3",
-              "time": "s", None: ""}
+# -- joints: the law keys of each registered joint law (masonrydam.materials.joint_laws) ---------------------
+def _joint_default(default):
+    return REQUIRED if default is jl.REQUIRED else ABSENT if default is jl.OPTIONAL else default
 
 
-def _composite_rows() -> tuple:
+def _joint_law_rows() -> tuple:
+    """One row per law key, in the order the laws declare them; a key of several laws (``cohesion``) is one row
+    with its meaning and unit from the first law, and its default in words where the laws' defaults differ."""
+    by_name = {}
+    for law in jl.joint_laws():
+        for k in law.keys:
+            by_name.setdefault(k.name, []).append((law.name, k))
     rows = []
-    for k, dim in _COMPOSITE_KEYS.items():
-        if k in ("cohesion", "friction_angle", "tensile_strength"):
-            continue  # rows of their own (all laws)
-        meaning, default = _COMPOSITE_MEANINGS[k]
-        unit = "1/m" if k == "dilatancy_decay" else _DIM_UNITS[dim]
-        unit_string = TIME if dim == "time" else UNIT if dim is not None else ""
-        rows.append(_k(f"joints.<set>.{k}", "number", meaning, unit, unit_string, default, variants=("composite",)))
+    for name, owners in by_name.items():
+        first = owners[0][1]
+        defaults = [_joint_default(k.default) for _, k in owners]
+        same = all(d is defaults[0] or d == defaults[0] for d in defaults)
+        words = [repr(d) if d is REQUIRED or d is ABSENT else format(d, "g") for d in defaults]
+        text = "" if same else ", ".join(f"{w} ({law})" for (law, _), w in zip(owners, words))
+        unit_string = TIME if first.dimension == "time" else UNIT if first.dimension is not None else ""
+        rows.append(_k(f"joints.<set>.{name}", "number", first.meaning, first.si_unit, unit_string,
+                       defaults[0] if same else ABSENT, default_text=text,
+                       variants=tuple(law for law, _ in owners)))
     return tuple(rows)
 
 
-_JOINTS = Section("[joints.&lt;set&gt;]", "One table per joint set of the mesh. `mohr_coulomb`: sticks, slides and "
-                  "opens (brittle: an open point loses its cohesion and tensile strength); `linear`: elastic; "
-                  "`composite`: Lourenço & Rots (1997) softening in tension, shear and compression (static stages).", (
-    _k("joints.<set>.law", "string", "joint law", default="mohr_coulomb", choices=JOINT_LAWS),
+_JOINTS = Section("[joints.&lt;set&gt;]", "One table per joint set of the mesh. " + "; ".join(
+    f"`{law.name}`: {law.description}" for law in jl.joint_laws()) + ".", (
+    _k("joints.<set>.law", "string", "joint law", default=jl.DEFAULT_JOINT_LAW,
+       choices=tuple(law.name for law in jl.joint_laws())),
     _k("joints.<set>.normal_stiffness", "number", "normal stiffness kn", "N/m3", UNIT, REQUIRED),
     _k("joints.<set>.shear_stiffness", "number", "shear stiffness ks", "N/m3", UNIT, REQUIRED),
-    _k("joints.<set>.cohesion", "number", "cohesion c", "Pa", UNIT, default_text="0 (mohr_coulomb), required "
-       "(composite)", variants=("mohr_coulomb", "composite")),
-    _k("joints.<set>.friction_angle", "number", "friction angle, in [0, 90)", "deg", UNIT, REQUIRED,
-       variants=("mohr_coulomb", "composite")),
-    _k("joints.<set>.tensile_strength", "number", "tensile strength (0: no tension)", "Pa", UNIT,
-       default_text="0 (mohr_coulomb), required (composite)", variants=("mohr_coulomb", "composite")),
-    _k("joints.<set>.residual_shear_stiffness", "number", "shear stiffness while sliding (kinematic hardening; 0: "
-       "perfectly plastic), below `shear_stiffness`", "N/m3", UNIT, 0.0, variants=("mohr_coulomb",)),
-    *_composite_rows(),
+    *_joint_law_rows(),
     _k("joints.<set>.integration", "string", "integration rule along the joint (nodal `lumped`; 16-node interfaces "
        "then take 3 x 3 Lobatto)", default="lumped", choices=QUADRATURE_SCHEMES),
     _k("joints.<set>.points", "integer", "points per direction of a `gauss`, `lobatto` or `newton-cotes` rule "
@@ -554,7 +541,9 @@ _GROUND = Section("[stages.ground_motion.&lt;axis&gt;]", "One table per axis (`x
     _k(f"{_GM}.<axis>.scale", "number", "factor on the accelerations"),
     _k(f"{_GM}.<axis>.scale_to_pga", "number", "scale to this peak ground acceleration", "m/s2", UNIT),
     _k(f"{_GM}.<axis>.scale_to_sa", "table", "scale to a pseudo-spectral acceleration `{ sa, period, damping }`"),
-    _k(f"{_GM}.<axis>.pulse.shape", "string", "pulse shape", default=REQUIRED, choices=PULSE_SHAPES),
+    _k(f"{_GM}.<axis>.pulse.shape", "string", "pulse shape: `amplitude` times 1 (rectangular), a half sine or a "
+       "symmetric triangle of peak 1 over `duration` (masonrydam.pulses; Chopra 2012, secs. 4.7-4.9)",
+       default=REQUIRED, choices=PULSE_SHAPES),
     _k(f"{_GM}.<axis>.pulse.amplitude", "number", "peak acceleration", "m/s2", UNIT, REQUIRED),
     _k(f"{_GM}.<axis>.pulse.duration", "number", "pulse length", "s", TIME, REQUIRED),
     _k(f"{_GM}.<axis>.scale_to_sa.sa", "number", "target pseudo-spectral acceleration", "m/s2", UNIT, REQUIRED),
@@ -633,7 +622,7 @@ _TIME_LOADS = Section("Loads of a dynamic stage", "A load of a dynamic stage is 
        default=REQUIRED, variants=("file",)),
     _k(f"{_TF}.column", "integer", "the value column, from 0 without the time column", default=0, variants=("file",)),
     _k(f"{_TF}.shape", "string", "1 (rectangular), a half sine or a symmetric triangle of peak 1 over `duration`",
-       default="rectangular", choices=TIME_PULSE_SHAPES, variants=("pulse",)),
+       default="rectangular", choices=PULSE_SHAPES, variants=("pulse",)),
     _k(f"{_TF}.duration", "number", "pulse length; harmonic: length of the shaking (default: to the end)", "s",
        TIME, default_text="required (pulse)", variants=("pulse", "harmonic")),
     _k(f"{_TF}.start", "number", "when it starts", "s", TIME, default=0, variants=("pulse", "harmonic")),

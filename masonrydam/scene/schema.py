@@ -13,6 +13,7 @@ import numpy as np
 
 from ..elements.quadrature import QUADRATURE_SCHEMES
 from ..errors import SceneError
+from ..pulses import PULSE_SHAPES
 from ..solvers.linear.direct import LINEAR_SOLVERS
 from ..checks import COMPONENT_NAMES
 from ..checks import boolean as _bool
@@ -27,16 +28,8 @@ from ..checks import vector as _vector
 from ..units import quantity
 from ..effects.large_kinematics import JOINT_FRAMES, KINEMATICS
 from ..effects.plasticity import CONTINUUM_LAWS, material_law
+from ..materials.joint_laws import DEFAULT_JOINT_LAW, JOINT_KEYS, joint_law, joint_laws
 
-JOINT_LAWS = ("mohr_coulomb", "linear", "composite")
-#: keys of the composite (masonry) joint law with their dimensions; None: a plain number
-_COMPOSITE_KEYS = {"tensile_strength": "stress", "mode_I_fracture_energy": "fracture_energy", "cohesion": "stress",
-                   "friction_angle": "angle", "residual_friction_angle": "angle", "dilatancy_angle": "angle",
-                   "dilatancy_confinement": "stress", "dilatancy_decay": None,
-                   "mode_II_fracture_energy": "fracture_energy", "compressive_strength": "stress",
-                   "cap_shear_factor": None, "cap_fracture_energy": "fracture_energy",
-                   "cap_peak_plastic_strain": "length", "shear_stiffness_2": "stiffness",
-                   "relaxation_time": "time"}
 HYPOTHESES = ("plane_stress", "plane_strain")
 SUPPORT_KINDS = ("fixed", "tied")
 G_STANDARD = 9.80665
@@ -163,50 +156,20 @@ def _material(name, d):
 
 def _joint(name, d):
     key = f"joints.{name}"
-    _check_keys(d, {"law", "normal_stiffness", "shear_stiffness", "cohesion", "friction_angle", "tensile_strength",
-                    "residual_shear_stiffness", "integration", "points", "frame"} | set(_COMPOSITE_KEYS), key)
-    law = _choice(d.get("law", "mohr_coulomb"), JOINT_LAWS, f"{key}.law")
+    laws = joint_laws()
+    _check_keys(d, set(JOINT_KEYS).union(*(law.key_names for law in laws)), key)
+    law = joint_law(_choice(d.get("law", DEFAULT_JOINT_LAW), tuple(law.name for law in laws), f"{key}.law"))
     for req in ("normal_stiffness", "shear_stiffness"):
         if req not in d:
             raise SceneError(f"{key}.{req}", "is required")
     kn = _positive(d["normal_stiffness"], "stiffness", f"{key}.normal_stiffness")
     ks = _positive(d["shear_stiffness"], "stiffness", f"{key}.shear_stiffness")
-    out = {"law": law, "normal_stiffness": kn, "shear_stiffness": ks}
-    if law != "composite":
-        for k in _COMPOSITE_KEYS:
-            if k in d and k not in ("cohesion", "friction_angle", "tensile_strength"):
-                raise SceneError(f"{key}.{k}", f"is a parameter of the composite law; law is \"{law}\"")
-    if law == "composite":  # Lourenco & Rots (1997): checked by materials.composite_interface.composite_params
-        for req in ("tensile_strength", "mode_I_fracture_energy", "cohesion", "friction_angle",
-                    "mode_II_fracture_energy"):
-            if req not in d:
-                raise SceneError(f"{key}.{req}", "is required for the composite law")
-        for k, dim_ in _COMPOSITE_KEYS.items():
-            if k in d:
-                if dim_ == "time":  # relaxation_time: 0 is the inviscid law
-                    out[k] = _time(d[k], f"{key}.{k}", allow_zero=True)
-                else:
-                    out[k] = _number(d[k], f"{key}.{k}") if dim_ is None else quantity(d[k], dim_, f"{key}.{k}")
-        if "residual_shear_stiffness" in d:
-            raise SceneError(f"{key}.residual_shear_stiffness", "has no meaning for the composite law (its shear "
-                                                                "softens with mode_II_fracture_energy)")
-    elif law == "mohr_coulomb":
-        if "friction_angle" not in d:
-            raise SceneError(f"{key}.friction_angle", "is required for the Mohr-Coulomb law (degrees)")
-        phi = quantity(d["friction_angle"], "angle", f"{key}.friction_angle")
-        if not 0.0 <= phi < 90.0:
-            raise SceneError(f"{key}.friction_angle", f"must be in [0, 90) degrees, got {d['friction_angle']!r}")
-        out["friction_angle"] = phi
-        out["cohesion"] = _positive(d.get("cohesion", 0.0), "stress", f"{key}.cohesion", allow_zero=True)
-        out["tensile_strength"] = _positive(d.get("tensile_strength", 0.0), "stress", f"{key}.tensile_strength", True)
-        ksr = _positive(d.get("residual_shear_stiffness", 0.0), "stiffness", f"{key}.residual_shear_stiffness", True)
-        if ksr >= ks:
-            raise SceneError(f"{key}.residual_shear_stiffness", f"must be smaller than shear_stiffness ({ks:g}), got {ksr:g}")
-        out["residual_shear_stiffness"] = ksr
-    else:
-        for k in ("cohesion", "friction_angle", "tensile_strength", "residual_shear_stiffness"):
-            if k in d:
-                raise SceneError(f"{key}.{k}", "has no meaning for a linear joint (law = 'linear')")
+    for k in d:
+        if k not in JOINT_KEYS and k not in law.key_names:
+            owners = " or ".join(f'"{other.name}"' for other in laws if k in other.key_names)
+            raise SceneError(f"{key}.{k}", f"is a parameter of law = {owners}, not of law = \"{law.name}\"")
+    # the law's own keys, read by its descriptor (masonrydam.materials.joint_laws)
+    out = {"law": law.name, "normal_stiffness": kn, "shear_stiffness": ks, **law.normalize(d, key, ks)}
     # default: nodal ("lumped") integration (Schellekens & de Borst 1993); the build step switches
     # 16-node (quad8) interfaces to 3x3 Newton-Cotes, whose lumped corner weights would be negative
     # large kinematics: the joint's frame turns with its current mid-surface (the seed's), or with its
@@ -264,7 +227,6 @@ def _selection(value, key):
 
 STAGE_TYPES = ("static", "modal", "dynamic")
 INTEGRATORS = ("newmark_average", "newmark_linear", "hht", "generalized_alpha", "central_difference")
-PULSE_SHAPES = ("rectangular", "half_sine")
 #: keys of a dynamic stage that apply to dt = "auto" only
 AUTO_STEP_KEYS = ("tolerance", "dt_min", "dt_max")
 _DYNAMIC_KEYS = {"name", "type", "steps", "duration", "dt", "integrator", "alpha", "rho_inf", "mass", "damping",

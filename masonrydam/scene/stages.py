@@ -1,0 +1,161 @@
+"""Build the stages of a normalised scene: static stages (their loads through the registry's load types),
+modal and dynamic stages (their ground motions and loads in time through the registry's effects).
+
+A stage asks the effects for what its loads add (:func:`masonrydam.effects.stage_load_builders`,
+:func:`masonrydam.effects.build_dynamic_stage`); this module names no effect.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..assembly.damping import RayleighDamping
+from ..assembly.model import Model
+from ..effects import DynamicStageParts, ModelContext, StaticStageLoads, build_dynamic_stage, finish_static_stage
+from ..effects import stage_load_builders
+from ..errors import SceneError
+from ..materials.plasticity import P_VISCOSITY
+from ..mesh.model import Mesh
+from ..mesh.sets import node_set
+from ..solvers.dynamic import DynamicSettings, DynamicStage, ModalStage
+from ..solvers.linear.direct import DIRECT_SOLVERS
+from ..solvers.static.stepping import StaticStage
+
+
+def build_stages(scene: dict, mesh: Mesh, model: Model, base_dir: Path | None = None) -> list:
+    """Stage objects in scene order: :class:`StaticStage`, :class:`~masonrydam.solvers.dynamic.ModalStage` and
+    :class:`~masonrydam.solvers.dynamic.DynamicStage`.
+
+    A dynamic stage keeps the supports and holds the DOFs prescribed by the last static stage at their
+    values (they move with the ground); its ground motion is read and scaled here."""
+    dim = mesh.dim
+    context = ModelContext(scene, base_dir, mesh, model)
+    builders = stage_load_builders()
+    supports = np.zeros(model.n_dof, dtype=bool)
+    for i, s in enumerate(scene["supports"]):
+        if s["kind"] != "fixed":
+            continue
+        nodes = node_set(mesh, s["set"], f"supports[{i}].set")
+        for c in s["components"]:
+            supports[nodes * dim + "xyz".index(c)] = True
+    stages = []
+    held = np.zeros(model.n_dof, dtype=bool)
+    carried = {}  # what the load types keep from one static stage to the next (e.g. the water level)
+    for i, st in enumerate(scene["stages"]):
+        if st["type"] == "modal":
+            stages.append(ModalStage(st["name"], st["modes"], st["mass"] == "lumped", supports | held))
+            continue
+        if st["type"] == "dynamic":
+            stages.append(_dynamic_stage(context, st, i, supports | held))
+            continue
+        loads = StaticStageLoads(i, st, np.zeros(model.n_dof), np.zeros(model.n_dof, dtype=bool),
+                                 np.zeros(model.n_dof), supports, carried)
+        for j, ld in enumerate(st["loads"]):
+            builders[ld["type"]](context, loads, ld, f"stages[{i}].loads[{j}]")
+        finish_static_stage(context, loads)
+        viscous = [g.name for g in model.cgroups if g.plastic and g.law_params[0, P_VISCOSITY] > 0]
+        if viscous and "duration" not in st:
+            raise SceneError(f"stages[{i}].duration", f"blocks {viscous} have Perzyna viscosity: a static stage needs "
+                                                      "its duration (s), the time over which its load is applied (set "
+                                                      "viscosity = 0 for a rate-independent law)")
+        relaxing = [g.name for g in model.igroups if g.relaxation_time > 0]
+        if relaxing and "duration" not in st:
+            raise SceneError(f"stages[{i}].duration", f"joint sets {relaxing} have a relaxation_time (viscous "
+                                                      "regularisation): a static stage needs its duration (s), the "
+                                                      "time over which its load is applied")
+        if st.get("control") == "dissipation":
+            softening = [g for g in model.igroups if g.nonlinear]
+            large = [g.name for g in softening if g.kinematics != "small"]
+            unfollowed = [g.name for g in softening if not g.joint_law.dissipation_control]
+            if unfollowed:
+                raise SceneError(f"stages[{i}].control", f"\"dissipation\" cannot follow the laws of joint sets "
+                                 f"{unfollowed} (their law does not support dissipation control; use "
+                                 "\"arc_length\" or \"opening\")")
+            if not softening or large:
+                raise SceneError(f"stages[{i}].control", "\"dissipation\" follows the energy dissipated by joints "
+                                 "that crack or slip with small displacements: " + (
+                                     f"joint sets {large} use large kinematics" if large else
+                                     "this model has no composite or Mohr-Coulomb joint set")
+                                 + " (use \"arc_length\")")
+        stages.append(StaticStage(st["name"], st["steps"], loads.force, loads.prescribed, loads.increment,
+                                  supports.copy(), water=loads.varying,
+                                  until_failure=st.get("until_failure", False), duration=st.get("duration", 0.0),
+                                  control=st.get("control", "load")))
+        held = loads.prescribed.copy()
+    return stages
+
+
+def _dynamic_stage(context: ModelContext, st: dict, i: int, supports: np.ndarray) -> DynamicStage:
+    """A dynamic stage with what the effects add to it (ground motions, loads in time)."""
+    model = context.model
+    settings = dynamic_settings(st, i, context.scene["solver"]["linear_solver"])
+    # a pulse is sampled at the analysis step (dt = "auto": at its smallest, so that the steps,
+    # not the samples, decide how sharply its start and end are resolved)
+    parts = DynamicStageParts(settings, settings.dt_min if settings.adaptive else st["dt"])
+    build_dynamic_stage(context, st, i, parts)
+    gms = parts.ground_motion
+    if st["steps"] is not None:
+        duration = st["steps"] * st["dt"]
+    elif st["duration"] is not None:
+        duration = st["duration"]
+    else:
+        duration = max(g.duration for g in gms)
+    v0 = None if st.get("initial_velocity") is None else \
+        initial_velocity_field(model, st["initial_velocity"], f"stages[{i}].initial_velocity")
+    u0 = None if st.get("initial_displacement") is None else \
+        initial_velocity_field(model, st["initial_displacement"], f"stages[{i}].initial_displacement",
+                               "displacement", "rotation")
+    return DynamicStage(st["name"], duration, supports, gms, settings, st["output"]["stride"], initial_velocity=v0,
+                        loads=parts.loads, initial_displacement=u0)
+
+
+def dynamic_settings(st: dict, index: int, linear_solver: str = "auto"):
+    """DynamicSettings of a normalised dynamic stage; ``linear_solver``: the scene's ``solver.linear_solver``
+    (an iterative choice applies to the static stages; dynamic stages use a direct solver)."""
+    if linear_solver not in DIRECT_SOLVERS:
+        linear_solver = "auto"
+
+    d = st["damping"]
+    damping = None
+    if d is not None:
+        if "ratio" in d:
+            damping = RayleighDamping.from_frequencies(d["frequencies"][0], d["frequencies"][1], d["ratio"],
+                                                       d["exclude_joints"])
+        else:
+            damping = RayleighDamping(d["alpha"], d["beta"], d["exclude_joints"])
+    return DynamicSettings(integrator=st["integrator"], dt=st["dt"], alpha=st["alpha"], rho_inf=st["rho_inf"],
+                           max_iterations=st["max_iterations"], force_tolerance=st["force_tolerance"],
+                           energy_tolerance=st["energy_tolerance"], max_substeps=st["max_substeps"], mass=st["mass"],
+                           damping=damping, linear_solver=linear_solver, low_rank_max=st["low_rank_max"],
+                           joint_space=st["joint_space"], adaptive=st["adaptive"], tolerance=st["tolerance"],
+                           dt_min=st["dt_min"], key=f"stages[{index}].")
+
+
+def initial_velocity_field(model: Model, items: list, key: str, translation="velocity",
+                           rotation="angular_velocity") -> np.ndarray:
+    """(n_dof,) m/s: the initial velocities of a dynamic stage (normalised ``initial_velocity`` items) at
+    the nodes of their element groups, NaN elsewhere; a rotation is ``v = w x (x - c)`` (small-rotation
+    rigid motion). With ``translation="displacement", rotation="rotation"`` the initial displacements (m) of
+    ``initial_displacement`` items, ``u = theta x (x - c)`` for a (small) rotation."""
+    dim = model.dim
+    v = np.full(model.n_dof, np.nan)
+    names = sorted({g.name for g in model.cgroups})
+    for j, it in enumerate(items):
+        nodes = []
+        for name in it["groups"]:
+            found = [g for g in model.cgroups if g.name == name]
+            if not found:
+                raise SceneError(f"{key}.groups" if len(items) == 1 else f"{key}[{j}].groups",
+                                 f"no element group '{name}' (groups: {names})")
+            nodes += [np.unique(g.conn) for g in found]
+        nodes = np.unique(np.concatenate(nodes))
+        if translation in it:
+            vel = np.tile(np.asarray(it[translation], dtype=float), (len(nodes), 1))
+        else:
+            r = model.coords[nodes] - np.asarray(it["rotation_center"], dtype=float)
+            w = it[rotation]
+            vel = (np.stack([-w * r[:, 1], w * r[:, 0]], axis=1) if dim == 2 else
+                   np.cross(np.asarray(w, dtype=float), r))
+        v[(nodes[:, None] * dim + np.arange(dim)).ravel()] = vel.ravel()
+    return v

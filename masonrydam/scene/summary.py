@@ -1,0 +1,221 @@
+"""The run's statistics (result attributes) and the one-screen summary printed after a run."""
+from __future__ import annotations
+
+import dataclasses
+import json
+import sys
+import time
+
+import numpy as np
+
+from .._version import __version__
+from ..solvers.dynamic import energy_warnings as dynamic_energy_warnings
+from ..solvers.linear.direct import resolve_backend
+
+
+def stats_attrs(solver, t_start, dyn_solvers=()):
+    st = solver.stats
+    out = {"steps": st.steps, "newton_iterations": st.iterations, "factorizations": st.factorizations,
+           "symbolic_analyses": st.analyses, "joint_space_size": st.joint_space_size,
+           "joint_space_steps": st.joint_space_steps, "joint_space_iterations": st.joint_space_iterations,
+           "joint_space_splits": st.joint_space_splits,
+           "joint_space_setup_s": round(st.joint_space_setup_s, 4),
+           "joint_space_flexibility_columns": st.joint_space_flexibility_columns,
+           "joint_space_flexibility_s": round(st.joint_space_flexibility_s, 4),
+           "step_cuts": st.step_cuts, "arc_length_steps": st.arc_length_steps,
+           "arc_length_switches": st.arc_length_switches, "solve_wall_time_s": round(st.wall_time_s, 4),
+           "total_wall_time_s": round(time.perf_counter() - t_start, 4), "per_stage": json.dumps(st.per_stage)}
+    far = solver.model.far_slips()
+    if far:
+        out["joint_slip_warnings"] = " | ".join(far)
+    if solver.limit is not None:
+        out["limit_state"] = _limit_text(solver)
+        out["limit_load_factor"] = float(solver.limit["load_factor"])
+        if "water_level" in solver.limit:
+            out["limit_reservoir_level"] = float(solver.limit["water_level"])
+    if dyn_solvers:
+        d = [x.stats for x in dyn_solvers]
+        steps = sum(x.steps for x in d)
+        wall = sum(x.wall_time_s - x.output_time_s for x in d)
+        out.update({
+            "dynamic_steps": steps, "dynamic_substeps": sum(x.substeps for x in d),
+            "dynamic_steps_rejected": sum(x.steps_rejected for x in d),
+            # the smallest step taken: by dt = "auto" where a stage had it, else the smallest fixed dt
+            "dynamic_dt_smallest": float(min([x.dt_smallest for x in d if x.dt_largest > 0]
+                                             + [s.s.dt for s in dyn_solvers if not s.s.adaptive],
+                                             default=float("nan"))),  # nan: no step was taken
+            "dynamic_newton_iterations": sum(x.iterations for x in d),
+            "dynamic_factorizations": sum(x.factorizations for x in d),
+            "dynamic_reference_solver": ",".join(sorted(set().union(*(x.reference_solvers for x in d)))),
+            "dynamic_exact_reuse_solves": sum(x.exact_solves for x in d),
+            "dynamic_low_rank_solves": sum(x.low_rank_solves for x in d),
+            "dynamic_low_rank_columns": sum(x.low_rank_columns for x in d),
+            "dynamic_max_low_rank": max(x.max_rank for x in d),
+            "dynamic_stabilized_steps": sum(x.stabilized_steps for x in d),
+            "dynamic_joint_space_size": max(x.joint_space_size for x in d),
+            "dynamic_joint_space_steps": sum(x.joint_space_steps for x in d),
+            "dynamic_joint_space_iterations": sum(x.joint_space_iterations for x in d),
+            "dynamic_joint_space_fallbacks": sum(x.joint_space_fallbacks for x in d),
+            "dynamic_joint_space_splits": sum(x.joint_space_splits for x in d),
+            "dynamic_joint_space_dense_factorizations": sum(x.joint_space_dense_factorizations for x in d),
+            "dynamic_joint_space_dense_updates": sum(x.joint_space_dense_updates for x in d),
+            "dynamic_joint_space_holds": sum(x.joint_space_holds for x in d),
+            "dynamic_joint_space_column_recoveries": sum(x.joint_space_column_recoveries for x in d),
+            "dynamic_joint_space_column_memory_MB": round(max(x.joint_space_column_bytes for x in d) / 2**20, 2),
+            "dynamic_joint_space_setup_s": round(sum(x.joint_space_setup_s for x in d), 4),
+            "dynamic_joint_space_flexibility_columns": sum(x.joint_space_flexibility_columns for x in d),
+            "dynamic_joint_space_flexibility_s": round(sum(x.joint_space_flexibility_s for x in d), 4),
+            "dynamic_joint_space_store_full": sum(x.joint_space_store_full for x in d),
+            "dynamic_wall_time_s": round(wall, 4),
+            "dynamic_output_time_s": round(sum(x.output_time_s for x in d), 4),
+            "dynamic_ms_per_step": round(1e3 * wall / max(steps, 1), 4),
+            "energy_error_max_J": float(max(x.energy_error_max for x in d)),
+            "energy_error_relative": float(max(x.energy_error_relative for x in d)),
+            "energy_numerical_relative": float(d[-1].energy_numerical / d[-1].energy_scale
+                                               if d[-1].energy_scale > 0 else 0.0),
+            "energy_contact_relative": float(d[-1].energy_contact / d[-1].energy_scale
+                                             if d[-1].energy_scale > 0 else 0.0),
+            "energy_warnings": " | ".join(_energy_warnings(dyn_solvers)),
+            "static_residual_carried": float(d[0].static_residual),
+            "dynamic_per_stage": json.dumps([p for x in d for p in x.per_stage]),
+        })
+    return out
+
+
+def _limit_text(solver) -> str:
+    """Where a stage with ``until_failure`` found no equilibrium, in words (with the water level)."""
+    lim = solver.limit
+    text = (f"stage '{lim['stage']}': no equilibrium beyond load factor {lim['load_factor']:.6g} "
+            f"(tried {lim['failed_at']:.6g}): {lim['reason']}")
+    if "water_level" in lim:
+        text += f"; reservoir level reached {lim['water_level']:.6g} m (tried {lim['water_level_tried']:.6g} m)"
+    return text
+
+
+def _energy_warnings(dyn_solvers):
+    """The energy warnings of the run (:func:`~masonrydam.solvers.dynamic.energy_warnings`): the energy
+    terms are cumulative over the dynamic stages, so the last stage's solver speaks for the run, with the
+    largest balance error of any stage."""
+    if not dyn_solvers:
+        return []
+    last = dyn_solvers[-1]
+    stats = dataclasses.replace(last.stats, energy_error_max=max(x.stats.energy_error_max for x in dyn_solvers))
+    s = last.s
+    dt = f"auto (tolerance {s.tolerance:g}, dt_min {s.dt_min:g} s)" if s.adaptive else f"{s.dt:g} s"
+    return dynamic_energy_warnings(stats, s.integrator, dt)
+
+
+def _columns_note(columns, seconds, store_full=0):
+    """The summary's note on the flexibility columns computed as steps needed them (large joint sets)."""
+    if not columns:
+        return ""
+    full = f", {store_full} step(s) needed more than the store holds" if store_full else ""
+    return f"; {columns} flexibility columns computed when first needed ({seconds:.3g} s{full})"
+
+
+def print_summary(sc, mesh, model, eff, solver, stats, path, ds, file=None, dyn_solvers=()):
+    file = file or sys.stdout
+    n_ip = sum(g.n_elem * g.nip for g in model.igroups)
+    types = {}
+    for b in mesh.blocks:
+        types[b.type] = types.get(b.type, 0) + len(b.cells)
+    jsets = {}
+    for g in model.igroups:
+        jsets[g.name] = jsets.get(g.name, 0) + g.n_elem
+    w = 72
+    lines = ["=" * w, f"masonrydam {__version__} | scene '{sc.name}' ({sc.source})", "-" * w,
+             f"model      : {mesh.dim}D, {model.n_nodes} nodes, {model.n_dof} DOFs, "
+             + ", ".join(f"{n} {t}" for t, n in sorted(types.items())),
+             f"joints     : " + (", ".join(f"{k} {v} el." for k, v in sorted(jsets.items())) or "none")
+             + f" ({n_ip} integration points)",
+             "effects    : " + eff[0]]
+    lines += ["             " + e for e in eff[1:]]
+    for ps in solver.stats.per_stage:
+        lines.append(f"stage      : {ps['stage']}: {ps['steps']} steps, {ps['iterations']} Newton iterations, "
+                     f"{ps['step_cuts']} step cuts"
+                     + (f"; in its {ps['dissipation_control_steps']} steps under dissipation control the joints "
+                        f"dissipated {ps['joint_dissipation_J']:.4g} J" if "joint_dissipation_J" in ps else ""))
+    lines.append(f"solver     : {solver.s.method}, {stats['factorizations']} factorization(s) "
+                 f"[{resolve_backend(solver.s.linear_solver, n_dof=model.n_dof, dim=model.dim)}; "
+                 f"{stats['symbolic_analyses']} symbolic analyses], {stats['newton_iterations']} general Newton "
+                 "iterations")
+    if stats["arc_length_steps"]:
+        lines.append(f"arc length : {stats['arc_length_steps']} steps under path-following control (Crisfield's arc, "
+                     "crack opening or joint dissipation)"
+                     + (f", {stats['arc_length_switches']} switch(es) to it or between its controls where a "
+                        "control stalled"
+                        if stats["arc_length_switches"] else ""))
+    if stats["joint_space_size"]:
+        lines.append(f"joint space: static steps on {stats['joint_space_size']} joint unknowns (set-up "
+                     f"{stats['joint_space_setup_s']:.3g} s): {stats['joint_space_steps']} step attempts converged "
+                     f"there in {stats['joint_space_iterations']} iterations, {stats['joint_space_splits']} cut "
+                     "where it did not converge"
+                     + _columns_note(stats['joint_space_flexibility_columns'], stats['joint_space_flexibility_s']))
+    for dsol in dyn_solvers:
+        for p in dsol.stats.per_stage:
+            crit = f", dt_crit {p['dt_critical']:.3g} s" if p.get("dt_critical") else ""
+            if p["dt"] == "auto":
+                lines.append(f"dynamic    : {p['stage']}: {p['steps']} steps, dt = auto ({p['dt_smallest']:.3g} to "
+                             f"{p['dt_largest']:.3g} s, tolerance {p['tolerance']:g}), {p['steps_rejected']} "
+                             f"refused and retried smaller ({p['integrator']})")
+            else:
+                lines.append(f"dynamic    : {p['stage']}: {p['steps']} steps of {p['dt']:g} s ({p['integrator']}{crit})")
+    if dyn_solvers:
+        lines.append(f"dynamics   : {stats['dynamic_newton_iterations']} general Newton iterations, {stats['dynamic_substeps']} "
+                     f"sub-step splits, {stats['dynamic_factorizations']} factorization(s) "
+                     f"[all-stick matrix: {stats['dynamic_reference_solver'] or '-'}], "
+                     f"{stats['dynamic_low_rank_solves']} low-rank solves, {stats['dynamic_ms_per_step']:.3g} ms/step")
+        if stats["dynamic_joint_space_size"]:
+            lines.append(f"joint space: {stats['dynamic_joint_space_size']} joint unknowns condensed (set-up "
+                         f"{stats['dynamic_joint_space_setup_s']:.3g} s); {stats['dynamic_joint_space_steps']} steps "
+                         f"solved there in {stats['dynamic_joint_space_iterations']} iterations "
+                         f"({stats['dynamic_joint_space_dense_factorizations']} dense LU, "
+                         f"{stats['dynamic_joint_space_dense_updates']} low-rank updates of them, "
+                         f"{stats['dynamic_joint_space_holds']} flipping points held sticking, "
+                         f"{stats['dynamic_joint_space_column_recoveries']} recoveries from "
+                         f"{stats['dynamic_joint_space_column_memory_MB']:.3g} MB of stored columns), "
+                         f"{stats['dynamic_joint_space_splits']} halved, "
+                         f"{stats['dynamic_joint_space_fallbacks']} finished by the general path"
+                         + _columns_note(stats['dynamic_joint_space_flexibility_columns'],
+                                         stats['dynamic_joint_space_flexibility_s'],
+                                         stats['dynamic_joint_space_store_full']))
+        else:
+            why = ("the blocks are nonlinear (plastic or large kinematics): every iteration is general"
+                   if not model.condensable else
+                   "no nonlinear joints, an explicit scheme, or joint_space = 'off'")
+            lines.append(f"joint space: off ({why})")
+        lines.append(f"energy     : balance error {stats['energy_error_max_J']:.3g} J "
+                     f"({100 * stats['energy_error_relative']:.3g} % of the largest energy term); numerical "
+                     f"dissipation {100 * stats['energy_numerical_relative']:.3g} %, contact events "
+                     f"{100 * stats['energy_contact_relative']:.3g} %")
+    if "joint_state" in ds and ds.sizes.get("joint_point", 0):
+        last = ds.joint_state.isel(step=-1).values
+        crushed = int((last == 3).sum())
+        lines.append(f"joints end : {int((last == 0).sum())} stick, {int((last == 1).sum())} slip, "
+                     f"{int((last == 2).sum())} open" + (f", {crushed} crushed" if crushed else ""))
+    if "limit_state" in stats:
+        lines.append(f"limit      : {stats['limit_state']}")
+    if "frequency" in ds:
+        comps = [str(c) for c in ds.component.values]
+        lines.append(f"modes      : stage '{stats.get('modal_stage', '')}', effective mass ratio (% of the free mass) "
+                     "per direction")
+        lines.append("             mode  f (Hz)    T (s)    " + "  ".join(f"{c:>6}" for c in comps))
+        for k in range(ds.sizes["mode"]):
+            r = ds.effective_mass_ratio.values[k]
+            lines.append(f"             {k + 1:4d}  {float(ds.frequency[k]):8.4g}  {float(ds.period[k]):7.4g}  "
+                         + "  ".join(f"{100 * v:6.2f}" for v in r))
+    if "section" in ds.dims and ds.sizes.get("step", 0):
+        last = ds.isel(step=-1)
+        sf = last.sliding_safety_factor.values
+        k = int(np.nanargmin(np.where(np.isfinite(sf), sf, np.inf)))
+        lines.append(f"stability  : {ds.sizes['section']} joint lines; lowest sliding factor {sf[k]:.3g} on "
+                     f"'{str(last.section.values[k])}', largest cracked ratio "
+                     f"{float(np.nanmax(last.cracked_length_ratio.values)):.3g} (masonrydam assess FILE)")
+    u = ds.displacement.isel(step=-1)
+    umax = float(np.abs(u).max())
+    lines.append(f"max |u|    : {umax:.4g} m")
+    lines.append(f"wall time  : {stats['total_wall_time_s']:.2f} s (solve {stats['solve_wall_time_s']:.2f} s)")
+    if path:
+        lines.append(f"results    : {path}")
+    lines.append("=" * w)
+    print("\n".join(lines), file=file)

@@ -9,34 +9,14 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from ..elements import interface as ik
-from ..materials import mohr_coulomb as mc
-from .groups import raise_for_status
 from .sparsity import full_matrix, scatter_matrix
 
 
 def _elastic_joint_parts(model):
     """Element stiffness matrices of every interface group with every point sticking (the initial,
-    elastic joint stiffness), from a copy of the parameters with unbreakable bonds and zero states;
-    the groups' own states are not touched."""
-    parts = []
-    for g in model.igroups:
-        params = g.params_table.copy()
-        if g.law != "composite":  # (the composite law is elastic at zero displacement from a virgin state)
-            params[:, mc.P_COHESION] = 1e300
-            params[:, mc.P_TENSILE_STRENGTH] = 1e300
-        params[:, g.open_tangent_column] = 0.0
-        zeros = np.zeros_like(g.state_committed)
-        trial = np.zeros_like(g.state_committed)
-        delta, traction = np.zeros_like(g.delta), np.zeros_like(g.traction)
-        fe, ke = np.zeros_like(g.fe), np.zeros_like(g.ke)
-        info = np.zeros(1, dtype=np.int64)
-        st = ik.interface_evaluate(model.coords, g.conn, np.zeros(model.n_dof), g.N, g.dN, g.weights, g.thickness,
-                                   params, g.param_index, zeros, trial, delta, traction, fe, ke, True, info,
-                                   g.law_id)
-        raise_for_status(st, info, g.name, "elastic joint stiffness")
-        parts.append((g, ke))
-    return parts
+    elastic joint stiffness: :meth:`~masonrydam.assembly.groups.InterfaceGroup.elastic_tangents`, the law at
+    rest from its ``JointLaw.elastic_parameters`` and zero states); the groups' own states are not touched."""
+    return [(g, g.elastic_tangents(model.coords, model.n_dof)) for g in model.igroups]
 
 
 def elastic_tangent_data(model) -> np.ndarray:

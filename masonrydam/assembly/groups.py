@@ -14,7 +14,8 @@ from ..elements import continuum as ck
 from ..elements import interface as ik
 from ..elements.shapes import shape_functions
 from ..errors import STATUS_BAD_GEOMETRY, STATUS_BAD_JACOBIAN, STATUS_NAN, MeshError, NumericalError
-from ..materials import mohr_coulomb as mc
+from ..materials.continuum_laws import continuum_law
+from ..materials.joint_laws import RESULT_OPEN, joint_law
 from ..mesh.model import INTERFACE_FACE_TYPE
 from .dofmap import DofMap
 
@@ -85,10 +86,7 @@ class ContinuumGroup:
             #: elastic energy (ne,) J of the last evaluation
             self.energy = np.zeros(self.n_elem)
         if self.plastic:
-            from ..materials import drucker_prager, mohr_coulomb_solid, tresca, von_mises
-
-            n_state = {"von_mises": von_mises.N_VM_STATE, "drucker_prager": drucker_prager.N_DP_STATE,
-                       "tresca": tresca.N_TRESCA_STATE, "mohr_coulomb": mohr_coulomb_solid.N_MC_STATE}[self.law]
+            n_state = self.continuum_law.state_size
             n = self.n_elem * len(self.weights)
             self.state_committed = np.zeros((n, n_state))
             self.state_trial = np.zeros((n, n_state))
@@ -99,8 +97,13 @@ class ContinuumGroup:
             self.ke = np.zeros((self.n_elem, self.n_edof, self.n_edof))
 
     @property
+    def continuum_law(self):
+        """The law's descriptor (:class:`masonrydam.materials.continuum_laws.ContinuumLaw`)."""
+        return continuum_law(self.law)
+
+    @property
     def plastic(self) -> bool:
-        return self.law != "elastic"
+        return self.continuum_law.plastic
 
     @property
     def large(self) -> bool:
@@ -123,11 +126,11 @@ class ContinuumGroup:
                                           self.thickness, u, want_tangent, self.fe, self.ke, self.energy, self.info)
             raise_for_status(st, self.info, self.name, "large-displacement element")
             return
-        from ..elements.continuum_plastic import LAW_IDS, continuum_plastic_evaluate
+        from ..elements.continuum_plastic import continuum_plastic_evaluate
 
         st = continuum_plastic_evaluate(coords, self.conn, self.dN, self.weights, self.thickness, u, self.law_params,
                                         self.param_index, self.state_committed, self.state_trial, dt, want_tangent,
-                                        LAW_IDS[self.law], self.fe, self.ke, self.info)
+                                        self.continuum_law.kernel_id, self.fe, self.ke, self.info)
         raise_for_status(st, self.info, self.name, f"{self.law.replace('_', ' ')} material")
 
     def commit(self):
@@ -182,9 +185,13 @@ class ContinuumGroup:
 class InterfaceGroup:
     """One joint set: interface elements with one law and one integration rule.
 
-    conn (ne, 2*ns): bottom face nodes then top face nodes; params (N_JOINT_PARAMS,);
-    state_committed / state_trial (ne, nip, N_JOINT_STATE); delta / traction (ne, nip, dim).
-    law: 'mohr_coulomb' or 'linear' (a linear joint never changes state: tension is carried).
+    conn (ne, 2*ns): bottom face nodes then top face nodes; params (n_params,) the law's parameter row;
+    state_committed / state_trial (ne, nip, n_state); delta / traction (ne, nip, dim).
+    law: the name of a registered joint law (:func:`masonrydam.materials.joint_laws.joint_law`), whose
+    descriptor is :attr:`joint_law`. A law with a fused kernel (the built-in ones) is evaluated by
+    :func:`~masonrydam.elements.interface.interface_evaluate`; another one (a plug-in) on the generic path:
+    relative displacements, its point law, assembly (``tangent`` (ne, nip, dim, dim) holds its point tangents).
+    ValueError for a plug-in law with large kinematics (the large-displacement kernel is fused).
     """
 
     def __init__(self, name, type_, conn, coords, dim, params, thickness, law, scheme, n_points=None,
@@ -204,16 +211,16 @@ class InterfaceGroup:
         self.params_table = np.ascontiguousarray(np.asarray(params, dtype=np.float64)[None, :])
         self.param_index = np.zeros(ne, dtype=np.int64)
         self.thickness = np.ascontiguousarray(thickness, dtype=np.float64)
+        self.joint_law = joint_law(law)
+        if kinematics == "large" and not self.joint_law.large_kinematics:
+            raise ValueError(f"the {self.joint_law.title} joint law has no large-displacement kernel (use "
+                             "kinematics = \"small\")")
+        #: the fused kernel's law argument (``JointLaw.kernel_id``)
+        self.law_id = self.joint_law.kernel_id
+        n_state = self.joint_law.state_size
         # trial / commit / revert: ``state_committed`` is the last converged state; ``state_base`` is
         # what the kernel reads in this step: the committed state plus bonds latched broken in
         # earlier iterations of the step (see :meth:`latch_broken_bonds`); ``state_trial`` is written.
-        self.law_id = ik.JOINT_LAW_IDS[law]
-        if law == "composite":
-            from ..materials import composite_interface as ci
-
-            n_state, self.open_tangent_column = ci.N_COMPOSITE_STATE, ci.P_OPEN_TANGENT
-        else:
-            n_state, self.open_tangent_column = mc.N_JOINT_STATE, mc.P_OPEN_TANGENT
         self.state_committed = np.zeros((ne, self.nip, n_state))
         self.state_base = np.zeros_like(self.state_committed)
         self.state_trial = np.zeros_like(self.state_committed)
@@ -222,6 +229,8 @@ class InterfaceGroup:
         self.fe = np.zeros((ne, self.dofs.shape[1]))
         self.ke = np.zeros((ne, self.dofs.shape[1], self.dofs.shape[1]))
         self.info = np.zeros(1, dtype=np.int64)
+        #: point tangents of the generic path (a law without a fused kernel); None on the fused path
+        self.tangent = None if self.joint_law.fused else np.zeros((ne, self.nip, dim, dim))
         self.scatter = None
         self.points = np.zeros((ne, self.nip, dim))
         self.frame = np.zeros((ne, self.nip, dim, dim))
@@ -235,24 +244,21 @@ class InterfaceGroup:
 
     @property
     def nonlinear(self) -> bool:
-        return self.law in ("mohr_coulomb", "composite")
+        """The joint's state changes (else its stiffness is the elastic one for good)."""
+        return self.joint_law.nonlinear
 
     @property
     def relaxation_time(self) -> float:
-        """Relaxation time (s) of the composite law's viscous regularisation (0: none, or another law)."""
-        if self.law != "composite":
-            return 0.0
-        from ..materials.composite_interface import P_RELAXATION_TIME
-
-        return float(self.params_table[:, P_RELAXATION_TIME].max())
+        """Relaxation time (s) of the law's viscous regularisation (0: none, or a rate-independent law)."""
+        return self.joint_law.relaxation_time(self.params_table)
 
     def evaluate(self, coords, u, want_tangent=True, dt=0.0):
         """Evaluate tractions, nodal forces and (optionally) tangents from the committed state; ``dt`` (s):
-        the step's time, seen by a composite law with a relaxation time."""
-        if self.law == "composite":
-            from ..materials.composite_interface import P_TIME_STEP
-
-            self.params_table[:, P_TIME_STEP] = dt
+        the step's time, seen by a law with a relaxation time."""
+        self.joint_law.set_time_step(self.params_table, dt)
+        if not self.joint_law.fused:
+            self._evaluate_generic(u, want_tangent, dt)
+            return
         args = (coords, self.conn, u, self.N, self.dN, self.weights, self.thickness, self.params_table,
                 self.param_index, self.state_base, self.state_trial, self.delta, self.traction, self.fe, self.ke,
                 want_tangent, self.info)
@@ -263,6 +269,72 @@ class InterfaceGroup:
         else:
             st = ik.interface_evaluate(*args, self.law_id)
         raise_for_status(st, self.info, self.name, "joint evaluation")
+
+    def _evaluate_generic(self, u, want_tangent, dt):
+        """The generic path of a law without a fused kernel: kinematics, the law's point law, assembly."""
+        st = ik.interface_relative_displacements(self.conn, u, self.N, self.frame, self.delta, self.info)
+        raise_for_status(st, self.info, self.name, "joint relative displacements")
+        st = self._point_law(self.state_base, self.state_trial, self.traction, self.tangent, dt)
+        raise_for_status(st, self.info, self.name, f"{self.joint_law.title} joint law")
+        st = ik.interface_assemble(self.N, self.frame, self.jw, self.thickness, self.traction, self.tangent,
+                                   want_tangent, self.fe, self.ke, self.info)
+        raise_for_status(st, self.info, self.name, "joint evaluation")
+
+    def _point_law(self, state_base, state_trial, traction, tangent, dt):
+        return int(self.joint_law.point_law(self.params_table, self.param_index, state_base, self.delta, dt,
+                                            state_trial, traction, tangent, self.info))
+
+    def point_tangents(self) -> np.ndarray:
+        """The law's tangent ``dt/d delta`` (ne, nip, dim, dim) Pa/m (local axes) at every point, for the relative
+        displacements of the last evaluation from the state that evaluation read: that of the assembled
+        stiffness, kept per point (dissipation-based path following). The group's state is not changed."""
+        dim = self.delta.shape[2]
+        kt = np.empty(self.delta.shape + (dim,))
+        scratch_state, scratch_traction = np.empty_like(self.state_trial), np.empty_like(self.traction)
+        if self.joint_law.fused:
+            st = ik.interface_point_tangents(self.params_table, self.param_index, self.state_base, self.delta, dim,
+                                             self.law_id, scratch_state, scratch_traction, kt, self.info)
+        else:
+            st = self._point_law(self.state_base, scratch_state, scratch_traction, kt, 0.0)
+        raise_for_status(st, self.info, self.name, "joint tangents")
+        return kt
+
+    def elastic_tangents(self, coords, n_dof: int) -> np.ndarray:
+        """Element stiffness matrices (ne, n_edof, n_edof) N/m with every point at rest: the initial, elastic
+        joint stiffness (``JointLaw.elastic_parameters``, zero relative displacement, virgin state). The
+        group's own state and arrays are not touched."""
+        params = self.joint_law.elastic_parameters(self.params_table)
+        zeros = np.zeros_like(self.state_committed)
+        trial = np.zeros_like(self.state_committed)
+        delta, traction = np.zeros_like(self.delta), np.zeros_like(self.traction)
+        fe, ke = np.zeros_like(self.fe), np.zeros_like(self.ke)
+        info = np.zeros(1, dtype=np.int64)
+        if self.joint_law.fused:
+            st = ik.interface_evaluate(coords, self.conn, np.zeros(n_dof), self.N, self.dN, self.weights,
+                                       self.thickness, params, self.param_index, zeros, trial, delta, traction, fe, ke,
+                                       True, info, self.law_id)
+        else:
+            tangent = np.zeros_like(self.tangent)
+            st = int(self.joint_law.point_law(params, self.param_index, zeros, delta, 0.0, trial, traction, tangent,
+                                              info))
+            if st == 0:
+                st = ik.interface_assemble(self.N, self.frame, self.jw, self.thickness, traction, tangent, True, fe,
+                                           ke, info)
+        raise_for_status(st, info, self.name, "elastic joint stiffness")
+        return ke
+
+    def set_open_tangent(self, factor: float) -> None:
+        """Tangent factor of open points (0: consistent; 1: initial stiffness), for a law that has one."""
+        self.joint_law.set_open_tangent(self.params_table, factor)
+
+    def compliance(self) -> np.ndarray:
+        """(ne, dim) elastic compliance ``[1/ks1, (1/ks2,) 1/kn]`` (m/Pa) of each element's parameters."""
+        return self.joint_law.compliance(self.params_table, self.delta.shape[2])[self.param_index]
+
+    def friction_strength(self) -> tuple:
+        """``(cohesion (ne,) Pa, tan_phi (ne,))`` of each element's Coulomb limit (inf, 0 where the law has none)."""
+        c, t = self.joint_law.friction_strength(self.params_table)
+        return c[self.param_index], t[self.param_index]
 
     def commit(self):
         self.state_committed[:] = self.state_trial
@@ -280,25 +352,28 @@ class InterfaceGroup:
         when a point opens; letting an iteration "un-break" a bond makes Newton chatter between the
         two sides of that jump. Returns the number of newly latched points.
         """
-        if self.law != "mohr_coulomb":  # (softening laws have no bond jump to latch)
-            return 0
-        col = mc.S_BOND_BROKEN
-        new = (self.state_trial[:, :, col] != 0) & (self.state_base[:, :, col] == 0)
-        n = int(new.sum())
-        if n:
-            self.state_base[:, :, col][new] = 1.0
-        return n
+        # (a law without a bond jump, e.g. a softening one, latches nothing: JointLaw.latches_bonds)
+        return self.joint_law.latch_broken_bonds(self.state_base, self.state_trial)
 
     def state_codes(self, trial=True) -> np.ndarray:
-        s = self.state_trial if trial else self.state_committed
-        return s[:, :, mc.S_CODE].astype(np.int8)
+        """(ne, nip) int8: the law's own state codes (trial, or committed)."""
+        return self.joint_law.codes(self.state_trial if trial else self.state_committed)
 
     def result_states(self, trial=False) -> np.ndarray:
         """(ne, nip) int8 state (committed, or the trial one) in the result's terms (``joint_state``, and what
-        uplift, stability and mechanism checks count as open or sliding): 0 stick, 1 slip, 2 open, 3 crush. The
-        Mohr-Coulomb codes are these; the composite law's (elastic, shear, tension, cap, tension-shear,
-        shear-cap) map to stick, slip, open, crush, open, crush."""
-        codes = self.state_codes(trial=trial)
-        if self.law != "composite":
-            return codes
-        return np.array([0, 1, 2, 3, 2, 3], dtype=np.int8)[codes]
+        uplift, stability and mechanism checks count as open or sliding): 0 stick, 1 slip, 2 open, 3 crush
+        (``JointLaw.result_state_map``: the Mohr-Coulomb codes are these; the composite law's elastic, shear,
+        tension, cap, tension-shear, shear-cap map to stick, slip, open, crush, open, crush)."""
+        return self.joint_law.result_states(self.state_trial if trial else self.state_committed)
+
+    def is_open(self, trial=False) -> np.ndarray:
+        """(ne, nip) bool: the point is open (committed, or the trial state)."""
+        return self.result_states(trial=trial) == RESULT_OPEN
+
+    def plastic_slip(self, trial=False) -> np.ndarray:
+        """(ne, nip, dim-1) m: the irreversible slip (committed, or the trial state; zero for a law without)."""
+        return self.joint_law.plastic_slip(self.state_trial if trial else self.state_committed, self.delta.shape[2])
+
+    def bond_broken(self, trial=False) -> np.ndarray:
+        """(ne, nip) bool: the bond has broken (committed, or the trial state)."""
+        return self.joint_law.bond_broken(self.state_trial if trial else self.state_committed)

@@ -141,9 +141,9 @@ class Model:
 
     @property
     def joint_space_capable(self) -> bool:
-        """Every nonlinear joint set follows the seed's Mohr-Coulomb law, the one the joint-space kernels
-        carry (:mod:`masonrydam.solvers.joint_space.kernels`)."""
-        return all(g.law != "composite" for g in self.igroups)
+        """Every joint set follows a law that the joint-space kernels carry (``JointLaw.joint_space``: the
+        seed's Mohr-Coulomb law, :mod:`masonrydam.solvers.joint_space.kernels`)."""
+        return all(g.joint_law.joint_space for g in self.igroups)
 
     @property
     def rate_dependent(self) -> bool:
@@ -334,7 +334,7 @@ class Model:
     def set_open_tangent(self, factor: float) -> None:
         """Tangent factor of open joint points (0: consistent; 1: initial stiffness). Residuals unchanged."""
         for g in self.igroups:
-            g.params_table[:, g.open_tangent_column] = factor
+            g.set_open_tangent(factor)
 
     def commit(self) -> None:
         for g in self.cgroups:
@@ -353,14 +353,12 @@ class Model:
         a node-to-node joint keeps the partners it was meshed with (no contact search re-pairs them), which
         holds only approximately, and only while the faces stay on one straight (plane), rigid line. One
         text per such set."""
-        from ..materials.mohr_coulomb import S_PLASTIC_SLIP
-
         out = []
         for g in self.igroups:
             face = g.jw.sum(axis=1)  # (ne,) element length (2D) or area (3D)
             size = face if self.dim == 2 else np.sqrt(face)  # m
             # the committed plastic slip (a failed attempt's trial values do not count), (ne, nip) m
-            slip = np.linalg.norm(g.state_committed[:, :, S_PLASTIC_SLIP:S_PLASTIC_SLIP + self.dim - 1], axis=2)
+            slip = np.linalg.norm(g.plastic_slip(), axis=2)
             ratio = slip / size[:, None]
             if ratio.size and ratio.max() > 1.0:
                 e, i = np.unravel_index(int(np.argmax(ratio)), ratio.shape)

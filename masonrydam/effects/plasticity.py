@@ -15,27 +15,18 @@ from ..checks import choice as _choice
 from ..checks import number as _number
 from ..checks import positive as _positive
 from ..errors import SceneError
+from ..materials.continuum_laws import ELASTIC_LAW, continuum_law, continuum_laws
 
-#: continuum laws of ``[materials.<group>] law`` and their own keys (with defaults; None: required)
-CONTINUUM_LAWS = {
-    "elastic": {},
-    "von_mises": {"yield_stress": None, "isotropic_hardening": 0.0, "kinematic_hardening": 0.0, "viscosity": 0.0,
-                  "residual_yield_stress": 0.0, "regularisation_length": None},
-    "drucker_prager": {"cohesion": None, "friction_angle": None, "dilation_angle": None, "cohesion_hardening": 0.0,
-                       "viscosity": 0.0, "match": "plane_strain", "residual_cohesion": 0.0,
-                       "regularisation_length": None},
-    "tresca": {"yield_stress": None, "isotropic_hardening": 0.0, "viscosity": 0.0, "residual_yield_stress": 0.0,
-               "regularisation_length": None},
-    "mohr_coulomb": {"cohesion": None, "friction_angle": None, "dilation_angle": None, "cohesion_hardening": 0.0,
-                     "viscosity": 0.0, "residual_cohesion": 0.0, "regularisation_length": None},
-}
+#: continuum laws of ``[materials.<group>] law`` and their own keys (with defaults; None: required), from the
+#: laws' descriptors (:mod:`masonrydam.materials.continuum_laws`)
+CONTINUUM_LAWS = {law.name: dict(law.keys) for law in continuum_laws()}
 #: keys that may be absent (None: not given)
 _OPTIONAL_LAW_KEYS = ("dilation_angle", "regularisation_length")
 
 
 def material_law(d, key) -> dict:
     """The elasto-plastic part of a material (``law`` and its parameters; SI, angles in degrees)."""
-    law = _choice(d.get("law", "elastic"), tuple(CONTINUUM_LAWS), f"{key}.law")
+    law = _choice(d.get("law", ELASTIC_LAW), tuple(CONTINUUM_LAWS), f"{key}.law")
     spec = CONTINUUM_LAWS[law]
     for k in d:
         if k in {kk for other in CONTINUUM_LAWS.values() for kk in other} and k not in spec:
@@ -92,34 +83,18 @@ def law_params(m: dict, name: str, dim: int, hypothesis: str, coords=None, conn=
     row per element (ne, P) when a softening modulus is regularised by the element size (crack band:
     ``H_e = H l_e / regularisation_length`` keeps the energy dissipated per unit area of a localised band
     independent of the mesh; Bazant & Oh 1983; Pietruszczak & Mroz 1981, IJNME 17, for plasticity)."""
-    law = m.get("law", "elastic")
-    if law == "elastic":
+    law = continuum_law(m.get("law", ELASTIC_LAW))
+    if not law.plastic:
         return None
     key = f"materials.{name}"
     if dim == 2 and hypothesis != "plane_strain":
-        raise SceneError(f"{key}.law", f"\"{law}\" needs plane strain in 2D ([model] hypothesis = "
+        raise SceneError(f"{key}.law", f"\"{law.name}\" needs plane strain in 2D ([model] hypothesis = "
                                        f"\"plane_strain\"; the laws keep the out-of-plane stress), got {hypothesis!r}")
-    from ..materials import drucker_prager, mohr_coulomb_solid, tresca, von_mises
-
-    soft_key = "isotropic_hardening" if law in ("von_mises", "tresca") else "cohesion_hardening"
-    column = {"von_mises": von_mises.P_H_ISO, "drucker_prager": drucker_prager.P_COHESION_HARDENING,
-              "tresca": tresca.P_H_ISO, "mohr_coulomb": mohr_coulomb_solid.P_COHESION_HARDENING}[law]
-    E, nu = m["youngs_modulus"], m["poisson_ratio"]
+    soft_key, column = law.hardening_key, law.hardening_column
 
     def row(h, where=""):
         try:
-            if law == "von_mises":
-                r = von_mises.von_mises_params(E, nu, m["yield_stress"], h, m["kinematic_hardening"],
-                                               m["residual_yield_stress"], m["viscosity"])
-            elif law == "drucker_prager":
-                r = drucker_prager.drucker_prager_params(E, nu, m["cohesion"], m["friction_angle"], m["dilation_angle"],
-                                                         h, m["residual_cohesion"], m["viscosity"], m["match"])
-            elif law == "tresca":
-                r = tresca.tresca_params(E, nu, m["yield_stress"], h, m["residual_yield_stress"], m["viscosity"])
-            else:
-                r = mohr_coulomb_solid.mohr_coulomb_solid_params(E, nu, m["cohesion"], m["friction_angle"],
-                                                                 m["dilation_angle"], h, m["residual_cohesion"],
-                                                                 m["viscosity"])
+            r = law.parameters(m, h)
         except ValueError as exc:
             raise SceneError(key if not where else f"{key}.{soft_key}", str(exc) + where) from None
         return np.asarray(r, dtype=np.float64)
@@ -144,12 +119,7 @@ def _describe(scene: dict, model) -> list[str]:
     for g in model.cgroups:
         if g.plastic:
             mat = scene["materials"][g.name]
-            what = {"von_mises": lambda: f"von Mises, yield stress {mat['yield_stress']:g} Pa",
-                    "tresca": lambda: f"Tresca, yield stress {mat['yield_stress']:g} Pa",
-                    "drucker_prager": lambda: f"Drucker-Prager ({mat['match'].replace('_', ' ')} match), c "
-                                              f"{mat['cohesion']:g} Pa, phi {mat['friction_angle']:g} deg",
-                    "mohr_coulomb": lambda: f"Mohr-Coulomb, c {mat['cohesion']:g} Pa, phi {mat['friction_angle']:g} "
-                                            "deg (principal-space return: plane, edges, apex)"}[g.law]()
+            what = continuum_law(g.law).summary(mat)
             if mat.get("viscosity", 0.0) > 0.0:
                 what += f", Perzyna viscosity {mat['viscosity']:g} Pa s"
             if mat.get("regularisation_length") is not None:

@@ -40,6 +40,7 @@ import scipy.sparse as sp
 
 from ..checks import check_keys, choice, number, positive
 from ..errors import SceneError
+from ..materials.joint_laws import RESULT_OPEN
 
 CRACKED = ("full_head", "unchanged", "none")
 #: uplift during the dynamic stages (the options of CADAM3D, Leclerc, Leger & Tinawi 2003, Adv. Eng. Softw.
@@ -221,15 +222,13 @@ class Uplift:
 
         ``rule``: the crack rule, default the scene's ``cracked``; the dynamic stages pass the
         ``earthquake`` option (:meth:`earthquake_force`)."""
-        from ..materials.mohr_coulomb import OPEN
-
         L, S = self.lines, self.samples
         rule = self.spec["cracked"] if rule is None else rule
         h_up, h_tail = self._heads(level, tail)
         tip = cracked = None
         if rule != "unchanged":
             codes = L.gather([g.result_states(trial=trial) for g in L.groups])
-            cracked, tip = L.leading_open(codes == OPEN)
+            cracked, tip = L.leading_open(codes == RESULT_OPEN)
             if trial and step is not None:
                 if step == self._latch_step:
                     tip = np.maximum(tip, self._latched_tip)

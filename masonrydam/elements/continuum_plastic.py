@@ -20,6 +20,7 @@ import numba
 import numpy as np
 
 from ..errors import STATUS_NAN, STATUS_OK
+from ..materials.continuum_laws import continuum_laws
 from ..materials.drucker_prager import drucker_prager_point
 from ..materials.mohr_coulomb_solid import mohr_coulomb_solid_point
 from ..materials.plasticity import WORK_SIZE
@@ -28,13 +29,10 @@ from ..materials.von_mises import von_mises_point
 from .continuum import (DETJ_RTOL, _add_btdb, _add_btsigma, _bad_det_status, _block_finite, _dim_tag,
                         _gather_displacements, _gather_element, _gradients, _voigt_map)
 
-#: law identifiers of :func:`continuum_plastic_evaluate`
-LAW_VON_MISES = 1
-LAW_DRUCKER_PRAGER = 2
-LAW_TRESCA = 3
-LAW_MOHR_COULOMB = 4
-LAW_IDS = {"von_mises": LAW_VON_MISES, "drucker_prager": LAW_DRUCKER_PRAGER, "tresca": LAW_TRESCA,
-           "mohr_coulomb": LAW_MOHR_COULOMB}
+#: law identifiers of :func:`continuum_plastic_evaluate` (the branches of ``_plastic_impl``): each plastic law's
+#: ``ContinuumLaw.kernel_id`` (:mod:`masonrydam.materials.continuum_laws`): 1 von Mises, 2 Drucker-Prager,
+#: 3 Tresca, 4 Mohr-Coulomb
+LAW_IDS = {law.name: law.kernel_id for law in continuum_laws() if law.plastic}
 
 
 @numba.njit(cache=True)

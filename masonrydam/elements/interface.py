@@ -233,10 +233,10 @@ def _frame(xm, dN, g, dim, R, size):
     return j
 
 
-#: joint laws of the interface kernels (argument ``law``): None, the seed's Mohr-Coulomb (and the linear joint, a
-#: Mohr-Coulomb joint that cannot break), or 1, the composite masonry law of
-#: :mod:`masonrydam.materials.composite_interface` (see :func:`joint_law_at` for why None)
-JOINT_LAW_IDS = {"mohr_coulomb": None, "linear": None, "composite": 1}
+# the joint law of the fused kernels (argument ``law``) is the descriptor's ``JointLaw.kernel_id``
+# (masonrydam.materials.joint_laws.FUSED_KERNELS): None, the seed's Mohr-Coulomb (and the linear joint, a
+# Mohr-Coulomb joint that cannot break), or 1, the composite masonry law of
+# masonrydam.materials.composite_interface (see joint_law_at for why None)
 
 
 @njit(cache=True, inline="always")
@@ -247,7 +247,7 @@ def joint_law_at(params_table, pidx, state_committed, state_trial, delta_out, tr
     interface kernels. The law runs on scalars (row views per point cost more than the law: see
     :func:`~masonrydam.materials.mohr_coulomb.mohr_coulomb_point`).
 
-    ``law``: None for the seed's Mohr-Coulomb law, an int (:data:`JOINT_LAW_IDS`) for another. Why None:
+    ``law``: None for the seed's Mohr-Coulomb law, an int (``JointLaw.kernel_id``) for another. Why None:
     numba prunes the ``law is not None`` branch of a None argument before typing, so the Mohr-Coulomb
     kernels never compile the composite law (it doubled the first, compiling run of the default scene)."""
     if law is not None:
@@ -482,6 +482,140 @@ def interface_point_tangents(params_table, param_index, state_base, delta, dim, 
             for r in range(dim):
                 for c in range(dim):
                     tangent_out[e, g, r, c] = C[r, c]
+    return STATUS_OK
+
+
+# ---- the generic path: kinematics -> point law (from Python) -> assembly -------------------------------
+# For a joint law without a fused kernel (a plug-in, masonrydam.materials.joint_laws): the same arithmetic
+# as interface_evaluate, split where the law is called, so that the law may be any function over the
+# points' arrays and these kernels stay cached (they take no function argument).
+
+
+@njit(cache=True)
+def interface_relative_displacements(conn, u, N, frame, delta_out, info):
+    """Local relative displacements at every integration point (the kinematics of :func:`interface_evaluate`).
+
+    Parameters
+    ----------
+    conn : int64 (n_elem, 2*ns);  u : float64 (n_dof,) m, ``dof = node*dim + comp``
+    N : float64 (nip, ns)
+    frame : float64 (n_elem, nip, dim, dim)
+        Local frames R of the reference mid-surface (:func:`interface_geometry`).
+    delta_out : float64 (n_elem, nip, dim), out
+        ``delta = R sum_a N_a (u_top,a - u_bot,a)`` (m), ``[s1, (s2,) n]``, opening positive (seed eqs. 4-6, 10).
+    info : int64 (1,), out — the element of a non-finite displacement.
+
+    Returns STATUS_OK, or STATUS_NAN (non-finite displacement).
+    """
+    n_elem = conn.shape[0]
+    dim = frame.shape[2]
+    nip = N.shape[0]
+    ns = N.shape[1]
+    du = np.empty((ns, dim))
+    Dug = np.empty(dim)
+    for e in range(n_elem):
+        for a in range(ns):
+            b = conn[e, a]
+            t = conn[e, ns + a]
+            for k in range(dim):
+                du[a, k] = u[t * dim + k] - u[b * dim + k]
+        for g in range(nip):
+            for k in range(dim):
+                s = 0.0
+                for a in range(ns):
+                    s += N[g, a] * du[a, k]
+                Dug[k] = s
+            for r in range(dim):
+                s = 0.0
+                for k in range(dim):
+                    s += frame[e, g, r, k] * Dug[k]
+                if not math.isfinite(s):
+                    info[0] = e
+                    return STATUS_NAN
+                delta_out[e, g, r] = s
+    return STATUS_OK
+
+
+@njit(cache=True)
+def interface_assemble(N, frame, jw, thickness, traction, tangent, want_tangent, fe_out, ke_out, info):
+    """Element forces and tangents from the tractions and tangents at the points (the assembly of
+    :func:`interface_evaluate`): ``fe = sum_ip B^T t j w h``, ``ke = sum_ip B^T C B j w h`` (seed eqs. 7-10).
+
+    Parameters
+    ----------
+    N : float64 (nip, ns);  frame : float64 (n_elem, nip, dim, dim) local frames R
+    jw : float64 (n_elem, nip)
+        ``j * w`` of the reference mid-surface (:func:`interface_geometry`; m in 2D, m^2 in 3D).
+    thickness : float64 (n_elem,) m (2D; ones in 3D)
+    traction : float64 (n_elem, nip, dim) Pa;  tangent : float64 (n_elem, nip, dim, dim) Pa/m (local axes)
+    want_tangent : bool
+    fe_out : float64 (n_elem, 2*ns*dim), out;  ke_out : float64 (n_elem, 2*ns*dim, 2*ns*dim), out (if wanted)
+    info : int64 (1,), out — the element of a non-finite force.
+
+    Returns STATUS_OK or STATUS_NAN.
+    """
+    n_elem = frame.shape[0]
+    dim = frame.shape[2]
+    nip = N.shape[0]
+    ns = N.shape[1]
+    ndof_half = ns * dim
+    tg = np.empty(dim)
+    RC = np.empty((dim, dim))
+    Cg = np.empty((dim, dim))
+    for e in range(n_elem):
+        for r in range(2 * ndof_half):
+            fe_out[e, r] = 0.0
+        if want_tangent:
+            for r in range(2 * ndof_half):
+                for c2 in range(2 * ndof_half):
+                    ke_out[e, r, c2] = 0.0
+        h = thickness[e]
+        for g in range(nip):
+            jwh = jw[e, g] * h
+            for k in range(dim):
+                s = 0.0
+                for r in range(dim):
+                    s += frame[e, g, r, k] * traction[e, g, r]
+                tg[k] = s * jwh
+            for a in range(ns):
+                Na = N[g, a]
+                for k in range(dim):
+                    fe_out[e, a * dim + k] -= Na * tg[k]
+                    fe_out[e, ndof_half + a * dim + k] += Na * tg[k]
+            if want_tangent:
+                for k in range(dim):
+                    for r in range(dim):
+                        s = 0.0
+                        for q in range(dim):
+                            s += frame[e, g, q, k] * tangent[e, g, q, r]
+                        RC[k, r] = s
+                for k in range(dim):
+                    for m in range(dim):
+                        s = 0.0
+                        for r in range(dim):
+                            s += RC[k, r] * frame[e, g, r, m]
+                        Cg[k, m] = s * jwh
+                for a in range(ns):
+                    Na = N[g, a]
+                    if Na == 0.0:
+                        continue
+                    for b in range(ns):
+                        NaNb = Na * N[g, b]
+                        if NaNb == 0.0:
+                            continue
+                        for k in range(dim):
+                            ra = a * dim + k
+                            for m in range(dim):
+                                cb = b * dim + m
+                                v = NaNb * Cg[k, m]
+                                ke_out[e, ra, cb] += v
+                                ke_out[e, ra, ndof_half + cb] -= v
+                                ke_out[e, ndof_half + ra, cb] -= v
+                                ke_out[e, ndof_half + ra, ndof_half + cb] += v
+        for r in range(2 * ndof_half):
+            if not math.isfinite(fe_out[e, r]):
+                info[0] = e
+                return STATUS_NAN
     return STATUS_OK
 
 

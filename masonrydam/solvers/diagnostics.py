@@ -11,7 +11,6 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-from ..materials.mohr_coulomb import OPEN
 
 
 def _components(model, use_joint_state: bool):
@@ -24,7 +23,7 @@ def _components(model, use_joint_state: bool):
         ns = g.conn.shape[1] // 2
         active = np.ones(g.n_elem, dtype=bool)
         if use_joint_state and g.nonlinear:
-            active = ~(g.result_states(trial=True) == OPEN).all(axis=1)
+            active = ~g.is_open(trial=True).all(axis=1)
         c = g.conn[active]
         rows.append(c[:, :ns].ravel())
         cols.append(c[:, ns:].ravel())
@@ -91,7 +90,7 @@ def find_free_parts(model, constrained: np.ndarray, use_joint_state: bool = True
             if not g.nonlinear:
                 continue
             touches = np.isin(g.conn, nodes).any(axis=1)
-            is_open = (g.result_states(trial=True) == OPEN).all(axis=1)
+            is_open = g.is_open(trial=True).all(axis=1)
             if (touches & is_open).any():
                 opened.append(f"{g.name} ({int((touches & is_open).sum())} element(s) open)")
         box = ", ".join(f"{'xyz'[k]} in [{lo[k]:.4g}, {hi[k]:.4g}] m" for k in range(dim))

@@ -55,7 +55,7 @@ import scipy.sparse as sp
 from scipy.linalg.lapack import dgetrf
 
 from ...errors import STATUS_NAN, STATUS_OK
-from ...materials import mohr_coulomb as mc
+from ...materials.joint_laws import RESULT_OPEN
 from ..linear.dense_lu import STATUS_SINGULAR
 from .kernels import (active_components, add_flexibility_product, apply_correction, capacitance_assemble,
                                   capacitance_update_solve, condensed_residual, joint_points_evaluate,
@@ -316,6 +316,12 @@ class JointSpace:
         self.model = model
         self.dim = dim = model.dim
         self.groups = [g for g in model.igroups if g.nonlinear]
+        #: the joint law of the points: the one the joint-space kernels carry (``JointLaw.joint_space``, the seed's
+        #: Mohr-Coulomb law; Model.joint_space_capable), None without points
+        laws = list({id(g.joint_law): g.joint_law for g in self.groups}.values())
+        if len(laws) > 1 or not all(law.joint_space for law in laws):
+            raise ValueError(f"the joint-space kernels carry one law, not {[law.name for law in laws]}")
+        self.law = laws[0] if laws else None
         self.B, self.weight, params, self.param_index = joint_operator(model)
         self.params_table = params.copy()  # own copy: the open-tangent factor is not used here
         self.m = m = self.B.shape[0]
@@ -343,7 +349,7 @@ class JointSpace:
         self.ST, self.slot = self.columns.ST, self.columns.slot
         self._u_free = np.empty(n_eq)
         self.Bf_T = Bf_T.tocsr()
-        P, ns = self.n_points, mc.N_JOINT_STATE
+        P, ns = self.n_points, (self.law.state_size if self.law is not None else 0)
         self.base = np.zeros((P, ns))
         self.trial = np.zeros((P, ns))
         self.traction = np.zeros((P, dim))
@@ -372,10 +378,11 @@ class JointSpace:
         self.column_recoveries = 0
         #: the last step needed more columns of S than the store holds
         self.store_full = False
-        self.params_table[:, mc.P_OPEN_TANGENT] = 0.0
-        k0 = np.empty((P, dim))
-        k0[:] = self.params_table[self.param_index, mc.P_KS][:, None]
-        k0[:, -1] = self.params_table[self.param_index, mc.P_KN]
+        # the consistent tangent of open points; the elastic stiffness [ks, (ks,) kn] of every point (Pa/m)
+        k0 = np.zeros((P, dim))
+        if self.law is not None:
+            self.law.set_open_tangent(self.params_table, 0.0)
+            k0 = self.law.elastic_stiffness(self.params_table[self.param_index], dim)
         #: (m,) N/m: elastic stiffness times area of every component (a displacement error to a force)
         self.wk = (k0 * self.weight[:, None]).ravel()
 
@@ -388,11 +395,10 @@ class JointSpace:
             k += n
 
     def _store_latched_bonds(self):
-        col, k = mc.S_BOND_BROKEN, 0
+        k = 0
         for g in self.groups:
             n = g.n_elem * g.nip
-            gb = g.state_base.reshape(n, -1)
-            gb[:, col] = np.maximum(gb[:, col], self.base[k:k + n, col])
+            self.law.keep_latched_bonds(g.state_base.reshape(n, -1), self.base[k:k + n])
             k += n
 
     def _evaluate(self, delta, delta_y, q_n):
@@ -640,13 +646,12 @@ class JointSpace:
                         sig = key.tobytes()
             if not stabilized and sig != prev_sig and sig in seen:
                 stabilized = True
-                broken = self.trial[:, mc.S_BOND_BROKEN] != 0
-                self.base[broken, mc.S_BOND_BROKEN] = 1.0
+                self.law.latch_broken_bonds(self.base, self.trial)
                 err = self._evaluate(delta, delta_y, q_n)
             seen.add(sig)
             prev_sig, prev_key = sig, key
             if stabilized:
-                self.qt[self.codes == mc.OPEN] = 0.0
+                self.qt[self.law.result_states_of(self.codes) == RESULT_OPEN] = 0.0
             if fixed_point:
                 self.qt[:] = 0.0
             rows, qt_rows = active_components(self.qt)

@@ -52,9 +52,6 @@ from ..linear.direct import SingularMatrix
 
 #: an arc-length stage may take this many times its nominal steps before it gives up
 MAX_STEPS_PER_NOMINAL = 20
-#: joint state codes of opening points: OPEN of the seed's law and TENSION of the composite law (2), and the
-#: composite law's tension-shear corner (4)
-OPENING_CODE, OPENING_SHEAR_CODE = 2, 4
 #: the arc may grow to this many times the first one (a stiff structure's elastic increment is tiny next to
 #: the rotation or sliding of a mechanism that follows its peak)
 DL_MAX_FACTOR = 1e6
@@ -132,8 +129,9 @@ class ArcLengthStage:
         for g in m.igroups:
             if not g.nonlinear:
                 continue
-            codes = g.state_committed[:, :, 0]
-            active = (codes == OPENING_CODE) | (codes == OPENING_SHEAR_CODE)  # cracking points
+            # cracking points: open in the last converged state (the seed's OPEN; the composite law's tension
+            # and tension-shear corner)
+            active = g.is_open(trial=False)
             if not active.any():
                 active = g.traction[:, :, dim - 1] > 0.0  # else those in tension
             if not active.any():

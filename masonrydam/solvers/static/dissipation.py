@@ -32,24 +32,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...assembly.groups import raise_for_status
-from ...elements import interface as ik
 from ...errors import NumericalError
-
-
-def elastic_compliance(group) -> np.ndarray:
-    """(n_param_sets, dim) elastic compliance of a nonlinear joint group's parameter sets (m/Pa), local axes
-    ``[s1, (s2,) n]``: 1/ks, (1/ks2 of the composite law, 1/ks of the seed's,) 1/kn."""
-    dim = group.delta.shape[2]
-    table = group.params_table
-    from ...materials import composite_interface as ci
-    from ...materials import mohr_coulomb as mc
-
-    if group.law == "composite":
-        cols = [ci.P_KS] + ([ci.P_KS2] if dim == 3 else []) + [ci.P_KN]
-    else:
-        cols = [mc.P_KS] + ([mc.P_KS] if dim == 3 else []) + [mc.P_KN]
-    return 1.0 / table[:, cols]
 
 
 class JointDissipation:
@@ -69,7 +52,8 @@ class JointDissipation:
             raise NumericalError(f"{where}: dissipation-based control is written for small-displacement joints; "
                                  f"joint set(s) {', '.join(large)} use large kinematics (use control = "
                                  "\"arc_length\" or \"opening\")")
-        self.compliance = [elastic_compliance(g)[g.param_index] for g in self.groups]  # (ne, dim) each
+        # (ne, dim) each: 1/ks, (1/ks2,) 1/kn of the element's law (JointLaw.compliance)
+        self.compliance = [g.compliance() for g in self.groups]
         self.area = [g.jw * g.thickness[:, None] for g in self.groups]  # (ne, nip) m2
         self.start = None
 
@@ -92,7 +76,7 @@ class JointDissipation:
             total += float((per_point * area).sum())
             if not want_gradient:
                 continue
-            kt = self._point_tangents(g)
+            kt = g.point_tangents()
             a = 0.5 * (t0 + t1) + np.einsum("eqrk,eqr->eqk", kt, 0.5 * dd - ce[:, None, :] * t1)
             a_global = np.einsum("eqrk,eqr->eqk", g.frame, a) * area[:, :, None]  # R^T a w
             nodal = np.einsum("qa,eqk->eak", g.N, a_global)  # (ne, ns, dim)
@@ -100,11 +84,3 @@ class JointDissipation:
             np.add.at(grad, g.dofs, fe)
         return total, grad
 
-    @staticmethod
-    def _point_tangents(g):
-        dim = g.delta.shape[2]
-        kt = np.empty(g.delta.shape + (dim,))
-        st = ik.interface_point_tangents(g.params_table, g.param_index, g.state_base, g.delta, dim, g.law_id,
-                                         np.empty_like(g.state_trial), np.empty_like(g.traction), kt, g.info)
-        raise_for_status(st, g.info, g.name, "joint tangents")
-        return kt

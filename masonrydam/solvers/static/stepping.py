@@ -34,6 +34,7 @@ import scipy.sparse as sp
 
 from ...assembly.elastic import elastic_tangent_data
 from ...errors import ConvergenceError, MechanismError, NumericalError
+from ...materials.joint_laws import RESULT_OPEN, RESULT_SLIP
 from ..chatter import ChatterGuard
 from ..diagnostics import find_free_parts
 from ..joint_space import MAX_INITIAL_STIFFNESS_ITERATIONS, JointSpace, joint_space_size, lazy_flexibility
@@ -167,8 +168,6 @@ def joint_mechanisms(model, limit: int = 4) -> list[str]:
     the joint's extent. At most ``limit`` entries (the most open first), then how many more. Empty if
     no joint is in such a state (a joint whose points are all open leaves a free part, which
     :func:`find_free_parts` names)."""
-    from ...materials.mohr_coulomb import OPEN, SLIP
-
     names = [g.name for g in model.cgroups] + ["?"]
     owner = np.full(model.n_nodes, len(model.cgroups))  # element group of each node (interfaces split nodes)
     for i in range(len(model.cgroups) - 1, -1, -1):
@@ -184,7 +183,7 @@ def joint_mechanisms(model, limit: int = 4) -> list[str]:
             elems = (below == b) & (above == a)
             c = codes[elems].ravel()
             x = g.points[elems].reshape(-1, model.dim)
-            n_open, n_slip = int((c == OPEN).sum()), int((c == SLIP).sum())
+            n_open, n_slip = int((c == RESULT_OPEN).sum()), int((c == RESULT_SLIP).sum())
             n_touch = len(c) - n_open
             where = f"joint set '{g.name}' between element groups '{names[b]}' and '{names[a]}'"
             if n_touch == 0:
@@ -193,7 +192,7 @@ def joint_mechanisms(model, limit: int = 4) -> list[str]:
                 found.append((n_open / len(c), f"sliding: every point of {where} that still touches slides "
                                                 f"({n_slip} sliding, {n_open} open of {len(c)})"))
                 continue
-            touching = x[c != OPEN]
+            touching = x[c != RESULT_OPEN]
             if 2 * n_open >= len(c) and np.ptp(touching, axis=0).max() <= 0.25 * np.ptp(x, axis=0).max():
                 hinge = ", ".join(f"{v:.4g}" for v in touching.mean(axis=0))
                 found.append((n_open / len(c), f"rocking: {n_open} of {len(c)} points of {where} are open; the "

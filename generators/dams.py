@@ -79,7 +79,8 @@ import numpy as np
 
 from masonrydam.elements.shapes import ELEMENT_TYPES
 from masonrydam.errors import MeshError, SceneError
-from masonrydam.mesh.interfaces import element_facets, insert_interfaces
+from masonrydam.mesh.facets import element_facets
+from masonrydam.mesh.interfaces import insert_interfaces
 from masonrydam.mesh.model import CellBlock, FacetSet, Mesh
 from masonrydam.units import quantity
 

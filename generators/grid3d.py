@@ -17,7 +17,8 @@ from typing import Callable
 import numpy as np
 
 from masonrydam.errors import MeshError
-from masonrydam.mesh.interfaces import element_facets, insert_interfaces
+from masonrydam.mesh.facets import element_facets
+from masonrydam.mesh.interfaces import insert_interfaces
 from masonrydam.mesh.model import CellBlock, FacetSet, Mesh
 
 from .grid import _grid_lines

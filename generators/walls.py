@@ -62,6 +62,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from masonrydam.errors import SceneError
+from masonrydam.mesh.facets import element_facets
 
 from .grid import Rect, rectangles_to_mesh
 
@@ -446,7 +447,6 @@ def opening_facets(mesh, spec: WallSpec):
     """Facet sets ``opening_<i>``: the element facets (edges in 2D, faces in 3D) on the boundary of
     each hole (x = x0 or x1 for z in [z0, z1]; z = z0 or z1 for x in [x0, x1]), oriented outward
     from the material (into the hole)."""
-    from masonrydam.mesh.interfaces import element_facets
     from masonrydam.mesh.model import FacetSet
 
     dim = mesh.dim

@@ -104,12 +104,10 @@ import scipy.sparse.linalg as spla
 
 from ..elements.quadrature import tensor_rule
 from ..elements.shapes import ELEMENT_TYPES, facet_area_normal, facet_outward_sign, reference_nodes, shape_functions
+from ..mesh.facets import FACET_CORNERS, FACET_TYPES
 
 __all__ = ["FluidMesh", "AcousticMatrices", "build_fluid_mesh", "acoustic_matrices", "reflection_damping"]
 
-_FACET_TYPES_2D = ("line2", "line3")
-_FACET_TYPES_3D = ("tri3", "tri6", "quad4", "quad8", "quad9")
-_N_CORNERS = {"line2": 2, "line3": 2, "tri3": 3, "tri6": 3, "quad4": 4, "quad8": 4, "quad9": 4}
 #: geometric growth of the layers of the extrusion away from the face
 GROWTH_RATIO = 1.2
 #: Gauss points per direction of the coupling integral on a wet piece (exact to degree 7)
@@ -203,7 +201,7 @@ def _face_input(coords, facet_type, facets, inward_points, vertical_axis):
     if coords.ndim != 2 or coords.shape[1] not in (2, 3):
         raise ValueError(f"coords must have shape (n_nodes, 2 or 3), got {coords.shape}")
     dim = coords.shape[1]
-    allowed = _FACET_TYPES_2D if dim == 2 else _FACET_TYPES_3D
+    allowed = FACET_TYPES[dim]
     if facet_type not in allowed:
         raise ValueError(f"facet_type {facet_type!r} is not a face type in {dim}D; use one of {allowed}")
     nfn = ELEMENT_TYPES[facet_type].n_nodes
@@ -313,7 +311,7 @@ def _pieces_2d(facet_type, coords, facets, level, axis, tol, reg):
 def _pieces_3d(facet_type, coords, facets, level, axis, tol, reg):
     """Wet polygons of every face, clipped at the level along its corner edges (corner elevations
     interpolated linearly along each edge), cut into quads / collapsed quads (triangles)."""
-    nc = _N_CORNERS[facet_type]
+    nc = FACET_CORNERS[facet_type]
     R = reference_nodes(facet_type)[:nc]
     corners = facets[:, :nc]
     d = level - coords[corners][:, :, axis]
@@ -486,7 +484,7 @@ def build_fluid_mesh(coords, facet_type, facets, inward_points, *, level, vertic
 
     # layers
     if element_size is None:
-        Xw = coords[facets[wet][:, :_N_CORNERS[facet_type]]]
+        Xw = coords[facets[wet][:, :FACET_CORNERS[facet_type]]]
         if dim == 2:
             sizes = np.linalg.norm(Xw[:, 1] - Xw[:, 0], axis=1)
         elif facet_type.startswith("quad"):

@@ -36,9 +36,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from ..elements.quadrature import gauss_legendre_1d, tensor_rule
-from ..elements.shapes import ELEMENT_TYPES, facet_area_normal, facet_outward_sign, shape_functions
-from .hydrostatics import collapsed_triangle_rule, region_points
+from ..elements.shapes import ELEMENT_TYPES, facet_outward_sign, facet_quadrature, facet_rule
+from .hydrostatics import region_points
 
 #: Gauss points per direction on a fully wet facet (the integrand has sqrt(depth))
 POINTS_PER_DIRECTION = 8
@@ -50,21 +49,11 @@ def westergaard_coefficient(depth, reservoir_depth, density):
     return 0.875 * density * np.sqrt(np.maximum(reservoir_depth * np.asarray(depth, dtype=np.float64), 0.0))
 
 
-def _rule(facet_type):
-    n = POINTS_PER_DIRECTION
-    if facet_type in ("line2", "line3"):
-        x, w = gauss_legendre_1d(n)
-        return x[:, None], w
-    if facet_type.startswith("quad"):
-        return tensor_rule("gauss", n, 2)
-    return collapsed_triangle_rule(n)
-
-
 def _points(facet_type, X, level, axis):
     """Quadrature on the wet part of every facet: (facet index (P,), reference points (P, r), weights (P,))."""
     xv = X[:, :, axis]
     wet = xv.max(axis=1) <= level
-    pts, w = _rule(facet_type)
+    pts, w = facet_rule(facet_type, POINTS_PER_DIRECTION)
     full = np.flatnonzero(wet)
     owner = [np.repeat(full, len(w))]
     points = [np.tile(pts, (len(full), 1))]
@@ -94,11 +83,8 @@ def westergaard_mass(coords, facet_type, facets, *, level, reservoir_depth, dens
     n_dof = n_nodes * dim
     if len(owner) == 0:
         return sp.csr_matrix((n_dof, n_dof))
-    N, dN = shape_functions(facet_type, pts)  # (P, nfn), (P, r, nfn)
-    Xp = X[owner]
-    x = np.einsum("pa,pad->pd", N, Xp)
-    A = facet_area_normal(dN, Xp)  # (P, dim), |A| = Jacobian
-    jac = np.linalg.norm(A, axis=1)
+    fq = facet_quadrature(facet_type, X, pts, w, owner=owner)
+    N, x, A, jac = fq.shape_values, fq.points, fq.area_normal, fq.jacobian  # (P, nfn), (P, dim), (P, dim), (P,)
     nrm = A / jac[:, None]
     depth = float(level) - x[:, int(vertical_axis)]
     scale = float(thickness) if dim == 2 else 1.0

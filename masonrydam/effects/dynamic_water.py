@@ -24,18 +24,15 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import SceneError
+from ..mesh.facets import boundary_owners
 from .added_mass import face_nodes, nodal_normals, westergaard_coefficient, westergaard_mass
 
 
 def _check_on_boundary(mesh, face) -> None:
     """A SceneError naming ``reservoir.face`` unless every facet of the face bounds exactly one element
     (water moving with the dam acts on the model's outer surface only)."""
-    from ..mesh.interfaces import _FacetTable
-
-    table = _FacetTable(mesh)
-    nc = 2 if mesh.dim == 2 else {3: 3, 6: 3, 4: 4, 8: 4, 9: 4}[face.facets.shape[1]]
-    k = table.lookup(_FacetTable.keys(face.facets, np.full(len(face.facets), nc)))
-    bad = np.flatnonzero((k < 0) | (table.count[np.maximum(k, 0)] != 1))
+    on_boundary, _ = boundary_owners(mesh, face.type, face.facets)
+    bad = np.flatnonzero(~on_boundary)
     if len(bad):
         f = face.facets[bad[0]]
         raise SceneError("reservoir.face", f"{len(bad)} facet(s) of '{face.name}' are not on the boundary of the model "

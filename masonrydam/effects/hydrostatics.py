@@ -53,7 +53,9 @@ exact:
 
 Entirely wet / dry / straddling facets are told apart with the Bernstein form of ``x_v`` (its
 control values bound it on the facet: Farin, *Curves and Surfaces for CAGD*, 5th ed. 2002, ch. 10).
-Rules: Gauss-Legendre (Abramowitz & Stegun 25.4.29); collapsed rule on the triangle
+Rules (:func:`masonrydam.elements.shapes.facet_rule`, points and normals from
+:func:`masonrydam.elements.shapes.facet_quadrature`): Gauss-Legendre (Abramowitz & Stegun 25.4.29);
+collapsed rule on the triangle (:func:`masonrydam.elements.quadrature.collapsed_triangle_rule`)
 ``(xi, eta) = (u, v (1 - u))`` with weight ``(1 - u)`` from tensor Gauss on ``[0, 1]^2``, exact for total
 degree ``2 n - 2`` (Stroud, *Approximate Calculation of Multiple Integrals*, 1971; Karniadakis &
 Sherwin, *Spectral/hp Element Methods*, 2nd ed. 2005, sec. 4.1.1 for the Duffy collapse).
@@ -64,13 +66,11 @@ from math import comb
 
 import numpy as np
 
-from ..elements.quadrature import gauss_legendre_1d, tensor_rule
-from ..elements.shapes import ELEMENT_TYPES, facet_area_normal, facet_outward_sign, shape_functions
+from ..elements.quadrature import collapsed_triangle_rule
+from ..elements.shapes import ELEMENT_TYPES, facet_outward_sign, facet_quadrature, facet_rule, shape_functions
+from ..mesh.facets import FACET_TYPES
 
-__all__ = ["facet_pressure_forces", "collapsed_triangle_rule", "region_points"]
-
-_FACET_TYPES_2D = ("line2", "line3")
-_FACET_TYPES_3D = ("tri3", "tri6", "quad4", "quad8", "quad9")
+__all__ = ["facet_pressure_forces", "region_points"]
 
 #: polynomial degree of x_v per reference variable (lines, quads) or in total (triangles) on the facet
 _GEOM_DEGREE = {"line2": 1, "line3": 2, "tri3": 1, "tri6": 2, "quad4": 1, "quad8": 2, "quad9": 2}
@@ -86,35 +86,14 @@ _QUAD_CORNERS = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
 _TRI_CORNERS = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
 
 
-def collapsed_triangle_rule(n: int) -> tuple[np.ndarray, np.ndarray]:
-    """Collapsed (Duffy) Gauss rule on the unit triangle ``{xi, eta >= 0, xi + eta <= 1}``.
-
-    ``(xi, eta) = (u, v (1 - u))`` with ``u, v`` the ``n``-point Gauss-Legendre points on [0, 1] and the
-    weight ``w_u w_v (1 - u)``; exact for polynomials of total degree ``2 n - 2`` (a monomial
-    ``xi^a eta^b`` becomes ``u^a (1 - u)^(b + 1) v^b``). Returns points (n*n, 2) and weights (n*n,) summing
-    to 1/2. All points are interior, all weights positive.
-    """
-    x, w = gauss_legendre_1d(n)
-    t, wt = 0.5 * (x + 1.0), 0.5 * w
-    u, v = np.meshgrid(t, t, indexing="ij")
-    wu, wv = np.meshgrid(wt, wt, indexing="ij")
-    pts = np.stack([u.ravel(), (v * (1.0 - u)).ravel()], axis=1)
-    return pts, (wu * wv * (1.0 - u)).ravel()
-
-
 def _duffy_points_for_degree(p: int) -> int:
     """Order n of the collapsed rule exact for total degree p: 2 n - 2 >= p."""
     return (p + 3) // 2
 
 
 def _full_rule(facet_type: str) -> tuple[np.ndarray, np.ndarray]:
-    n = _FULL_RULE_POINTS[facet_type]
-    if facet_type in _FACET_TYPES_2D:
-        x, w = gauss_legendre_1d(n)
-        return x[:, None], w
-    if facet_type.startswith("quad"):
-        return tensor_rule("gauss", n, 2)
-    return collapsed_triangle_rule(n)
+    """The rule of an entirely wet facet (and of each wet sub-interval of an edge)."""
+    return facet_rule(facet_type, _FULL_RULE_POINTS[facet_type])
 
 
 # ---------------------------------------------------------------------------------------------
@@ -148,7 +127,7 @@ def _facet_bernstein_matrix(facet_type: str) -> np.ndarray:
     shape functions are ``M @ nodal_values`` (a serendipity quad8 is represented in the biquadratic
     space). Their min / max bound the field on the facet."""
     p = _GEOM_DEGREE[facet_type]
-    if facet_type in _FACET_TYPES_2D:
+    if facet_type in FACET_TYPES[2]:
         t = np.linspace(0.0, 1.0, p + 1)
         pts = (2.0 * t - 1.0)[:, None]
         V = _bernstein_1d(t, p)
@@ -168,16 +147,6 @@ def _facet_bernstein_matrix(facet_type: str) -> np.ndarray:
 
 # ---------------------------------------------------------------------------------------------
 # traction density and integration at arbitrary points
-
-
-def _nodal_forces_at_points(N, dN, X, w, sign, surface_level, unit_weight, axis, K):
-    """Nodal forces (P, nfn, dim) of the integration points: N (P, nfn), dN (P, r, nfn),
-    X (P, nfn, dim) facet node coordinates, w (P,) weights (incl. the thickness in 2D),
-    sign (P,) +-1 turning the parametric normal outward."""
-    x = np.einsum("pa,pad->pd", N, X)
-    A = facet_area_normal(dN, X)
-    T = _traction_times_area(A * sign[:, None], x[:, axis], surface_level, unit_weight, axis, K)
-    return np.einsum("p,pa,pd->pad", w, N, T)
 
 
 def _traction_times_area(A, xv, surface_level, unit_weight, axis, K):
@@ -408,7 +377,7 @@ def facet_pressure_forces(coords, facet_type, facets, inward_points, *, surface_
     if coords.ndim != 2 or coords.shape[1] not in (2, 3):
         raise ValueError(f"coords must have shape (n_nodes, 2 or 3), got {coords.shape}")
     n_nodes, dim = coords.shape
-    allowed = _FACET_TYPES_2D if dim == 2 else _FACET_TYPES_3D
+    allowed = FACET_TYPES[dim]
     if facet_type not in allowed:
         raise ValueError(f"facet type {facet_type!r} is not a boundary facet in {dim}D; use one of {allowed}")
     nfn = ELEMENT_TYPES[facet_type].n_nodes
@@ -439,13 +408,10 @@ def facet_pressure_forces(coords, facet_type, facets, inward_points, *, surface_
 
     if fully_wet.any():
         pts, w = _full_rule(facet_type)
-        N, dN = shape_functions(facet_type, pts)
-        Xw = X[fully_wet]
-        x = np.einsum("qa,nad->nqd", N, Xw)
-        A = facet_area_normal(dN[None], Xw[:, None])  # (n, q, dim)
-        A *= sign[fully_wet, None, None]
-        T = _traction_times_area(A, x[..., axis], s, gamma, axis, K)
-        F = np.einsum("q,qa,nqd->nad", w * scale, N, T)
+        fq = facet_quadrature(facet_type, X[fully_wet], pts, w)
+        A = fq.area_normal * sign[fully_wet, None, None]  # (n, q, dim), outward
+        T = _traction_times_area(A, fq.points[..., axis], s, gamma, axis, K)
+        F = np.einsum("q,qa,nqd->nad", w * scale, fq.shape_values, T)
         f += _scatter(facets[fully_wet], F, n_nodes, dim)
 
     if partial.any():
@@ -454,8 +420,10 @@ def facet_pressure_forces(coords, facet_type, facets, inward_points, *, surface_
                                     subdivision_tol=float(subdivision_tol))
         if len(loc):
             gid = idx[loc]
-            N, dN = shape_functions(facet_type, pts)
-            F = _nodal_forces_at_points(N, dN, X[gid], w * scale, sign[gid], s, gamma, axis, K)
+            fq = facet_quadrature(facet_type, X, pts, w, owner=gid)
+            A = fq.area_normal * sign[gid][:, None]  # (P, dim), outward
+            T = _traction_times_area(A, fq.points[:, axis], s, gamma, axis, K)
+            F = np.einsum("p,pa,pd->pad", w * scale, fq.shape_values, T)
             f += _scatter(facets[gid], F, n_nodes, dim)
     return f
 
@@ -469,6 +437,6 @@ def region_points(facet_type, nodal_values, threshold, *, max_subdivision=10, su
     (:mod:`masonrydam.effects.uplift`) with the distance along a joint and the drain line, where the
     uplift profile has its kink."""
     v = np.asarray(nodal_values, dtype=np.float64)
-    if facet_type in _FACET_TYPES_2D:
+    if facet_type in FACET_TYPES[2]:
         return _wet_points_lines(facet_type, v, threshold)
     return _wet_points_faces(facet_type, v, threshold, max_subdivision, subdivision_tol)

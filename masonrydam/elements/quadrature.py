@@ -88,6 +88,24 @@ def triangle_rule(n_points: int) -> tuple[np.ndarray, np.ndarray]:
     raise ValueError(f"no triangle rule with {n_points} points (use 1, 3 or 6)")
 
 
+def collapsed_triangle_rule(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Collapsed (Duffy) Gauss rule on the unit triangle ``{xi, eta >= 0, xi + eta <= 1}``.
+
+    ``(xi, eta) = (u, v (1 - u))`` with ``u, v`` the ``n``-point Gauss-Legendre points on [0, 1] and the
+    weight ``w_u w_v (1 - u)``; exact for polynomials of total degree ``2 n - 2`` (a monomial
+    ``xi^a eta^b`` becomes ``u^a (1 - u)^(b + 1) v^b``; Stroud, *Approximate Calculation of Multiple
+    Integrals*, 1971; Karniadakis & Sherwin, *Spectral/hp Element Methods*, 2nd ed. 2005, sec. 4.1.1).
+    Returns points (n*n, 2) and weights (n*n,) summing to 1/2. All points are interior, all weights
+    positive.
+    """
+    x, w = gauss_legendre_1d(n)
+    t, wt = 0.5 * (x + 1.0), 0.5 * w
+    u, v = np.meshgrid(t, t, indexing="ij")
+    wu, wv = np.meshgrid(wt, wt, indexing="ij")
+    pts = np.stack([u.ravel(), (v * (1.0 - u)).ravel()], axis=1)
+    return pts, (wu * wv * (1.0 - u)).ravel()
+
+
 def _tet_orbit_31(a: float) -> np.ndarray:
     """The 4 points with volume coordinates (a, a, a, 1 - 3a) and permutations: (4, 3)."""
     L = np.full((4, 4), a)

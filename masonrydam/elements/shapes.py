@@ -52,7 +52,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .quadrature import tensor_rule, tetrahedron_rule, triangle_rule
+from .quadrature import collapsed_triangle_rule, tensor_rule, tetrahedron_rule, triangle_rule
 
 
 @dataclass(frozen=True)
@@ -373,3 +373,85 @@ def facet_outward_sign(facet_type: str, X: np.ndarray, inward_points: np.ndarray
     Ac = facet_area_normal(dNc[0], X)
     sign = np.where(np.einsum("nd,nd->n", np.asarray(inward_points) - xc, Ac) > 0.0, -1.0, 1.0)
     return sign, Ac
+
+
+#: points of the symmetric triangle rule of total degree ``2 n - 2``, by ``n`` (:func:`facet_rule`)
+_SYMMETRIC_TRIANGLE_POINTS = {1: 1, 2: 3, 3: 6}
+
+
+def facet_rule(facet_type: str, points_per_direction: int, triangle: str = "collapsed") -> tuple[np.ndarray, np.ndarray]:
+    """Gauss rule on the reference facet of ``facet_type`` (edges line2 / line3, faces tri3 / tri6 /
+    quad4 / quad8 / quad9): the one facet rule of the facet loads, the absorbing boundaries, the
+    hydrostatic loads and the added mass.
+
+    With ``n = points_per_direction``:
+
+    - lines: ``n``-point Gauss-Legendre on [-1, 1], exact to degree ``2 n - 1``;
+    - quadrilaterals: ``n x n`` tensor Gauss on [-1, 1]^2, exact to degree ``2 n - 1`` in each variable;
+    - triangles (unit triangle): ``triangle = "collapsed"``: the ``n x n`` collapsed Gauss rule
+      (:func:`~masonrydam.elements.quadrature.collapsed_triangle_rule`); ``triangle = "symmetric"``: the
+      symmetric rule with fewer points (``n`` = 1, 2, 3: 1, 3 and Dunavant's 6 points,
+      :func:`~masonrydam.elements.quadrature.triangle_rule`); both exact to total degree ``2 n - 2``.
+
+    Returns ``points`` (q, r) and ``weights`` (q,) summing to 2, 4 and 1/2 (Abramowitz & Stegun
+    25.4.29 for Gauss-Legendre).
+    """
+    et = ELEMENT_TYPES.get(facet_type)
+    if et is None or et.family not in ("line", "quad", "tri"):
+        raise ValueError(f"{facet_type!r} is not a facet type (line2, line3, tri3, tri6, quad4, quad8, quad9)")
+    n = int(points_per_direction)
+    if et.family != "tri":
+        return tensor_rule("gauss", n, et.dim)
+    if triangle == "collapsed":
+        return collapsed_triangle_rule(n)
+    if triangle == "symmetric":
+        if n not in _SYMMETRIC_TRIANGLE_POINTS:
+            raise ValueError(f"no symmetric triangle rule of degree {2 * n - 2} (points_per_direction 1, 2 or 3)")
+        return triangle_rule(_SYMMETRIC_TRIANGLE_POINTS[n])
+    raise ValueError(f"triangle must be 'collapsed' or 'symmetric', got {triangle!r}")
+
+
+@dataclass(frozen=True)
+class FacetQuadrature:
+    """Integration points on facets (edges in 2D, faces in 3D), from :func:`facet_quadrature`.
+
+    The leading shape ``S`` of the arrays is ``(n, q)`` when one reference rule of ``q`` points is used
+    on all ``n`` facets, ``(P,)`` when each of ``P`` points lies on its own facet (``owner``).
+
+    shape_values: (q, nfn) or (P, nfn), the facet's shape functions ``N_a`` at the points;
+    points: (S..., dim) m, the points ``x = N_a X_a``;
+    area_normal: (S..., dim), the unnormalised normal of :func:`facet_area_normal` (2D: the tangent
+        turned by -90 degrees, 3D: ``dX/dxi x dX/deta``), whose length is the Jacobian;
+    jacobian: (S...), ``|area_normal|``: m per unit reference length (2D) or m2 per unit reference
+        area (3D);
+    weights: (q,) or (P,), the reference weights; ``jacobian * weights`` is the length (2D, per unit
+        thickness) or area (3D) each point stands for.
+    """
+
+    shape_values: np.ndarray
+    points: np.ndarray
+    area_normal: np.ndarray
+    jacobian: np.ndarray
+    weights: np.ndarray
+
+
+def facet_quadrature(facet_type: str, X: np.ndarray, points: np.ndarray, weights: np.ndarray,
+                     owner: np.ndarray | None = None) -> FacetQuadrature:
+    """Points, Jacobians and normals of facets at reference ``points`` (q, r) with ``weights`` (q,), e.g.
+    from :func:`facet_rule`: the one facet quadrature of the facet loads, the absorbing boundaries, the
+    hydrostatic loads and the added mass.
+
+    X: (n, nfn, dim) m, the node coordinates of every facet. Without ``owner`` the same points are used
+    on every facet (arrays ``(n, q, ...)``); with ``owner`` (P,) int, point ``p`` lies on facet
+    ``owner[p]`` (arrays ``(P, ...)``, e.g. the points of :func:`masonrydam.effects.hydrostatics.region_points`
+    on the wet part of each facet). See :class:`FacetQuadrature`.
+    """
+    N, dN = shape_functions(facet_type, points)
+    if owner is None:
+        x = np.einsum("qa,nad->nqd", N, X)
+        A = facet_area_normal(dN[None], X[:, None])
+    else:
+        X = X[owner]
+        x = np.einsum("pa,pad->pd", N, X)
+        A = facet_area_normal(dN, X)
+    return FacetQuadrature(N, x, A, np.linalg.norm(A, axis=-1), weights)

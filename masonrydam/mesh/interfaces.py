@@ -31,10 +31,9 @@ from scipy.sparse.csgraph import connected_components
 
 from ..elements.shapes import ELEMENT_TYPES
 from ..errors import MeshError
+from .facets import FACET_CORNERS, FacetTable, corner_keys
 from .model import INTERFACE_FACE_TYPE, INTERFACE_OF_FACE, CellBlock, FacetSet, Mesh
 
-#: number of corner nodes of each facet type
-_FACET_CORNERS = {"line2": 2, "line3": 2, "tri3": 3, "tri6": 3, "quad4": 4, "quad8": 4}
 #: cyclic rotation by one corner of each 3D facet type (new position k takes old node perm[k])
 _ROTATE_ONE = {
     "quad4": [1, 2, 3, 0],
@@ -42,89 +41,6 @@ _ROTATE_ONE = {
     "tri3": [1, 2, 0],
     "tri6": [1, 2, 0, 4, 5, 3],
 }
-
-
-def element_facets(element_type: str) -> tuple:
-    """``((facet_type, local_nodes), ...)`` of an element type: edges in 2D, faces in 3D.
-
-    Facets are ordered so that their outward normal follows the right-hand rule (3D) or is the
-    edge tangent turned -90 degrees (2D, counter-clockwise elements).
-    """
-    et = ELEMENT_TYPES[element_type]
-    facets = getattr(et, "facets", None)
-    if facets:
-        return tuple(facets)
-    ftype = "line2" if len(et.edges[0]) == 2 else "line3"
-    return tuple((ftype, tuple(e)) for e in et.edges)
-
-
-class _FacetTable:
-    """All facets of all continuum elements, padded to a common width with -1.
-
-    nodes (n_f, w); type_index (n_f,) into ``types``; elem (n_f,) global element index;
-    key (n_f, 4) sorted corner nodes padded with -1; inverse (n_f,) unique-facet index;
-    count (n_unique,) how many elements share each unique facet.
-    """
-
-    def __init__(self, mesh: Mesh):
-        self.types: list[str] = []
-        nodes, tidx, elem = [], [], []
-        offset = 0
-        width = 0
-        for b in mesh.blocks:
-            et = ELEMENT_TYPES[b.type]
-            if et.dim != mesh.dim:
-                raise MeshError(f"element type '{b.type}' is {et.dim}D in a {mesh.dim}D mesh", group=b.name)
-            for ftype, local in element_facets(b.type):
-                if ftype not in self.types:
-                    self.types.append(ftype)
-                nodes.append(b.cells[:, list(local)])
-                tidx.append(np.full(len(b.cells), self.types.index(ftype)))
-                elem.append(offset + np.arange(len(b.cells)))
-                width = max(width, len(local))
-            offset += len(b.cells)
-        linear = {t for t in self.types if t in ("line2", "tri3", "quad4")}
-        quadratic = set(self.types) - linear
-        if linear and quadratic:
-            raise MeshError("mixing linear and quadratic elements in one mesh is not supported "
-                            f"(facet types {sorted(self.types)})")
-        self.width = width
-        self.nodes = np.vstack([np.pad(n, ((0, 0), (0, width - n.shape[1])), constant_values=-1) for n in nodes])
-        self.type_index = np.concatenate(tidx)
-        self.elem = np.concatenate(elem)
-        self.n_elements = offset
-        self.corners = np.array([_FACET_CORNERS[t] for t in self.types])[self.type_index]
-        self.key = self.keys(self.nodes, self.corners)
-        uniq, inverse = np.unique(self.key, axis=0, return_inverse=True)
-        self.unique_keys = uniq
-        self.inverse = inverse.ravel()
-        self.count = np.bincount(self.inverse, minlength=len(uniq))
-        # first and second occurrence of each unique facet
-        order = np.argsort(self.inverse, kind="stable")
-        starts = np.searchsorted(self.inverse[order], np.arange(len(uniq)))
-        self.first = order[starts]
-        second = np.minimum(starts + 1, len(order) - 1)
-        self.second = np.where(self.count >= 2, order[second], -1)
-
-    @staticmethod
-    def keys(nodes: np.ndarray, corners: np.ndarray) -> np.ndarray:
-        """Sorted corner nodes padded with -1 to 4 columns: (n, 4) int64."""
-        k = np.full((len(nodes), 4), -1, dtype=np.int64)
-        for nc in np.unique(corners):
-            sel = corners == nc
-            k[sel, :nc] = np.sort(nodes[sel, :nc], axis=1)
-        return k
-
-    def lookup(self, keys: np.ndarray) -> np.ndarray:
-        """Unique-facet index of each key row, -1 where the key is not a facet of the mesh."""
-        uk = self.unique_keys
-        # lexicographic search through a structured view
-        view = np.ascontiguousarray(uk).view([("", np.int64)] * 4).ravel()
-        q = np.ascontiguousarray(keys, dtype=np.int64).view([("", np.int64)] * 4).ravel()
-        pos = np.searchsorted(view, q)
-        pos = np.minimum(pos, len(view) - 1)
-        found = view[pos] == q
-        return np.where(found, pos, -1)
 
 
 def _facet_normals(points: np.ndarray, nodes: np.ndarray, corners: np.ndarray) -> np.ndarray:
@@ -164,7 +80,7 @@ def _align_first_tangent(points, faces, types, type_index):
         sel = np.nonzero(type_index == ti)[0]
         if not len(sel):
             continue
-        nc = _FACET_CORNERS[ftype]
+        nc = FACET_CORNERS[ftype]
         nn = len(_ROTATE_ONE[ftype])
         f = out[sel, :nn]
         x = points[f[:, :nc]]
@@ -201,7 +117,7 @@ def insert_interfaces(mesh: Mesh, joint_facets: dict[str, np.ndarray]) -> Mesh:
     """
     mesh.check()
     dim = mesh.dim
-    ft = _FacetTable(mesh)
+    ft = FacetTable(mesh)
     n_unique = len(ft.unique_keys)
 
     # mark joint facets
@@ -217,7 +133,7 @@ def insert_interfaces(mesh: Mesh, joint_facets: dict[str, np.ndarray]) -> Mesh:
             nc = {3: 3, 6: 3, 4: 4, 8: 4}.get(arr.shape[1])
             if nc is None:
                 raise MeshError(f"joint set '{name}': a 3D facet has 3, 4, 6 or 8 nodes, got {arr.shape[1]}")
-        k = ft.lookup(_FacetTable.keys(arr, np.full(len(arr), nc)))
+        k = ft.lookup(corner_keys(arr, np.full(len(arr), nc)))
         if (k < 0).any():
             f = arr[np.nonzero(k < 0)[0][0]]
             what = "an edge" if dim == 2 else "a face"
@@ -339,8 +255,8 @@ def insert_interfaces(mesh: Mesh, joint_facets: dict[str, np.ndarray]) -> Mesh:
     old_cells = conn_list
     for name, fs in mesh.facet_sets.items():
         arr = fs.facets
-        nc = _FACET_CORNERS.get(fs.type, dim)
-        k = ft.lookup(_FacetTable.keys(arr, np.full(len(arr), nc)))
+        nc = FACET_CORNERS.get(fs.type, dim)
+        k = ft.lookup(corner_keys(arr, np.full(len(arr), nc)))
         owner = np.where((k >= 0), ft.elem[ft.first[np.maximum(k, 0)]], -1)
         owner[(k >= 0) & (ft.count[np.maximum(k, 0)] != 1)] = -1
         out = arr.copy()

@@ -33,6 +33,7 @@ from masonrydam.assembly.model import Model
 from masonrydam.effects import foundation as F
 from masonrydam.errors import SceneError
 from masonrydam.materials.elastic import elasticity_matrix
+from masonrydam.mesh.facets import boundary_owners
 from masonrydam.mesh.model import CellBlock, FacetSet, Mesh
 from masonrydam.assembly.mass import MassMatrix
 
@@ -154,10 +155,8 @@ def newmark(M, C, K, force, n_steps, dt=DT, T=None, base=None):
 
 
 def boundary(mesh, name):
-    from masonrydam.effects.foundation import _group_boundary
-
     fs = mesh.facet_sets[name]
-    ok, inward = _group_boundary(mesh, "foundation", np.asarray(fs.facets), fs.type)
+    ok, inward = boundary_owners(mesh, fs.type, fs.facets, "foundation")
     assert ok.all()
     return F.Boundary(name, fs.type, fs.facets, inward)
 

@@ -29,7 +29,8 @@ import numpy as np
 import pytest
 from scipy.integrate import quad_vec
 
-from masonrydam.effects.hydrostatics import collapsed_triangle_rule, facet_pressure_forces
+from masonrydam.effects.hydrostatics import facet_pressure_forces
+from masonrydam.elements.quadrature import collapsed_triangle_rule
 from masonrydam.elements.shapes import shape_functions
 
 GAMMA = 9810.0  # N/m3, water

@@ -39,6 +39,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..checks import check_keys, choice, number, positive
+from ..elements.shapes import facet_quadrature
 from ..errors import SceneError
 from ..materials.joint_laws import RESULT_OPEN
 
@@ -105,7 +106,6 @@ class Uplift:
         Sets ``self.matrix`` (n_dof, n_samples): nodal forces of a unit pressure at each sample (``N_a w
         n`` on the top face, minus that on the bottom face), and the samples' ``s``, ``elevation``,
         ``line``, ``strip`` and ``weight`` (m2)."""
-        from ..elements.shapes import facet_area_normal, shape_functions
         from ..mesh.model import INTERFACE_FACE_TYPE
         from .hydrostatics import region_points
 
@@ -136,11 +136,8 @@ class Uplift:
             for e, xi, w in pieces:
                 if len(e) == 0:
                     continue
-                N, dN = shape_functions(face, xi)
-                Xe = X[e]
-                x = np.einsum("pa,pad->pd", N, Xe)
-                A = facet_area_normal(dN, Xe)
-                J = np.linalg.norm(A, axis=1)
+                fq = facet_quadrature(face, X, xi, w, owner=e)
+                N, x, A, J = fq.shape_values, fq.points, fq.area_normal, fq.jacobian  # (P, ns), (P, dim), (P, dim), (P,)
                 n = A / J[:, None]
                 n *= np.sign(np.einsum("pd,pd->p", n, g.frame[e, 0, dim - 1, :]))[:, None]  # bottom to top
                 wt = w * J * g.thickness[e]

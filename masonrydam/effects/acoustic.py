@@ -103,7 +103,8 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ..elements.quadrature import tensor_rule
-from ..elements.shapes import ELEMENT_TYPES, facet_area_normal, facet_outward_sign, reference_nodes, shape_functions
+from ..elements.shapes import (ELEMENT_TYPES, facet_area_normal, facet_outward_sign, facet_quadrature, facet_rule,
+                               reference_nodes, shape_functions)
 from ..mesh.facets import FACET_CORNERS, FACET_TYPES
 
 __all__ = ["FluidMesh", "AcousticMatrices", "build_fluid_mesh", "acoustic_matrices", "reflection_damping"]
@@ -615,10 +616,9 @@ def _boundary_mass(nodes, bf):
     """int N^T N dS (nb, nfn, nfn) and int N n dS (nb, nfn, dim) of line2 / quad4 boundary facets
     (n = facet_area_normal direction; 2 Gauss points per direction: exact on parallelograms)."""
     ftype = "line2" if bf.shape[1] == 2 else "quad4"
-    pts, w = tensor_rule("gauss", 2, bf.shape[1] // 2)
-    N, dN = shape_functions(ftype, pts)
-    A = facet_area_normal(dN[None], nodes[bf][:, None])  # (nb, q, dim)
-    dA = np.linalg.norm(A, axis=2)
+    pts, w = facet_rule(ftype, 2)
+    fq = facet_quadrature(ftype, nodes[bf], pts, w)
+    N, A, dA = fq.shape_values, fq.area_normal, fq.jacobian  # (q, nfn), (nb, q, dim), (nb, q)
     M = np.einsum("q,nq,qa,qb->nab", w, dA, N, N)
     Nn = np.einsum("q,qa,nqd->nad", w, N, A)
     return M, Nn

@@ -8,7 +8,7 @@ for speed buys, measured against converged references or closed forms.
 Cases (scenes built from the bundled examples and test models):
 - ``sliding_block``: Newmark (1965) rectangular pulse (examples/sliding_block_pulse.toml): permanent slip
   against the rigid-block closed form ``A (A - a_y) t0^2 / (2 a_y)`` and against the dt-converged
-  elastic model (fixed dt = 1e-4 s; 0.27 % above the rigid block, see tests/test_time_steps_and_energy.py);
+  elastic model (fixed dt = 1e-4 s; 0.27 % above the rigid block, see tests/solvers/test_time_steps_and_energy.py);
   knobs: dt, integrator, dt = "auto" tolerance, joint stiffness kn (1e9 to 1e12 Pa/m);
 - ``rocking_block``: a 0.3 x 1.5 m block released at 0.02 alpha on a stiff no-tension joint (Housner
   1963): the time of the first impact against ``T/4 = acosh(1 / (1 - theta0/alpha)) / p``; knobs: dt,
@@ -46,7 +46,8 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-for p in (ROOT, ROOT / "tests", Path(__file__).resolve().parent):
+# tests/ holds the scene builders (scenes.py), tests/solvers the free-rocking helper of test_dynamics
+for p in (ROOT, ROOT / "tests", ROOT / "tests" / "solvers", Path(__file__).resolve().parent):
     if str(p) not in sys.path:
         sys.path.insert(0, str(p))
 
@@ -161,14 +162,14 @@ def rms_error(hist, ref) -> float:
 
 # ---------------------------------------------------------------------------------------------- cases
 def case_sliding_block(quick: bool) -> list:
-    from test_dynamics import sliding_scene
+    from scenes import sliding_block
 
     A, mu, t0 = 0.4 * G, 0.2, 0.2
     ay = mu * G
     rigid = A * (A - ay) * t0**2 / (2 * ay)
 
     def one(knob, value, **kw):
-        sc = sliding_scene("rectangular", A, t0, mu, duration=0.5, **kw)
+        sc = sliding_block(shape="rectangular", amplitude=A, pulse=t0, mu=mu, duration=0.5, **kw)
         dyn, rec = run_scene(sc)
         s = -float(dyn.joint_slip.isel(step=-1).values.mean())
         rec.update(case="sliding_block", knob=knob, value=value, slip=s)
@@ -220,7 +221,7 @@ def case_rocking_block(quick: bool) -> list:
         i = np.nonzero(th <= 0)[0][0]
         tc = t[i - 1] + (t[i] - t[i - 1]) * th[i - 1] / (th[i - 1] - th[i])
         # against Housner's T/4 for the rigid block; the small-displacement model itself is 0.3 % off it
-        # at this theta0 (tests/test_dynamics.py): errors below that say nothing more
+        # at this theta0 (tests/solvers/test_dynamics.py): errors below that say nothing more
         out.append({"case": "rocking_block", "knob": knob, "value": dt, "measure": "time of first impact",
                     "error": abs(tc - T4) / T4, "wall_s": wall, "solve_s": wall, "s_per_simulated_s": wall / 0.2,
                     "steps": int(round(0.2 / dt)), "energy_growth": float(e_mech.max())})

@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-for p in (str(ROOT), str(ROOT / "tests")):
+for p in (str(ROOT), str(ROOT / "tests"), str(ROOT / "tests" / "effects")):  # the water and rock scenes of tests/effects
     if p not in sys.path:
         sys.path.insert(0, p)
 

@@ -14,7 +14,15 @@ The problems (shared/reference/PROBLEMS.md numbers in brackets):
   no-slip joint [3];
 - :func:`tilted_block`: the same kind of block under a growing horizontal body force (a tilted table) [3];
 - :func:`block_on_elastic_joint`: a rigid block on linear joint springs with a modal stage (Chopra 2012,
-  sec. 10.2).
+  sec. 10.2);
+- :func:`small_wall`: a running-bond wall of 0.2 x 0.1 m units on a fixed base (the simplified micro-model,
+  Lourenco 1996);
+- :func:`dam_with_reservoir`: a triangular-topped gravity dam on a rock block with water and uplift (the
+  gravity method of USBR 1987, sec. 5.7-5.11);
+- :func:`koyna_el_centro`: examples/koyna_el_centro.toml (the Koyna section under El Centro) with time
+  steps and a mesh of the test's own [5].
+
+:func:`toml_text` writes a scene dictionary as TOML, for tests of the command line.
 """
 from __future__ import annotations
 
@@ -65,6 +73,32 @@ def _index(items: list, part: str, key: str) -> int:
     if not part.lstrip("-").isdigit():
         raise KeyError(f"override {key!r}: {part!r} is not an index of a list")
     return int(part)
+
+
+def toml_text(scene: Mapping) -> str:
+    """``scene`` as the text of a TOML file (each top-level entry one line, inner tables inline), for tests
+    that give the command line a scene file."""
+    lines = []
+    for key, value in scene.items():
+        lines.append(f"{key} = {_toml_value(value)}")
+    return "\n".join(lines) + "\n"
+
+
+def _toml_value(value) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, (int, float, np.integer, np.floating)):
+        x = float(value) if isinstance(value, (float, np.floating)) else int(value)
+        if isinstance(x, float) and not math.isfinite(x):
+            return "nan" if math.isnan(x) else ("inf" if x > 0 else "-inf")
+        return repr(x)
+    if isinstance(value, str):
+        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(value, Mapping):
+        return "{" + ", ".join(f'"{k}" = {_toml_value(v)}' for k, v in value.items()) + "}"
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    raise TypeError(f"no TOML form for {type(value).__name__}")
 
 
 # ----------------------------------------------------------------------------------------------
@@ -211,4 +245,96 @@ def block_on_elastic_joint(modes=6, mass="consistent", *, overrides=None):
         "stages": [{"name": "gravity", "loads": [{"type": "self_weight"}]},
                    {"name": "modes", "type": "modal", "modes": modes, "mass": mass}],
     }
+    return merged(scene, overrides)
+
+
+# ----------------------------------------------------------------------------------------------
+# a small masonry wall
+# ----------------------------------------------------------------------------------------------
+
+#: the joint stiffnesses of the small wall (Lourenco & Rots 1997's Eindhoven walls: kn = 82, ks = 36 N/mm3)
+WALL_NORMAL_STIFFNESS, WALL_SHEAR_STIFFNESS = "82 N/mm3", "36 N/mm3"
+#: the small wall's thickness (m) and its units' density (kg/m3)
+WALL_THICKNESS, WALL_UNIT_DENSITY = 0.1, 1800.0
+
+
+def small_wall(*, length=0.8, height=0.4, elements_per_unit=3, bond="running", normal_stiffness=WALL_NORMAL_STIFFNESS,
+               shear_stiffness=WALL_SHEAR_STIFFNESS, bed_joints=None, stages=None, overrides=None):
+    """A wall ``length`` x ``height`` of 0.2 x 0.1 m units (masonry_wall_2d: expanded units, zero-thickness bed
+    and head joints; E = 16.7 GPa, nu = 0.15, 1800 kg/m3, 0.1 m thick) on a fixed base. Head joints are linear
+    (kn = 82, ks = 36 N/mm3 unless given); ``bed_joints`` gives the bed joints' entry (default: linear, the
+    same stiffnesses). ``stages`` default to one stage "gravity": self-weight and 0.2 MPa on the top edge."""
+    linear = {"law": "linear", "normal_stiffness": normal_stiffness, "shear_stiffness": shear_stiffness}
+    scene = {
+        "model": {"name": "wall", "thickness": WALL_THICKNESS},
+        "mesh": {"generator": "masonry_wall_2d",
+                 "parameters": {"length": length, "height": height, "unit_length": 0.2, "unit_height": 0.1,
+                                "bond": bond, "elements_per_unit": elements_per_unit}},
+        "materials": {"units": {"youngs_modulus": "16.7 GPa", "poisson_ratio": 0.15, "density": WALL_UNIT_DENSITY}},
+        "joints": {"bed_joints": bed_joints or dict(linear), "head_joints": dict(linear)},
+        "supports": [{"set": "base", "components": ["x", "y"]}],
+        "stages": stages or [{"name": "gravity", "steps": 1, "loads": [
+            {"type": "self_weight"}, {"type": "edge_pressure", "set": "top_edge", "pressure": "0.2 MPa"}]}],
+    }
+    return merged(scene, overrides)
+
+
+# ----------------------------------------------------------------------------------------------
+# a gravity dam with its reservoir
+# ----------------------------------------------------------------------------------------------
+
+#: density of the dam's concrete (kg/m3)
+DAM_CONCRETE_DENSITY = 2400.0
+
+
+def dam_with_reservoir(*, height=30.0, crest_width=5.0, downstream_slope=0.8, level=28.0, element_size=2.0,
+                       friction_angle=45.0, youngs_modulus=25e9, joint_stiffness=1e11, foundation_width=None,
+                       stages=None, overrides=None):
+    """A gravity dam (gravity_dam_2d: vertical upstream face, crest ``crest_width``, downstream face
+    ``downstream_slope`` horizontal per vertical; concrete 2400 kg/m3) on a massless rock block 10 m deep and
+    ``foundation_width`` wide (default: twice the base plus 20 m), joined by a cohesionless base joint
+    (``friction_angle``, kn = ks = ``joint_stiffness``), with water at ``level`` and its uplift on the base
+    joint (linear from headwater to the toe). Stages default to "gravity" (self-weight) then "water" (the
+    reservoir in 4 steps). Checked against the gravity method (USBR, Design of Small Dams 1987, sec. 5.7-5.11;
+    USACE EM 1110-2-2200, ch. 3-4)."""
+    if foundation_width is None:
+        foundation_width = 2.0 * (crest_width + downstream_slope * height) + 20.0
+    material = {"youngs_modulus": youngs_modulus, "poisson_ratio": 0.2}
+    scene = {
+        "model": {"name": "dam_water", "hypothesis": "plane_strain"},
+        "mesh": {"generator": "gravity_dam_2d",
+                 "parameters": {"height": height, "crest_width": crest_width, "downstream_slope": downstream_slope,
+                                "foundation_width": foundation_width, "foundation_depth": 10.0,
+                                "element_size": element_size}},
+        "materials": {"dam": dict(material, density=DAM_CONCRETE_DENSITY), "foundation": dict(material, density=0.0)},
+        "joints": {"base_joint": {"normal_stiffness": joint_stiffness, "shear_stiffness": joint_stiffness,
+                                  "friction_angle": friction_angle}},
+        "reservoir": {"level": level, "uplift": {"joints": ["base_joint"]}},
+        "supports": [{"set": "foundation_bottom"}],
+        "stages": stages or [{"name": "gravity", "loads": [{"type": "self_weight"}]},
+                             {"name": "water", "steps": 4, "loads": [{"type": "reservoir"}]}],
+    }
+    return merged(scene, overrides)
+
+
+# ----------------------------------------------------------------------------------------------
+# the Koyna section under El Centro (reference problem 5)
+# ----------------------------------------------------------------------------------------------
+
+def koyna_el_centro(*, element_size, dt, steps=None, duration=None, output=None, overrides=None):
+    """examples/koyna_el_centro.toml (the Koyna section, Chopra & Chakrabarti 1973 profile, cut by 10 lift
+    joints and the base joint, Mohr-Coulomb joints with a brittle bond; self-weight, then El Centro 1940 at
+    0.5 g with HHT) on a mesh of ``element_size`` m, its dynamic stage stepped at a fixed ``dt`` for
+    ``steps`` steps or ``duration`` s, recording ``output``. Read it with ``base_dir=EXAMPLES`` where
+    a file it names must be found."""
+    import tomllib
+
+    from masonrydam.scene.schema import set_time_steps
+    from repository_paths import EXAMPLES
+
+    scene = tomllib.loads((EXAMPLES / "koyna_el_centro.toml").read_text())
+    scene["mesh"]["parameters"]["element_size"] = element_size
+    stage = set_time_steps(scene["stages"][1], dt, steps=steps, duration=duration)
+    if output is not None:
+        stage["output"] = output
     return merged(scene, overrides)

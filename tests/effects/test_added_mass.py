@@ -15,6 +15,7 @@ import scipy.linalg
 import masonrydam
 from masonrydam.effects.added_mass import westergaard_mass
 from masonrydam.errors import SceneError
+from scenes import ELASTIC_JOINT_BLOCK as BLOCK, block_on_elastic_joint
 
 RHO_W = 1000.0
 
@@ -91,23 +92,18 @@ def test_inclined_and_rotated_faces(angle):
     assert abs(float(ut @ (M @ un))) < 1e-10 * expected
 
 
-B, HB, RHO, KN, KS, T, HE, LEVEL = 2.0, 1.0, 2000.0, 1e9, 4e8, 1.0, 0.125, 0.75
+B, HB, RHO, T, HE = BLOCK.width, BLOCK.height, BLOCK.density, BLOCK.thickness, BLOCK.element_size
+KN, KS = BLOCK.normal_stiffness, BLOCK.shear_stiffness
+LEVEL = 0.75
 
 
 def block_scene(dynamic="westergaard", mass="consistent"):
-    return {
-        "model": {"name": "block_water", "thickness": T},
-        "mesh": {"generator": "blocks_2d", "parameters": {"element_size": HE, "blocks": [
-            {"x0": 0.0, "y0": -0.5, "x1": B, "y1": 0.0, "group": "base"},
-            {"x0": 0.0, "y0": 0.0, "x1": B, "y1": HB, "group": "block"}]}},
-        "materials": {"base": {"youngs_modulus": 1e14, "poisson_ratio": 0.2, "density": RHO},
-                      "block": {"youngs_modulus": 1e14, "poisson_ratio": 0.2, "density": RHO}},
-        "joints": {"joints": {"law": "linear", "normal_stiffness": KN, "shear_stiffness": KS}},
+    """The rigid block on an elastic joint of the modal stage tests with water at LEVEL on its face x = 0
+    (``[reservoir] dynamic``), the reservoir's static load in the gravity stage, and 4 modes."""
+    return block_on_elastic_joint(modes=4, mass=mass, overrides={
+        "model.name": "block_water",
         "reservoir": {"level": LEVEL, "face": "left_edge", "dynamic": dynamic},
-        "supports": [{"set": "base"}],
-        "stages": [{"name": "gravity", "loads": [{"type": "self_weight"}, {"type": "reservoir"}]},
-                   {"name": "modes", "type": "modal", "modes": 4, "mass": mass}],
-    }
+        "stages.0.loads": [{"type": "self_weight"}, {"type": "reservoir"}]})
 
 
 @pytest.mark.parametrize("mass", ["consistent", "lumped"])

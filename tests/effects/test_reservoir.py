@@ -23,32 +23,13 @@ import pytest
 import masonrydam
 from masonrydam.errors import SceneError
 from repository_paths import EXAMPLES
+from scenes import DAM_CONCRETE_DENSITY, dam_with_reservoir
 
 pytest.importorskip("gmsh")
 
 G = 9.80665
 GW = 1000.0 * G  # unit weight of water, N/m3
-RHO_C = 2400.0
-
-
-def dam_scene(*, H=30.0, cw=5.0, m=0.8, h=28.0, h_size=2.0, phi=45.0, E=25e9, kn=1e11, reservoir_extra=None,
-              stages=None, level=None):
-    reservoir = {"level": h if level is None else level, "uplift": {"joints": ["base_joint"]}}
-    reservoir.update(reservoir_extra or {})
-    return {
-        "model": {"name": "dam_water", "hypothesis": "plane_strain"},
-        "mesh": {"generator": "gravity_dam_2d",
-                 "parameters": {"height": H, "crest_width": cw, "downstream_slope": m,
-                                "foundation_width": 2.0 * (cw + m * H) + 20.0, "foundation_depth": 10.0,
-                                "element_size": h_size}},
-        "materials": {"dam": {"youngs_modulus": E, "poisson_ratio": 0.2, "density": RHO_C},
-                      "foundation": {"youngs_modulus": E, "poisson_ratio": 0.2, "density": 0.0}},
-        "joints": {"base_joint": {"normal_stiffness": kn, "shear_stiffness": kn, "friction_angle": phi}},
-        "reservoir": reservoir,
-        "supports": [{"set": "foundation_bottom"}],
-        "stages": stages or [{"name": "gravity", "loads": [{"type": "self_weight"}]},
-                             {"name": "water", "steps": 4, "loads": [{"type": "reservoir"}]}],
-    }
+RHO_C = DAM_CONCRETE_DENSITY
 
 
 def section(H, cw, m):
@@ -78,7 +59,7 @@ def test_gravity_method_linear_uplift():
     """Normal force W - U and shear force = water thrust to 0.1 %, sliding factor and resultant position
     to 0.5 % (measured: 1e-13 and 1e-12; the consistent pore forces make the uplift moment exact)."""
     H, cw, m, h, phi = 30.0, 5.0, 0.8, 28.0, 45.0
-    ds = masonrydam.run(dam_scene(H=H, cw=cw, m=m, h=h, phi=phi))
+    ds = masonrydam.run(dam_with_reservoir(height=H, crest_width=cw, downstream_slope=m, level=h, friction_angle=phi))
     W, xW, B = section(H, cw, m)
     P = 0.5 * GW * h * h
     U, xU = profile_forces(B, [(0.0, GW * h), (B, 0.0)])
@@ -106,7 +87,8 @@ def test_gravity_method_drains_and_tailwater():
     H, cw, m, h, ht, phi = 30.0, 5.0, 0.8, 28.0, 4.0, 45.0
     extra = {"tailwater": {"level": ht}, "uplift": {"joints": ["base_joint"],
                                                      "drains": {"distance": 5.0, "efficiency": 0.67}}}
-    ds = masonrydam.run(dam_scene(H=H, cw=cw, m=m, h=h, phi=phi, reservoir_extra=extra))
+    ds = masonrydam.run(dam_with_reservoir(height=H, crest_width=cw, downstream_slope=m, level=h, friction_angle=phi,
+                                           overrides={"reservoir": extra}))
     W, xW, B = section(H, cw, m)
     P, Pt = 0.5 * GW * h * h, 0.5 * GW * ht * ht
     wedge = 0.5 * (m * ht) * ht  # water above the downstream face below the tail level (m2)
@@ -148,7 +130,8 @@ def test_cracked_base_against_the_classic_iteration():
     H, cw, m, h = 30.0, 5.0, 0.5, 30.0
     Lc, N, e = classic_cracked_base(H, cw, m, h)
     assert Lc == pytest.approx(8.0, rel=1e-6)  # the fixed point of this section
-    scene = dam_scene(H=H, cw=cw, m=m, h=h, h_size=0.2, phi=55.0, E=1e13, kn=1e9)
+    scene = dam_with_reservoir(height=H, crest_width=cw, downstream_slope=m, level=h, element_size=0.2,
+                               friction_angle=55.0, youngs_modulus=1e13, joint_stiffness=1e9)
     scene["stages"][1]["steps"] = 10
     ds = masonrydam.run(scene)
     B = float(ds.section_length[0])
@@ -177,8 +160,8 @@ def test_flood_until_the_base_slides():
     stages = [{"name": "gravity", "loads": [{"type": "self_weight"}]},
               {"name": "fill", "steps": 2, "loads": [{"type": "reservoir"}]},
               {"name": "flood", "steps": 15, "until_failure": True, "loads": [{"type": "reservoir", "level": 35.0}]}]
-    scene = dam_scene(H=H, cw=cw, m=m, phi=phi, level=20.0, stages=stages,
-                      reservoir_extra={"uplift": {"joints": ["base_joint"], "cracked": "unchanged"}})
+    scene = dam_with_reservoir(height=H, crest_width=cw, downstream_slope=m, friction_angle=phi, level=20.0,
+                               stages=stages, overrides={"reservoir.uplift": {"joints": ["base_joint"], "cracked": "unchanged"}})
     ds = masonrydam.run(scene)
     assert ds.attrs["limit_reservoir_level"] == pytest.approx(h_slide, rel=5e-3)
     assert "sliding" in ds.attrs["limit_state"] and "reservoir level reached" in ds.attrs["limit_state"]
@@ -190,7 +173,7 @@ def test_flood_until_the_base_slides():
 def test_no_reservoir_pays_nothing():
     """A dam scene without [reservoir] has no water variables, sections or pore pressures, and its
     effects list names no water."""
-    scene = dam_scene()
+    scene = dam_with_reservoir()
     del scene["reservoir"]
     scene["stages"] = scene["stages"][:1]
     ds = masonrydam.run(scene)
@@ -199,7 +182,7 @@ def test_no_reservoir_pays_nothing():
     assert "section" not in ds.dims
     eff = ds.attrs["simulated_effects"]
     assert "reservoir" not in eff and "uplift" not in eff
-    ds = masonrydam.run(dam_scene())
+    ds = masonrydam.run(dam_with_reservoir())
     assert "reservoir: hydrostatic pressure" in ds.attrs["simulated_effects"]
     assert "uplift: pore pressure in joint sets base_joint" in ds.attrs["simulated_effects"]
 
@@ -219,7 +202,7 @@ def test_no_reservoir_pays_nothing():
     (lambda s: s.pop("reservoir"), "stages[1].loads[0].type"),
 ])
 def test_bad_water_input_names_the_key(change, key):
-    scene = dam_scene()
+    scene = dam_with_reservoir()
     change(scene)
     with pytest.raises(SceneError) as err:
         masonrydam.run(scene)
@@ -233,7 +216,7 @@ def test_joint_lines_of_a_lifted_section_and_a_3d_dam():
     from masonrydam.scene import Scene
     from masonrydam.scene import build_mesh, build_model
 
-    s = dam_scene(h_size=2.0)
+    s = dam_with_reservoir(element_size=2.0)
     s["mesh"]["parameters"]["lift_spacing"] = 10.0
     s["joints"]["lift_joints"] = dict(s["joints"]["base_joint"])
     sc = Scene(s)
@@ -251,9 +234,9 @@ def test_gravity_method_3d_monolith():
     the base line's N = (W - U) b and T = P b to 0.1 %, factor and resultant position to 0.5 %, with
     the drain profile (the drain line crosses hex faces, which the uplift integration splits)."""
     H, cw, m, h, phi, b = 30.0, 5.0, 0.8, 28.0, 45.0, 10.0
-    scene = dam_scene(H=H, cw=cw, m=m, h=h, phi=phi, h_size=3.0,
-                      reservoir_extra={"uplift": {"joints": ["base_joint"],
-                                                  "drains": {"distance": 5.0, "efficiency": 0.67}}})
+    scene = dam_with_reservoir(height=H, crest_width=cw, downstream_slope=m, level=h, friction_angle=phi,
+                               element_size=3.0, overrides={"reservoir.uplift": {
+                                   "joints": ["base_joint"], "drains": {"distance": 5.0, "efficiency": 0.67}}})
     scene["model"] = {"name": "dam3d", "dimension": 3}
     scene["mesh"]["generator"] = "gravity_dam_3d"
     scene["mesh"]["parameters"].update(valley_bottom_width=b, valley_top_width=b, n_monoliths=1)
@@ -345,7 +328,7 @@ def test_static_water_stays_applied_in_a_dynamic_stage():
     stays where the reservoir stage left it (a missing water force would set it swinging by the
     thrust over the stiffness, about the static displacement itself), and the pore pressures and the
     level are carried into the dynamic steps unchanged."""
-    scene = dam_scene(h_size=3.0)
+    scene = dam_with_reservoir(element_size=3.0)
     scene["stages"].append({"name": "still", "type": "dynamic", "dt": 0.01, "steps": 20,
                             "ground_motion": {"x": {"values": [0.0, 0.0], "dt": 0.01}}})
     ds = masonrydam.run(scene)
@@ -366,7 +349,7 @@ def test_each_monolith_base_is_a_section_of_its_own():
     nodes, so each is a line of its own (counted along the dam axis), each carrying half the prism's
     W - U (no uplift here: N = W b per monolith, b = 10 m)."""
     H, cw, m = 30.0, 5.0, 0.8
-    scene = dam_scene(H=H, cw=cw, m=m, h_size=3.0)
+    scene = dam_with_reservoir(height=H, crest_width=cw, downstream_slope=m, element_size=3.0)
     del scene["reservoir"]["uplift"]
     scene["model"] = {"name": "dam3d", "dimension": 3}
     scene["mesh"]["generator"] = "gravity_dam_3d"
@@ -391,5 +374,5 @@ def test_path_following_is_refused_where_it_would_drop_the_water(control):
                                {"name": "push", "control": control, "loads": [
                                    {"type": "self_weight", "acceleration": [0.5, 0.0], "factor": 1.0}]}])):
         with pytest.raises(SceneError) as err:
-            masonrydam.run(dam_scene(stages=stages))
+            masonrydam.run(dam_with_reservoir(stages=stages))
         assert err.value.key == f"stages[{index}].control" and "water" in str(err.value)

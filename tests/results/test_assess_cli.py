@@ -22,22 +22,11 @@ import xarray as xr
 
 import masonrydam
 from masonrydam.cli.main import main
+from scenes import dam_with_reservoir
 
 pytest.importorskip("gmsh")
 
-DAM = {
-    "model": {"name": "dam_water", "hypothesis": "plane_strain"},
-    "mesh": {"generator": "gravity_dam_2d",
-             "parameters": {"height": 30.0, "crest_width": 5.0, "downstream_slope": 0.8,
-                            "foundation_width": 80.0, "foundation_depth": 10.0, "element_size": 2.0}},
-    "materials": {"dam": {"youngs_modulus": 25e9, "poisson_ratio": 0.2, "density": 2400.0},
-                  "foundation": {"youngs_modulus": 25e9, "poisson_ratio": 0.2, "density": 0.0}},
-    "joints": {"base_joint": {"normal_stiffness": 1e11, "shear_stiffness": 1e11, "friction_angle": 45.0}},
-    "reservoir": {"level": 28.0, "uplift": {"joints": ["base_joint"], "cracked": "full_head"}},
-    "supports": [{"set": "foundation_bottom"}],
-    "stages": [{"name": "gravity", "loads": [{"type": "self_weight"}]},
-               {"name": "water", "steps": 4, "loads": [{"type": "reservoir"}]}],
-}
+DAM = dam_with_reservoir(foundation_width=80.0, overrides={"reservoir.uplift.cracked": "full_head"})
 
 
 def crack_scene():

@@ -11,8 +11,6 @@ matplotlib Figure objects (lines, their data, axis labels), not on the PNG:
 """
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pytest
 import xarray as xr
@@ -24,6 +22,7 @@ from masonrydam.errors import MasonrydamError
 from masonrydam.results.histories import (MAX_LINES, default_figure, history_figure, parse_selection,
                                           quantity_figure, step_axis)
 from masonrydam.results.pushover import pushover_data
+from scenes import sliding_block
 
 #: the x record of the shaking stage: 0.2 m/s2 with a spike of 3 m/s2 at t = 0.015 s (between two output
 #: steps, every 0.01 s), 151 samples at 1 ms of which the 0.1 s stage uses 101 (2.5 m/s2 at 0.12 s is after it)
@@ -40,24 +39,17 @@ DT_X2 = 0.005
 
 
 def record_scene():
-    phi = math.degrees(math.atan(0.2))
-    return {
-        "model": {"name": "record_block", "thickness": 1.0},
-        "mesh": {"generator": "blocks_2d", "parameters": {"blocks": [
-            {"x0": 0, "y0": 0, "x1": 2, "y1": 0.25, "group": "base"},
-            {"x0": 0, "y0": 0.25, "x1": 2, "y1": 0.75, "group": "block"}], "element_size": 0.25}},
-        "materials": {"base": {"youngs_modulus": 30e9, "poisson_ratio": 0.2, "density": 2000},
-                      "block": {"youngs_modulus": 30e9, "poisson_ratio": 0.2, "density": 2000}},
-        "joints": {"joints": {"normal_stiffness": 1e10, "shear_stiffness": 1e10, "friction_angle": phi}},
-        "supports": [{"set": "base", "components": ["x", "y"]}],
+    """The sliding block of scenes.sliding_block (mu = 0.2) shaken by the two-component record REC_X, REC_Y,
+    then by an aftershock REC_X2 at another sampling rate."""
+    return sliding_block(overrides={
+        "model.name": "record_block",
         "stages": [{"name": "gravity", "loads": [{"type": "self_weight"}]},
                    {"name": "shake", "type": "dynamic", "dt": 0.002, "duration": 0.1,
                     "ground_motion": {"x": {"values": REC_X.tolist(), "dt": DT_X},
                                       "y": {"values": REC_Y.tolist(), "dt": DT_Y}},
                     "output": {"stride": 5}},
                    {"name": "aftershock", "type": "dynamic", "dt": 0.005, "duration": 0.05,
-                    "ground_motion": {"x": {"values": REC_X2.tolist(), "dt": DT_X2}}}],
-    }
+                    "ground_motion": {"x": {"values": REC_X2.tolist(), "dt": DT_X2}}}]})
 
 
 @pytest.fixture(scope="module")

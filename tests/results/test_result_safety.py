@@ -8,7 +8,7 @@
 - a second request aborts at once; SIGKILL leaves the earlier result and a readable working file
   that :func:`masonrydam.results.files.open_result` reports as left by a run that did not finish.
 
-The physics of the scene (the Newmark sliding block of test_dynamics) is checked there; here the
+The physics of the scene (the Newmark sliding block of scenes.sliding_block) is checked in test_dynamics; here the
 kept steps are compared with a complete run of the same scene.
 """
 from __future__ import annotations
@@ -31,43 +31,12 @@ from masonrydam.cli.main import main
 from masonrydam.errors import RunStopped
 from masonrydam.results.files import IncompleteResultWarning, open_result, partial_path
 from masonrydam.scene.stopping import StopRequests
-from scenes import sliding_block
+from scenes import sliding_block, toml_text
 
-#: the sliding block of test_dynamics (Newmark 1965; mu = 0.2, a 0.4 g rectangular pulse of 0.2 s),
-#: as a TOML scene for the command line; its duration is set per test
-SLIDING_TOML = """
-[model]
-name = "sliding_block"
-thickness = 1.0
-[mesh]
-generator = "blocks_2d"
-parameters = {{ blocks = [{{ x0 = 0, y0 = 0, x1 = 2, y1 = 0.25, group = "base" }},
-               {{ x0 = 0, y0 = 0.25, x1 = 2, y1 = 0.75, group = "block" }}], element_size = 0.25 }}
-[materials.base]
-youngs_modulus = 3e10
-poisson_ratio = 0.2
-density = 2000
-[materials.block]
-youngs_modulus = 3e10
-poisson_ratio = 0.2
-density = 2000
-[joints.joints]
-normal_stiffness = 1e10
-shear_stiffness = 1e10
-friction_angle = 11.309932474020215
-[[supports]]
-set = "base"
-[[stages]]
-name = "gravity"
-loads = [{{ type = "self_weight" }}]
-[[stages]]
-name = "pulse"
-type = "dynamic"
-dt = 0.002
-duration = {duration}
-integrator = "newmark_average"
-ground_motion.x.pulse = {{ shape = "rectangular", amplitude = 3.92266, duration = 0.2 }}
-"""
+def sliding_toml(duration) -> str:
+    """The Newmark sliding block of scenes.sliding_block (mu = 0.2, a 0.4 g rectangular pulse of 0.2 s),
+    stepped with the trapezoidal rule for ``duration`` s, as a TOML scene for the command line."""
+    return toml_text(sliding_block(duration=duration, integrator="newmark_average"))
 
 
 def sha256(path) -> str:
@@ -161,7 +130,7 @@ def test_output_path_errors_come_before_any_work(tmp_path, monkeypatch):
 # ------------------------------------------------------------------------------------------------
 def start_cli_run(tmp_path, duration=600.0):
     scene = tmp_path / "slide.toml"
-    scene.write_text(SLIDING_TOML.format(duration=duration))
+    scene.write_text(sliding_toml(duration))
     out = tmp_path / "out.nc"
     proc = subprocess.Popen([sys.executable, "-m", "masonrydam.cli.main", "run", str(scene), "-o", str(out),
                              "--no-progress"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
@@ -301,7 +270,7 @@ def cli(capsys, *argv):
 
 def test_file_system_mistakes_are_one_line_messages(tmp_path, capsys):
     scene = tmp_path / "slide.toml"
-    scene.write_text(SLIDING_TOML.format(duration=0.01))
+    scene.write_text(sliding_toml(0.01))
     missing = tmp_path / "missing"
     cases = [
         (("run", scene, "-o", tmp_path), "is a folder"),

@@ -26,34 +26,26 @@ import xarray as xr
 import masonrydam
 from masonrydam.cli.main import main
 from masonrydam.errors import ConvergenceError, MasonrydamError, MechanismError
+from scenes import WALL_NORMAL_STIFFNESS, WALL_SHEAR_STIFFNESS, WALL_THICKNESS, WALL_UNIT_DENSITY, small_wall
 
 G = 9.80665
-T = 0.1  # thickness (m)
-RHO = 1800.0  # units, kg/m3
+T = WALL_THICKNESS  # thickness (m)
+RHO = WALL_UNIT_DENSITY  # units, kg/m3
 RHO_BEAM = 7850.0
 
 
 def wall_scene(self_weight=True, pressure="0.1 MPa", **params) -> dict:
     """2 courses x 2 units (0.2 x 0.1 m) running-bond wall on a fixed base, one element per unit
     height; stage 'gravity' (self-weight) and stage 'press' (pressure on the top edge)."""
-    p = {"length": 0.4, "height": 0.2, "unit_length": 0.2, "unit_height": 0.1, "bond": "running",
-         "elements_per_unit": 1}
-    p.update(params)
     stages = []
     if self_weight:
         stages.append({"name": "gravity", "steps": 1, "loads": [{"type": "self_weight"}]})
     stages.append({"name": "press", "steps": 2,
                    "loads": [{"type": "edge_pressure", "set": "top_edge", "pressure": pressure}]})
-    return {
-        "model": {"name": "tiny_wall", "thickness": T},
-        "mesh": {"generator": "masonry_wall_2d", "parameters": p},
-        "materials": {"units": {"youngs_modulus": "16.7 GPa", "poisson_ratio": 0.15, "density": RHO}},
-        "joints": {"bed_joints": {"normal_stiffness": "82 N/mm3", "shear_stiffness": "36 N/mm3",
-                                  "friction_angle": 36.87},
-                   "head_joints": {"law": "linear", "normal_stiffness": "82 N/mm3", "shear_stiffness": "36 N/mm3"}},
-        "supports": [{"set": "base", "components": ["x", "y"]}],
-        "stages": stages,
-    }
+    bed_joints = {"normal_stiffness": WALL_NORMAL_STIFFNESS, "shear_stiffness": WALL_SHEAR_STIFFNESS,
+                  "friction_angle": 36.87}
+    return small_wall(length=0.4, height=0.2, elements_per_unit=1, bed_joints=bed_joints, stages=stages,
+                      overrides={"model.name": "tiny_wall", "mesh.parameters": params})
 
 
 def block_scene(stage2: dict, phi=30.0, solver=None) -> dict:

@@ -11,8 +11,6 @@ and the block-triangular Newton correction against a dense solve of ``(I + S Qt)
 """
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pytest
 
@@ -20,13 +18,15 @@ import masonrydam
 from masonrydam.errors import STATUS_NAN, SceneError
 from masonrydam.scene import build_mesh, build_model, build_stages
 from masonrydam.scene.scene import Scene
-from repository_paths import EXAMPLES
 from masonrydam.solvers.linear.dense_lu import STATUS_SINGULAR, woodbury_apply, woodbury_factor
 from masonrydam.solvers.joint_space import capacitance_lu, joint_operator, joint_space_size
 from masonrydam.solvers.joint_space.kernels import (STATUS_TOO_MANY_CHANGES, apply_correction,
                                             capacitance_update_solve, joint_space_correction)
+from scenes import ROCKING_BLOCK_HEIGHT, ROCKING_BLOCK_WIDTH, koyna_el_centro, rocking_block, sliding_block
 
 G = 9.80665
+#: what the Koyna runs record: every 50th step, the crest
+KOYNA_OUTPUT = {"stride": 50, "nodes": ["crest"]}
 
 
 def _model(scene):
@@ -190,24 +190,6 @@ def test_woodbury_update_equals_the_dense_solve():
     np.testing.assert_allclose(x, np.linalg.solve(K, b), rtol=1e-10, atol=1e-12)
 
 
-def _sliding_scene(joint_space, amplitude=0.4 * G, duration=0.5):
-    mu = 0.2
-    stage = {"name": "pulse", "type": "dynamic", "dt": 0.002, "duration": duration, "integrator": "hht",
-             "joint_space": joint_space,
-             "ground_motion": {"x": {"pulse": {"shape": "rectangular", "amplitude": amplitude, "duration": 0.2}}}}
-    return {
-        "model": {"name": "sliding_block", "thickness": 1.0},
-        "mesh": {"generator": "blocks_2d", "parameters": {"blocks": [
-            {"x0": 0, "y0": 0, "x1": 2, "y1": 0.25, "group": "base"},
-            {"x0": 0, "y0": 0.25, "x1": 2, "y1": 0.75, "group": "block"}], "element_size": 0.25}},
-        "materials": {g: {"youngs_modulus": 30e9, "poisson_ratio": 0.2, "density": 2000} for g in ("base", "block")},
-        "joints": {"joints": {"normal_stiffness": 1e10, "shear_stiffness": 1e10,
-                              "friction_angle": math.degrees(math.atan(mu))}},
-        "supports": [{"set": "base", "components": ["x", "y"]}],
-        "stages": [{"name": "gravity", "loads": [{"type": "self_weight"}]}, stage],
-    }
-
-
 def test_sliding_block_same_history_as_the_general_path_and_newmark_slip():
     """Reference problem 1: rectangular pulse A = 0.4 g for 0.2 s on a joint with mu = 0.2. Permanent
     slip of a rigid block (Newmark 1965): s = A t_p^2 (A - a_y) / (2 a_y) with a_y = mu g. The condensed
@@ -215,7 +197,7 @@ def test_sliding_block_same_history_as_the_general_path_and_newmark_slip():
     solved every step itself."""
     hist = {}
     for mode in ("on", "off"):
-        ds = masonrydam.run(_sliding_scene(mode))
+        ds = masonrydam.run(sliding_block(duration=0.5, joint_space=mode))
         top = np.nonzero(np.isclose(ds.y.values, 0.75))[0]
         hist[mode] = ds.displacement.sel(component="x").isel(node=top).mean(axis=1).values
         if mode == "on":
@@ -241,7 +223,7 @@ def test_recovery_from_stored_columns_equals_the_substitution(monkeypatch):
     for stored in (True, False):
         if not stored:
             monkeypatch.setattr(js, "RECOVERY_MEMORY_MAX", 0)
-        ds = masonrydam.run(_sliding_scene("on", duration=0.3))
+        ds = masonrydam.run(sliding_block(duration=0.3, joint_space="on"))
         hist[stored] = ds.displacement.values
         attrs[stored] = ds.attrs
     assert int(attrs[True]["dynamic_joint_space_column_recoveries"]) > 50
@@ -255,7 +237,7 @@ def test_recovery_from_stored_columns_equals_the_substitution(monkeypatch):
 def test_sticking_steps_take_no_joint_space_iteration():
     """Below the sliding threshold (A = 0.1 g < mu g) every point sticks: each step is the elastic
     predictor (one substitution), with no iteration and the single factorization of the stage."""
-    ds = masonrydam.run(_sliding_scene("on", amplitude=0.1 * G, duration=0.1))
+    ds = masonrydam.run(sliding_block(amplitude=0.1 * G, duration=0.1, joint_space="on"))
     a = ds.attrs
     assert int(a["dynamic_joint_space_steps"]) == int(a["dynamic_steps"]) == 50
     assert int(a["dynamic_joint_space_iterations"]) == 0
@@ -270,21 +252,14 @@ def test_rocking_block_same_history_as_the_general_path():
     1e-6 of the peak uplift (about 1 mm). After it the histories part: the impact of a stiff block
     (kn = 1e12 Pa/m, dt = 1 ms) is resolved by step splitting driven by the energy check, which
     rounds differently in the two paths."""
-    B, H = 0.3, 1.5
+    B, H = ROCKING_BLOCK_WIDTH, ROCKING_BLOCK_HEIGHT
     out = {}
     for mode in ("on", "off"):
-        scene = {"model": {"name": "rocking", "thickness": 1.0},
-                 "mesh": {"generator": "blocks_2d", "parameters": {"blocks": [
-                     {"x0": -0.1, "y0": -0.1, "x1": B + 0.1, "y1": 0.0, "group": "base"},
-                     {"x0": 0.0, "y0": 0.0, "x1": B, "y1": H, "group": "block"}], "element_size": 0.05}},
-                 "materials": {g: {"youngs_modulus": 200e9, "poisson_ratio": 0.2, "density": 2000} for g in ("base", "block")},
-                 "joints": {"joints": {"normal_stiffness": 1e12, "shear_stiffness": 1e12, "friction_angle": 45.0}},
-                 "supports": [{"set": "base", "components": ["x", "y"]}],
-                 "stages": [{"name": "gravity", "loads": [{"type": "self_weight"}]},
-                            {"name": "pulse", "type": "dynamic", "dt": 1e-3, "duration": 0.4, "integrator": "hht",
-                             "joint_space": mode,
-                             "ground_motion": {"x": {"pulse": {"shape": "half_sine", "amplitude": 1.5 * G * B / H,
-                                                               "duration": 0.15}}}}]}
+        scene = rocking_block([{"name": "gravity", "loads": [{"type": "self_weight"}]},
+                               {"name": "pulse", "type": "dynamic", "dt": 1e-3, "duration": 0.4, "integrator": "hht",
+                                "joint_space": mode,
+                                "ground_motion": {"x": {"pulse": {"shape": "half_sine", "amplitude": 1.5 * G * B / H,
+                                                                  "duration": 0.15}}}}])
         ds = masonrydam.run(scene)
         heel = np.nonzero(np.isclose(ds.x.values, B) & np.isclose(ds.y.values, 0.0))[0]
         out[mode] = ds.displacement.sel(component="y").isel(node=heel).max(axis=1).values
@@ -299,7 +274,7 @@ def test_rocking_block_same_history_as_the_general_path():
 
 
 def test_joint_space_key_is_checked():
-    sc = _sliding_scene("sometimes")
+    sc = sliding_block(duration=0.5, joint_space="sometimes")
     with pytest.raises(SceneError, match=r"stages\[1\]\.joint_space"):
         masonrydam.run(sc)
 
@@ -399,22 +374,6 @@ def test_reevaluating_some_points_equals_a_full_residual_evaluation():
     assert e1[0] == pytest.approx(err_r, rel=1e-12)
 
 
-def _koyna_scene(steps, element_size=3.0):
-    """``examples/koyna_el_centro.toml`` (reference problem 5: the Koyna section, Chopra & Chakrabarti
-    1973 profile, cut by 10 lift joints and the base joint, Mohr-Coulomb joints with a brittle bond,
-    self-weight then El Centro at 0.5 g) on a coarse mesh, for ``steps`` steps."""
-    import tomllib
-    from pathlib import Path
-
-    from masonrydam.scene.schema import set_time_steps
-
-    sc = tomllib.loads((EXAMPLES / "koyna_el_centro.toml").read_text())
-    sc["mesh"]["parameters"]["element_size"] = element_size
-    st = set_time_steps(sc["stages"][1], 0.01, steps=steps)  # the example's dt = "auto": fixed steps here
-    st["output"] = {"stride": 50, "nodes": ["crest"]}
-    return sc
-
-
 def test_holding_flipping_points_cuts_the_iterations_of_a_cracking_dam(monkeypatch):
     """When the neck of the Koyna section cracks (first 3 s of El Centro at 0.5 g), points on the
     stick/slip and open/closed boundaries flip state from one Newton iteration to the next. Holding
@@ -424,9 +383,9 @@ def test_holding_flipping_points_cuts_the_iterations_of_a_cracking_dam(monkeypat
     accepted (the caller checks every step against the full residual with the true law)."""
     import masonrydam.solvers.joint_space.condensation as js_module
 
-    held = masonrydam.run(_koyna_scene(300)).attrs
+    held = masonrydam.run(koyna_el_centro(element_size=3.0, dt=0.01, steps=300, output=KOYNA_OUTPUT)).attrs
     monkeypatch.setattr(js_module, "FLIPS_BEFORE_HOLD", 10**9)
-    plain = masonrydam.run(_koyna_scene(300)).attrs
+    plain = masonrydam.run(koyna_el_centro(element_size=3.0, dt=0.01, steps=300, output=KOYNA_OUTPUT)).attrs
     assert held["dynamic_joint_space_holds"] > 0 and plain["dynamic_joint_space_holds"] == 0
     assert held["dynamic_joint_space_fallbacks"] == 0
     assert held["dynamic_joint_space_steps"] >= 300

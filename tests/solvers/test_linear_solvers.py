@@ -27,6 +27,7 @@ from masonrydam.scene.scene import Scene
 from masonrydam.solvers.linear import direct as linear
 from masonrydam.solvers.linear.iterative import AMGSolver, is_symmetric, rigid_body_modes, tied_groups
 from masonrydam.solvers.linear.direct import Factorization, SingularMatrix, make_solver, resolve_backend
+from scenes import small_wall
 
 pytest.importorskip("pyamg")
 
@@ -39,27 +40,6 @@ def direct(K, b):
 
 def rel_err(x, ref):
     return np.linalg.norm(x - ref) / np.linalg.norm(ref)
-
-
-def wall_dict(kn="82 N/mm3", ks="36 N/mm3", length=0.8, height=0.4, epu=3, bed=None, stages=None, solver=None,
-              bond="running"):
-    """Running-bond wall of 0.2 x 0.1 m units on a fixed base (masonry_wall_2d), linear joints unless
-    ``bed`` gives the bed joint law."""
-    s = {
-        "model": {"name": "wall", "thickness": 0.1},
-        "mesh": {"generator": "masonry_wall_2d",
-                 "parameters": {"length": length, "height": height, "unit_length": 0.2, "unit_height": 0.1,
-                                "bond": bond, "elements_per_unit": epu}},
-        "materials": {"units": {"youngs_modulus": "16.7 GPa", "poisson_ratio": 0.15, "density": 1800}},
-        "joints": {"bed_joints": bed or {"law": "linear", "normal_stiffness": kn, "shear_stiffness": ks},
-                   "head_joints": {"law": "linear", "normal_stiffness": kn, "shear_stiffness": ks}},
-        "supports": [{"set": "base", "components": ["x", "y"]}],
-        "stages": stages or [{"name": "gravity", "steps": 1, "loads": [
-            {"type": "self_weight"}, {"type": "edge_pressure", "set": "top_edge", "pressure": "0.2 MPa"}]}],
-    }
-    if solver:
-        s["solver"] = solver
-    return s
 
 
 def model_system(scene_dict, u=None):
@@ -134,7 +114,7 @@ def test_symmetry_check_and_tied_groups():
 def test_amg_2d_jointed_wall(kn_scale):
     """2D running-bond wall with line2 interfaces: soft (Lourenco & Rots) and 1000x stiffer joints."""
     kn, ks = f"{82 * kn_scale} N/mm3", f"{36 * kn_scale} N/mm3"
-    model, K, b, free = model_system(wall_dict(kn, ks))
+    model, K, b, free = model_system(small_wall(normal_stiffness=kn, shear_stiffness=ks))
     ref = direct(K, b)
     s = amg_for(model, K)
     assert s.backend == "amg" and s.krylov == "cg" and s.symmetric
@@ -292,7 +272,7 @@ def test_amg_nonsymmetric_sliding_joint_uses_fgmres():
     """A block sliding with friction on its bed joint: the consistent tangent is not symmetric."""
     bed = {"normal_stiffness": "82 N/mm3", "shear_stiffness": "36 N/mm3", "cohesion": 0.0,
            "friction_angle": 30.0, "tensile_strength": 0.0, "residual_shear_stiffness": "3.6 N/mm3"}
-    sc = wall_dict(bed=bed, length=0.4, height=0.2, epu=3)
+    sc = small_wall(bed_joints=bed, length=0.4, height=0.2, elements_per_unit=3)
     model, _, _, _ = model_system(sc)
     # the upper course pressed down onto the lower one and pushed sideways (nodes are not shared
     # across the joints: every course moves as a rigid body)
@@ -318,7 +298,7 @@ def two_units_without_joint(pin: bool):
     """Two 0.2 x 0.1 m units stacked (stack bond) with no joint between them: the lower one is on
     the fixed base, the upper one floats (pin: one of its nodes held, so that only its rotation
     about that node is free)."""
-    sc = wall_dict(length=0.2, height=0.2, epu=6, bond="stack")
+    sc = small_wall(length=0.2, height=0.2, elements_per_unit=6, bond="stack")
     del sc["joints"]["head_joints"]  # one unit per course
     model, _, _, _ = model_system(sc)
     m = Model(model.coords, model.cgroups, [])
@@ -356,7 +336,7 @@ def test_singular_floating_block_raises(pin):
 def test_amg_is_deterministic_and_keeps_the_global_random_state():
     """pyamg draws random start vectors; the solver seeds them, so a nonlinear run is reproducible,
     and restores numpy's global generator."""
-    model, K, b, _ = model_system(wall_dict(length=0.4, height=0.2, epu=3))
+    model, K, b, _ = model_system(small_wall(length=0.4, height=0.2, elements_per_unit=3))
     xs = []
     for seed in (1, 2):
         np.random.seed(seed)
@@ -369,7 +349,7 @@ def test_amg_is_deterministic_and_keeps_the_global_random_state():
 def test_amg_does_not_modify_the_matrix(size):
     """K may share its arrays with the model (Model.evaluate): the solver must not touch them,
     explicit zeros of the tangent pattern included."""
-    model, K, b, _ = model_system(wall_dict(length=0.4, height=0.2, epu=3))
+    model, K, b, _ = model_system(small_wall(length=0.4, height=0.2, elements_per_unit=3))
     assert (K.data == 0).any(), "the interface pattern stores explicit zeros"
     before = (K.data.copy(), K.indices.copy(), K.indptr.copy())
     one = {"max_coarse": 10**6, "tie_threshold": None} if size == "one level" else {}
@@ -381,7 +361,7 @@ def test_amg_does_not_modify_the_matrix(size):
 
 
 def test_non_convergence_and_nan_raise():
-    model, K, b, free = model_system(wall_dict(length=0.4, height=0.2, epu=2))
+    model, K, b, free = model_system(small_wall(length=0.4, height=0.2, elements_per_unit=2))
     s = amg_for(model, K, maxiter=2)
     with pytest.raises(SingularMatrix, match=r"did not converge in 2 iterations: relative residual"):
         s.solve(b)
@@ -459,7 +439,7 @@ def test_symmetric_factorization_equals_the_direct_solve_on_a_jointed_wall():
     plus a mass-like diagonal, as in an effective matrix: one and many right-hand sides give the
     general direct solve's answer (both are backward stable on an SPD matrix; Higham 2002, Thm. 10.3),
     and the factor has no more entries than a dense lower triangle."""
-    model, K, b, free = model_system(wall_dict(epu=2))
+    model, K, b, free = model_system(small_wall(elements_per_unit=2))
     Kf = (K + sp.diags(np.full(K.shape[0], 1e-3 * K.diagonal().max()))).tocsr()
     bf = b + 1e-6 * np.linalg.norm(b)  # no zero entries
     f = linear.SymmetricFactorization(Kf)
@@ -485,7 +465,7 @@ def test_supernodal_block_solve_equals_the_entry_by_entry_one(monkeypatch, max_w
     the rows of its diagonal block and then those of the supernode's last column)."""
     from masonrydam.solvers.linear.ldlt_kernels import supernode_partition
 
-    model, K, b, free = model_system(wall_dict(epu=2))
+    model, K, b, free = model_system(small_wall(elements_per_unit=2))
     Kf = (K + sp.diags(np.full(K.shape[0], 1e-3 * K.diagonal().max()))).tocsr()
     rng = np.random.default_rng(2)
     B = rng.standard_normal((Kf.shape[0], 5))

@@ -19,7 +19,7 @@ from masonrydam.errors import AccuracyWarning, SceneError
 from masonrydam.assembly.damping import RayleighDamping
 from masonrydam.solvers.dynamic import DynamicSettings, GroundMotion
 from repository_paths import BENCHMARKS, EXAMPLES
-from scenes import rocking_block, sliding_block
+from scenes import koyna_el_centro, rocking_block, sliding_block
 from test_dynamics import G, chopra_recurrence, run_sdof
 
 A_PULSE, MU, T_PULSE = 0.4 * G, 0.2, 0.2
@@ -106,16 +106,10 @@ def test_energy_balance_names_the_numerical_dissipation():
 
 def koyna_section(dt, duration=4.0):
     """examples/koyna_el_centro.toml on a coarse mesh (2.9 m), the first ``duration`` s of El Centro at 0.5 g."""
-    import tomllib
-
-    from masonrydam.scene.schema import set_time_steps
     from masonrydam.scene.scene import Scene
 
-    examples = EXAMPLES
-    sc = tomllib.loads((examples / "koyna_el_centro.toml").read_text())
-    sc["mesh"]["parameters"]["element_size"] = 2.9
-    set_time_steps(sc["stages"][1], dt, duration=duration)["output"] = {"dt": 0.01, "nodes": ["crest"]}
-    return Scene(sc, base_dir=examples)
+    sc = koyna_el_centro(element_size=2.9, dt=dt, duration=duration, output={"dt": 0.01, "nodes": ["crest"]})
+    return Scene(sc, base_dir=EXAMPLES)
 
 
 def test_koyna_at_a_large_step_warns_that_contact_events_created_energy(tmp_path):

@@ -17,7 +17,7 @@ import xarray as xr
 from matplotlib.figure import Figure
 
 import masonrydam
-from masonrydam.cli.main import default_scene_path, main
+from masonrydam.cli.main import main
 from masonrydam.errors import MasonrydamError
 from masonrydam.results.histories import (MAX_LINES, default_figure, history_figure, parse_selection,
                                           quantity_figure, step_axis)
@@ -65,10 +65,8 @@ def dyn(dyn_nc):
 
 
 @pytest.fixture(scope="module")
-def wall_nc(tmp_path_factory):
-    out = tmp_path_factory.mktemp("wall") / "wall.nc"
-    masonrydam.run(default_scene_path(), output=out)  # gravity and precompression, then a 1 mm push
-    return out
+def wall_nc(default_scene_result):
+    return default_scene_result  # gravity and precompression, then a 1 mm push
 
 
 @pytest.fixture(scope="module")

@@ -13,18 +13,13 @@ import numpy as np
 import pytest
 import xarray as xr
 
-import masonrydam
 from masonrydam.errors import MasonrydamError
 from masonrydam.results.pushover import pushover_data, pushover_figure
 
 
 @pytest.fixture(scope="module")
-def wall(tmp_path_factory):
-    out = tmp_path_factory.mktemp("push") / "wall.nc"
-    from masonrydam.cli.main import default_scene_path
-
-    masonrydam.run(default_scene_path(), output=out)
-    return out
+def wall(default_scene_result):
+    return default_scene_result
 
 
 def test_pushover_data_and_figure(wall):

@@ -49,17 +49,6 @@ def base_scene() -> dict:
     }
 
 
-@pytest.fixture
-def no_solve(monkeypatch):
-    """Make any attempt to solve fail loudly: errors must come before solving."""
-    from masonrydam.solvers.static import stepping as static
-
-    def _forbidden(self, *a, **k):
-        raise AssertionError("the solver was started although the scene is invalid")
-
-    monkeypatch.setattr(static.StaticSolver, "run", _forbidden)
-
-
 def expect_scene_error(scene, tmp_path, key, match=None):
     """Run ``scene``; it must raise SceneError with ``.key == key`` before solving and before any
     result file is created."""

@@ -18,7 +18,7 @@ from masonrydam.errors import MechanismError, SceneError
 from masonrydam.scene.scene import Scene
 from masonrydam.scene.schema import normalize
 from masonrydam.units import PLAUSIBLE, SI_UNIT, plausible
-from test_scene_errors import BASE_TOML, base_scene, expect_scene_error, modified, no_solve  # noqa: F401
+from test_scene_errors import BASE_TOML, base_scene, expect_scene_error, modified
 
 G = 9.80665
 

@@ -327,6 +327,10 @@ class InterfaceGroup:
         """Tangent factor of open points (0: consistent; 1: initial stiffness), for a law that has one."""
         self.joint_law.set_open_tangent(self.params_table, factor)
 
+    def elastic_stiffness(self) -> np.ndarray:
+        """(ne, dim) elastic stiffness ``[ks1, (ks2,) kn]`` (Pa/m) of each element's parameters."""
+        return self.joint_law.elastic_stiffness(self.params_table, self.delta.shape[2])[self.param_index]
+
     def compliance(self) -> np.ndarray:
         """(ne, dim) elastic compliance ``[1/ks1, (1/ks2,) 1/kn]`` (m/Pa) of each element's parameters."""
         return self.joint_law.compliance(self.params_table, self.delta.shape[2])[self.param_index]

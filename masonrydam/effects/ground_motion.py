@@ -1,7 +1,7 @@
 """Inertia, damping and uniform base excitation: what a dynamic stage adds to the model.
 
 The stage's schema is :func:`masonrydam.scene.schema._dynamic_stage` (time steps, integrator, output),
-its solver :mod:`masonrydam.solvers.dynamic.integration`; the records are read and processed by
+its solver :mod:`masonrydam.solvers.dynamic`; the records are read and processed by
 :mod:`masonrydam.records`. This module says, for the run's list of simulated effects, what a scene's
 dynamic stages simulate; a scene with static stages only simulates no inertia and no damping.
 """
@@ -17,11 +17,7 @@ from .. import records as rec
 from ..errors import SceneError
 from ..pulses import pulse_samples
 from ..records import RecordError
-from ..solvers.dynamic import GroundMotion
-
-_INTEGRATORS = {"newmark_average": "Newmark average acceleration", "newmark_linear": "Newmark linear acceleration",
-                "hht": "HHT-alpha", "generalized_alpha": "generalized-alpha", "central_difference": "central difference"}
-
+from ..solvers.dynamic import GroundMotion, scheme_named
 
 def _dynamic_stages(scene):
     return [st for st in scene["stages"] if st["type"] == "dynamic"]
@@ -38,11 +34,8 @@ def _static_only(scene, model):
 def _inertia(scene, model):
     out = []
     for st in _dynamic_stages(scene):
-        what = _INTEGRATORS[st["integrator"]]
-        if st["integrator"] == "hht":
-            what += f" (alpha {st['alpha']:g})"
-        elif st["integrator"] == "generalized_alpha":
-            what += f" (rho_inf {st['rho_inf']:g})"
+        scheme = scheme_named(st["integrator"])
+        what = scheme.label + "".join(f" ({name} {st[name]:g})" for name in scheme.parameters)
         steps = (f"dt auto (tolerance {st['tolerance']:g}, dt_max {st['dt']:g} s)" if st.get("adaptive")
                  else f"dt {st['dt']:g} s")
         out.append(f"dynamic stage '{st['name']}': {st['mass']} mass inertia, {what}, {steps}")

@@ -33,9 +33,9 @@ from ..pulses import PULSE_SHAPES
 from ..pulses import PULSE_SHAPES
 from ..materials import joint_laws as jl
 from ..results.writer import OutputOptions
-from ..solvers.dynamic import ADAPTIVE_DEFAULT_LEVELS, JOINT_SPACE_MODES
+from ..solvers.dynamic import ADAPTIVE_DEFAULT_LEVELS, INTEGRATORS, JOINT_SPACE_MODES, SCHEMES
 from ..solvers.linear.direct import LINEAR_SOLVERS
-from .schema import (AUTO_DT_MAX_DEFAULT, AUTO_TOLERANCE_DEFAULT, G_STANDARD, HYPOTHESES, INTEGRATORS,
+from .schema import (AUTO_DT_MAX_DEFAULT, AUTO_TOLERANCE_DEFAULT, G_STANDARD, HYPOTHESES,
                      PROCESSING_STEPS, STAGE_TYPES, STATIC_CONTROLS, SUPPORT_KINDS)
 
 __all__ = ["Key", "Section", "REQUIRED", "ABSENT", "SECTIONS", "keys", "render_markdown", "main"]
@@ -479,8 +479,9 @@ _DYNAMIC = Section("[[stages]] type = \"dynamic\"", "A time history from the sta
        default_text=f"output dt, else {AUTO_DT_MAX_DEFAULT:g}"),
     _k("stages[].dt_min", "number", "dt = \"auto\": smallest step", "s", TIME,
        default_text=f"dt_max / {2 ** ADAPTIVE_DEFAULT_LEVELS}"),
-    _k("stages[].integrator", "string", "time integrator (`central_difference`: explicit, with a computed critical "
-       "step; needs mass = \"lumped\")", default="hht", choices=INTEGRATORS),
+    _k("stages[].integrator", "string", "time integrator ("
+       + "; ".join(f"`{sc.name}`: explicit, with a computed critical step; needs mass = \"lumped\""
+                   for sc in SCHEMES if sc.explicit) + ")", default="hht", choices=INTEGRATORS),
     _k("stages[].alpha", "number", "HHT alpha, in [-1/3, 0]", default=-0.1),
     _k("stages[].rho_inf", "number", "generalized-alpha spectral radius at infinite frequency, in [0, 1]",
        default=0.8),

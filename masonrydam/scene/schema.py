@@ -14,6 +14,7 @@ import numpy as np
 from ..elements.quadrature import QUADRATURE_SCHEMES
 from ..errors import SceneError
 from ..pulses import PULSE_SHAPES
+from ..solvers.dynamic import INTEGRATORS, scheme_named
 from ..solvers.linear.direct import LINEAR_SOLVERS
 from ..checks import COMPONENT_NAMES
 from ..checks import boolean as _bool
@@ -226,7 +227,6 @@ def _selection(value, key):
 
 
 STAGE_TYPES = ("static", "modal", "dynamic")
-INTEGRATORS = ("newmark_average", "newmark_linear", "hht", "generalized_alpha", "central_difference")
 #: keys of a dynamic stage that apply to dt = "auto" only
 AUTO_STEP_KEYS = ("tolerance", "dt_min", "dt_max")
 _DYNAMIC_KEYS = {"name", "type", "steps", "duration", "dt", "integrator", "alpha", "rho_inf", "mass", "damping",
@@ -234,7 +234,7 @@ _DYNAMIC_KEYS = {"name", "type", "steps", "duration", "dt", "integrator", "alpha
                  "low_rank_max", "joint_space", "initial_velocity", "initial_displacement", "loads", *AUTO_STEP_KEYS}
 #: dt = "auto" without dt_max (and without output.dt): the largest step (s)
 AUTO_DT_MAX_DEFAULT = 0.01
-#: dt = "auto": default relative local error per step (see solvers.dynamic.integration.DynamicSolver._step_error)
+#: dt = "auto": default relative local error per step (see solvers.dynamic.step_control.AdaptiveStepping.step_error)
 AUTO_TOLERANCE_DEFAULT = 1e-5
 
 
@@ -430,7 +430,7 @@ def _dynamic_stage(s, key, dim, index):
         raise SceneError(f"{key}.output", f"expected a table, e.g. {{ stride = 10 }}, got {o!r}")
     out_dt = None if "dt" not in o else _time(o["dt"], f"{key}.output.dt")
     if s["dt"] == "auto":
-        # error-controlled steps: dt_max / 2^k down to dt_min (solvers.dynamic.integration.DynamicSolver._run_adaptive)
+        # error-controlled steps: dt_max / 2^k down to dt_min (solvers.dynamic.step_control.AdaptiveStepping)
         out["adaptive"] = True
         out["dt"] = _time(s.get("dt_max", out_dt or AUTO_DT_MAX_DEFAULT), f"{key}.dt_max")
         out["dt_min"] = None if "dt_min" not in s else _time(s["dt_min"], f"{key}.dt_min")
@@ -456,15 +456,16 @@ def _dynamic_stage(s, key, dim, index):
     out["duration"] = _time(s["duration"], f"{key}.duration") if "duration" in s else None
     integ = _choice(s.get("integrator", "hht"), INTEGRATORS, f"{key}.integrator")
     out["integrator"] = integ
-    if "alpha" in s and integ != "hht":
+    scheme = scheme_named(integ)
+    if "alpha" in s and "alpha" not in scheme.parameters:
         raise SceneError(f"{key}.alpha", f"is the HHT parameter; integrator is '{integ}'")
-    if "rho_inf" in s and integ != "generalized_alpha":
+    if "rho_inf" in s and "rho_inf" not in scheme.parameters:
         raise SceneError(f"{key}.rho_inf", f"is the generalized-alpha parameter; integrator is '{integ}'")
     out["alpha"] = _number(s.get("alpha", -0.1), f"{key}.alpha", -1.0 / 3.0, 0.0)
     out["rho_inf"] = _number(s.get("rho_inf", 0.8), f"{key}.rho_inf", 0.0, 1.0)
     out["mass"] = _choice(s.get("mass", "lumped"), ("lumped", "consistent"), f"{key}.mass")
-    if integ == "central_difference" and out["mass"] != "lumped":
-        raise SceneError(f"{key}.mass", "central difference is explicit and needs mass = 'lumped'")
+    if scheme.explicit and out["mass"] != "lumped":
+        raise SceneError(f"{key}.mass", f"{scheme.label} is explicit and needs mass = 'lumped'")
     out["max_iterations"] = _int(s.get("max_iterations", 25), f"{key}.max_iterations", 1)
     out["max_substeps"] = _int(s.get("max_substeps", 4), f"{key}.max_substeps", 0)
     out["low_rank_max"] = _int(s.get("low_rank_max", 256), f"{key}.low_rank_max", 0)

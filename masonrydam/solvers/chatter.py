@@ -1,6 +1,6 @@
 """The chatter guard of a Newton step with joints, shared by the static and the dynamic solvers
 (:meth:`~masonrydam.solvers.static.stepping.StaticSolver._newton_iterations`,
-:meth:`~masonrydam.solvers.dynamic.integration.DynamicSolver._advance`).
+:meth:`~masonrydam.solvers.dynamic.implicit.ImplicitStep.solve`).
 
 Newton on joints that stick, slide, open and close can cycle between joint-state patterns. When the pattern
 of an iteration repeats one seen before in the step, other than the previous iteration's (a pattern that

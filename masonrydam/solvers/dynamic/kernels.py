@@ -54,7 +54,7 @@ def newmark_residual(Ma, w_m, Cv, f_int, free, const, R):
 @numba.njit(cache=True)
 def step_works(free, u0, u1, pg0, pg1, fs, cv0, cv1, f0, f1, kc0, kc1, v1, mass_diag, mv1, a0, a1, ma0, ma1, out):
     """Trapezoidal works of one step on the ``free`` (n,) DOFs (the energy balance of
-    :meth:`~masonrydam.solvers.dynamic.integration.DynamicSolver._record_energy`; Hughes 2000, sec. 9.1.4), with
+    :meth:`~masonrydam.solvers.dynamic.energy.EnergyBalance.record`; Hughes 2000, sec. 9.1.4), with
     ``du = u1 - u0`` (n_dof arrays ``u0, u1, f0, f1, kc0, kc1, a0, a1``; (n,) arrays ``pg*, fs, cv*, v1``):
 
         out[0] = du . (pg0 + pg1) / 2          work of the earthquake loads (J)

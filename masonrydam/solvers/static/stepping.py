@@ -11,7 +11,8 @@ not converge is cut in half and retried, and the step length grows back after su
 fails when a step would become shorter than ``1 / (steps * 2**max_step_cuts)``. Convergence needs both the force residual
 ``||r|| <= force_tolerance * max(||f_ext||, ||f_int||, ||r_0||)`` (r_0: the step's first residual, so
 that a state with no force at all, such as an open joint, still has a scale) and the energy of the last correction
-``|du . r| <= energy_tolerance * |du_0 . r_0|``.
+``|du . r| <= energy_tolerance * |du_0 . r_0|``. The convergence test, the secant line search and the step
+cutting are the Newton parts shared with the dynamic steps (:mod:`masonrydam.solvers.newton`).
 
 A factorization is reused while the tangent is unchanged (same values): a scene whose joints stay
 linear is therefore solved with a single factorization; a changed tangent is refactorized with the
@@ -19,7 +20,7 @@ kept symbolic analysis (PARDISO).
 
 Joint space (``joint_space = "auto"``, full Newton): the blocks are linear, so each step is first
 solved on the relative displacements of the nonlinear joints, condensed from the all-stick stiffness
-(:mod:`.joint_space`, as the dynamic solver does), which needs no sparse factorization per
+(:mod:`masonrydam.solvers.joint_space`, as the dynamic solver does), which needs no sparse factorization per
 iteration; the general Newton iterations then check the result against the full residual and go on
 from it where needed, or solve the step from its start where the joint-space iteration did not
 converge.
@@ -40,6 +41,7 @@ from ..diagnostics import find_free_parts
 from ..joint_space import MAX_INITIAL_STIFFNESS_ITERATIONS, JointSpace, joint_space_size, lazy_flexibility
 from ..linear.iterative import rigid_body_modes
 from ..linear.direct import SingularMatrix, SymmetricFactorization, make_solver, resolve_backend
+from ..newton import ConvergenceTest, StepCutting, force_scale, secant_line_search
 
 #: tangent factor of open joint points in ordinary Newton iterations: a tiny stiffness in the
 #: tangent only (tractions stay zero) so that a block resting on a single contact point does not make
@@ -348,7 +350,7 @@ class StaticSolver:
         f_int, _ = m.evaluate(u, want_tangent=False)
         R = (f_int - self._with_state_load(f_ext))[free]
         r0_norm = float(np.linalg.norm(R))
-        ref = max(float(np.linalg.norm(f_ext[free])), float(np.linalg.norm(f_int[free])), r0_norm, 1e-30)
+        ref = force_scale(float(np.linalg.norm(f_ext[free])), float(np.linalg.norm(f_int[free])), r0_norm)
         cols0, secs0 = js.columns.computed, js.columns.seconds
         try:
             u_js, its, converged, _ = js.solve_step(u, R, JOINT_SPACE_FORCE_FRACTION * self.s.force_tolerance * ref,
@@ -380,6 +382,7 @@ class StaticSolver:
         energy0 = None
         last_energy = None
         guard = ChatterGuard(m, OPEN_TANGENT_REGULAR)
+        test = ConvergenceTest(s.force_tolerance, s.energy_tolerance)
         for it in range(s.max_iterations + 1):
             want_K = s.method == "newton" or self._initial is None
             try:
@@ -399,12 +402,10 @@ class StaticSolver:
             r = r_full[free]
             if it == 0 and r0_norm is None:
                 r0_norm = float(np.linalg.norm(r))
-            ref = max(np.linalg.norm(f_now), np.linalg.norm(f_int), r0_norm, 1e-30)
+            ref = force_scale(np.linalg.norm(f_now), np.linalg.norm(f_int), r0_norm)
             rn = float(np.linalg.norm(r))
             self._status(f"iteration {it}, residual {rn / ref:.1e}")
-            force_ok = rn <= s.force_tolerance * ref
-            energy_ok = last_energy is None or energy0 == 0 or last_energy <= s.energy_tolerance * energy0
-            if force_ok and energy_ok:
+            if test.converged(rn, ref, energy0, last_energy):
                 return True, u, it, f_int
             if it == s.max_iterations:
                 break
@@ -514,33 +515,20 @@ class StaticSolver:
             self.model.set_open_tangent(OPEN_TANGENT_REGULAR)
 
     def _line_search(self, u, du, r0, f_ext, max_tries=6):
-        """Secant line search on g(s) = du . r(u + s du) (Crisfield 1991, sec. 9.3.1)."""
+        """The step length along the correction ``du`` from ``u`` (residual ``r0`` there): the secant line search
+        of :func:`masonrydam.solvers.newton.secant_line_search` on g(s) = du . r(u + s du)."""
         m, free = self.model, self.model.dofmap.free
-        g0 = float(du @ r0)
-        if g0 <= 0:
-            return 1.0
-        s_prev, g_prev, s = 0.0, g0, 1.0
-        for k in range(max_tries):
+
+        def directional_residual(s):
             trial = u.copy()
             trial[free] += s * du
-            try:
-                f_int, _ = m.evaluate(trial, want_tangent=False)
-            except NumericalError:  # a law gave up at this trial point: a shorter step
-                return 0.5 if k == 0 else s_prev if s_prev > 0 else 0.1
-            g = float(du @ (self._with_state_load(f_ext) - f_int)[free])
-            if not np.isfinite(g):
-                return 0.5
-            if abs(g) <= 0.5 * abs(g0):
-                if k:
-                    self.stats.line_searches += 1
-                return s
-            if g == g_prev:
-                return s
-            s_new = s - g * (s - s_prev) / (g - g_prev)
-            s_prev, g_prev = s, g
-            s = float(np.clip(s_new, 0.1, 1.0))
-        self.stats.line_searches += 1
-        return s
+            f_int, _ = m.evaluate(trial, want_tangent=False)
+            return float(du @ (self._with_state_load(f_ext) - f_int)[free])
+
+        step, searched = secant_line_search(directional_residual, float(du @ r0), max_tries)
+        if searched:
+            self.stats.line_searches += 1
+        return step
 
     def _with_state_load(self, f_ext):
         """``f_ext`` plus the forces that follow the joints' trial states (see :meth:`_newton`)."""
@@ -575,6 +563,7 @@ class StaticSolver:
             lam, nominal = 0.0, 1.0 / st.steps
             dlam = nominal
             cuts = 0
+            cutting = StepCutting.from_nominal(s.max_step_cuts, nominal)
             stage_stats = {"stage": st.name, "steps": 0, "iterations": 0, "step_cuts": 0}
             it_before = self.stats.iterations + self.stats.joint_space_iterations
             self._iterations_before = it_before
@@ -615,7 +604,7 @@ class StaticSolver:
                 singular = None
                 try:
                     # a step that can still be cut is cut where its joint-space iteration fails
-                    can_cut = cuts + 1 <= s.max_step_cuts and dl / 2.0 >= nominal / 2.0 ** s.max_step_cuts
+                    can_cut = cutting.can_cut(cuts, dl)
                     self._where = f"{st.name}: load factor {target:.4g}" + (f" ({cuts} cuts)" if cuts else "")
                     ok, u_new, iters, f_int = self._newton(trial, f_ext, can_cut, state_load)
                 except SingularMatrix as exc:
@@ -639,8 +628,8 @@ class StaticSolver:
                 # failure: cut the step, after reverting the trial state and latched bonds
                 self.stats.step_cuts += 1
                 stage_stats["step_cuts"] += 1
+                final = not cutting.can_cut(cuts, dl)
                 cuts += 1
-                final = cuts > s.max_step_cuts or dl / 2.0 < nominal / 2.0 ** s.max_step_cuts
                 # a part that floats in the failed attempt (every joint around it open) is named
                 parts = find_free_parts(m, constrained, use_joint_state=True) if final else []
                 # otherwise the joints that gave way in that attempt name the mechanism and the part

@@ -40,7 +40,7 @@ def element_masses(model, lumped: bool, massless=()):
 
 class MassMatrix:
     """Mass of the continuum groups, assembled once, plus an optional added mass (e.g. the reservoir's,
-    :mod:`masonrydam.effects.added_mass`).
+    :mod:`masonrydam.effects.reservoir.added_mass`).
 
     ``lumped``; ``full`` (n_dof, n_dof) CSR; ``diagonal``: the whole matrix is diagonal (lumped element
     masses and an added mass without off-diagonal terms), then ``diag`` (n_dof,) kg and, after

@@ -16,21 +16,22 @@ from __future__ import annotations
 
 from typing import Callable
 
+from ..errors import SceneError
 from .base import DynamicStageParts, Effect, EffectRun, ModelContext, RunContext, StaticStageLoads, add_force
 
 __all__ = ["DynamicStageParts", "Effect", "EffectRun", "ModelContext", "RunContext", "StaticStageLoads", "activate",
-           "add_force", "load_types", "register", "registry", "sections", "simulated", "unregister"]
+           "add_force", "load_types", "normalize_dynamic_load", "register", "registry", "sections", "simulated", "unregister"]
 
 #: effects registered from outside the package (:func:`register`), after the built-in ones
 _REGISTERED: list[Effect] = []
 
 
 def _modules():
-    from . import (dynamic_loads, dynamic_water, foundation, ground_motion, large_kinematics, loads, plasticity,
-                   reservoir, uplift)
+    from . import dynamic_loads, foundation, ground_motion, large_kinematics, loads, plasticity, reservoir
 
-    return (plasticity, large_kinematics, loads, reservoir, uplift, ground_motion, dynamic_loads, dynamic_water,
-            foundation)
+    # (the reservoir is one package; its entries keep their places in the summary's order)
+    return (plasticity, large_kinematics, loads, reservoir.water, reservoir.uplift, ground_motion, dynamic_loads,
+            reservoir.moving, foundation)
 
 
 def register(effect: Effect) -> None:
@@ -103,6 +104,15 @@ def build_dynamic_stage(context: ModelContext, spec: dict, index: int, parts: Dy
     for e in registry().values():
         if e.dynamic_stage is not None:
             e.dynamic_stage(context, spec, index, parts)
+
+
+def normalize_dynamic_load(raw, key: str, dim: int) -> dict:
+    """One entry of a dynamic stage's ``loads``, normalised by the effect that owns them
+    (:attr:`Effect.dynamic_loads`)."""
+    owners = [e for e in registry().values() if e.dynamic_loads is not None]
+    if not owners:
+        raise SceneError(key, "no registered effect takes loads in dynamic stages")
+    return owners[0].dynamic_loads(raw, key, dim)
 
 
 def simulated(scene: dict, model) -> list[str]:

@@ -186,7 +186,9 @@ class Effect:
     ``(model_context, stage_loads, load, key) -> None`` adding a normalised load to a
     :class:`StaticStageLoads`; finish_stage: ``(model_context, stage_loads) -> None`` called once per static
     stage after its loads (e.g. to turn what the loads asked for into ``varying``); dynamic_stage:
-    ``(model_context, stage_spec, index, parts) -> None`` adding to a :class:`DynamicStageParts`."""
+    ``(model_context, stage_spec, index, parts) -> None`` adding to a :class:`DynamicStageParts`;
+    dynamic_loads: the normaliser ``(raw, key, dim) -> dict`` of the ``loads`` entries of a dynamic stage,
+    for the effect that owns them."""
 
     name: str
     asked_by: str
@@ -200,3 +202,4 @@ class Effect:
     stage_loads: dict = field(default_factory=dict)
     finish_stage: Callable | None = None
     dynamic_stage: Callable | None = None
+    dynamic_loads: Callable | None = None

@@ -228,7 +228,7 @@ def _effects():
     return [Effect("dynamic_loads", "a dynamic stage's 'loads' with a 'time_function'", __name__,
                    "consistent nodal forces scaled in time; closed forms of Chopra (2012), Dynamics of Structures, "
                    "eqs. 3.1.6 and 4.3.2", "tests/test_dynamic_loads.py", _describe, activate=_activate,
-                   dynamic_stage=_add_loads_in_time)]
+                   dynamic_stage=_add_loads_in_time, dynamic_loads=normalize_dynamic_load)]
 
 
 EFFECTS = _effects()

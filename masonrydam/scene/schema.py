@@ -27,6 +27,7 @@ from ..checks import positive as _positive
 from ..checks import seconds as _time
 from ..checks import vector as _vector
 from ..units import quantity
+from ..effects import load_types, normalize_dynamic_load, sections
 from ..effects.large_kinematics import JOINT_FRAMES, KINEMATICS
 from ..effects.plasticity import CONTINUUM_LAWS, material_law
 from ..materials.joint_laws import DEFAULT_JOINT_LAW, JOINT_KEYS, joint_law, joint_laws
@@ -188,8 +189,6 @@ def _joint(name, d):
 
 def _load(d, key, dim):
     """One load of a static stage, normalised by the effect that owns its type (:mod:`masonrydam.effects`)."""
-    from ..effects import load_types
-
     types = load_types()
     if not isinstance(d, dict) or "type" not in d:
         raise SceneError(f"{key}.type", "every load needs a 'type'")
@@ -414,8 +413,6 @@ def _initial_velocity(d, key, dim, translation="velocity", rotation="angular_vel
 
 
 def _dynamic_stage(s, key, dim, index):
-    from ..effects.dynamic_loads import normalize_dynamic_load
-
     _check_keys(s, _DYNAMIC_KEYS, key)
     out = {"name": str(s.get("name", f"stage{index + 1}")), "type": "dynamic"}
     loads = s.get("loads", [])
@@ -584,8 +581,6 @@ def _output_options(d: dict) -> dict:
 def normalize(raw: dict) -> dict:
     """Validate ``raw`` and return the normalised scene (SI floats, defaults filled). NumPy values in
     ``raw`` are taken as the plain Python values they hold (:func:`plain`)."""
-    from ..effects import sections
-
     raw = plain(raw)
     effect_sections = sections()
     _check_keys(raw, {"model", "mesh", "materials", "joints", "supports", "stages", "solver", "output",

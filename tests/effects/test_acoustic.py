@@ -1,4 +1,4 @@
-"""Tests of masonrydam.effects.acoustic (the reservoir as pressure finite elements) against closed forms.
+"""Tests of masonrydam.effects.reservoir.acoustic (the reservoir as pressure finite elements) against closed forms.
 
 Sources:
 - Westergaard, H. M. (1933), "Water pressures on dams during earthquakes", Trans. ASCE 98, 418-433:
@@ -30,7 +30,7 @@ import numpy as np
 import pytest
 import scipy.sparse.linalg as spla
 
-from masonrydam.effects.acoustic import acoustic_matrices, build_fluid_mesh
+from masonrydam.effects.reservoir.acoustic import acoustic_matrices, build_fluid_mesh
 from masonrydam.elements.shapes import reference_nodes
 
 RHO = 1000.0  # kg/m3

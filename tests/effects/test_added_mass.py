@@ -13,7 +13,7 @@ import pytest
 import scipy.linalg
 
 import masonrydam
-from masonrydam.effects.added_mass import westergaard_mass
+from masonrydam.effects.reservoir.added_mass import westergaard_mass
 from masonrydam.errors import SceneError
 from scenes import ELASTIC_JOINT_BLOCK as BLOCK, block_on_elastic_joint
 
@@ -199,7 +199,7 @@ def test_acoustic_needs_a_level_and_a_boundary_face():
     # a face through the inside of a block: the facets between two elements of one body
     from types import SimpleNamespace
 
-    from masonrydam.effects.dynamic_water import _check_on_boundary
+    from masonrydam.effects.reservoir.moving import _check_on_boundary
     from masonrydam.scene import Scene
     from masonrydam.scene import build_mesh
 

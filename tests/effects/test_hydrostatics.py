@@ -1,4 +1,4 @@
-"""Tests of masonrydam.effects.hydrostatics.facet_pressure_forces against closed forms.
+"""Tests of masonrydam.effects.reservoir.hydrostatics.facet_pressure_forces against closed forms.
 
 Sources:
 - hydrostatics: F. M. White, *Fluid Mechanics*, 7th ed. 2011, ch. 2 (secs. 2.3-2.5, 2.7): pressure
@@ -29,7 +29,7 @@ import numpy as np
 import pytest
 from scipy.integrate import quad_vec
 
-from masonrydam.effects.hydrostatics import facet_pressure_forces
+from masonrydam.effects.reservoir.hydrostatics import facet_pressure_forces
 from masonrydam.elements.quadrature import collapsed_triangle_rule
 from masonrydam.elements.shapes import shape_functions
 

@@ -66,9 +66,9 @@ from math import comb
 
 import numpy as np
 
-from ..elements.quadrature import collapsed_triangle_rule
-from ..elements.shapes import ELEMENT_TYPES, facet_outward_sign, facet_quadrature, facet_rule, shape_functions
-from ..mesh.facets import FACET_TYPES
+from ...elements.quadrature import collapsed_triangle_rule
+from ...elements.shapes import ELEMENT_TYPES, facet_outward_sign, facet_quadrature, facet_rule, shape_functions
+from ...mesh.facets import FACET_TYPES
 
 __all__ = ["facet_pressure_forces", "region_points"]
 
@@ -434,7 +434,7 @@ def region_points(facet_type, nodal_values, threshold, *, max_subdivision=10, su
     points (P, r), weights (P,)), exact (or, for a field that is not linear on the facet's reference
     triangles, as accurate as the subdivision) for the polynomial integrands of this module. The
     hydrostatic integration uses it with the elevation and the water level; the uplift
-    (:mod:`masonrydam.effects.uplift`) with the distance along a joint and the drain line, where the
+    (:mod:`masonrydam.effects.reservoir.uplift`) with the distance along a joint and the drain line, where the
     uplift profile has its kink."""
     v = np.asarray(nodal_values, dtype=np.float64)
     if facet_type in FACET_TYPES[2]:

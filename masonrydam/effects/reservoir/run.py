@@ -6,12 +6,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..assembly.joint_lines import JointLines
-from ..results.assess import SECTION_VARIABLES, SectionAssessment
-from ..results.variables import ResultDimension, ResultVariable
-from ..solvers.dynamic import coupled_modal_analysis
-from .base import EffectRun
-from .dynamic_water import DynamicWater
+from ...assembly.joint_lines import JointLines
+from ...results.assess import SECTION_VARIABLES, SectionAssessment
+from ...results.variables import ResultDimension, ResultVariable
+from ...solvers.dynamic import coupled_modal_analysis
+from ..base import EffectRun
+from .moving import DynamicWater
 
 
 def activate(context):
@@ -22,7 +22,7 @@ def activate(context):
 
 
 def assessed_lines(model, reservoir):
-    """The joint lines of ``model`` under ``reservoir`` (:class:`~masonrydam.effects.reservoir.Reservoir`)
+    """The joint lines of ``model`` under ``reservoir`` (:class:`~masonrydam.effects.reservoir.water.Reservoir`)
     to assess: those of the uplift joint sets where the scene has uplift, else those of every joint
     set; of them, :class:`SectionAssessment` keeps the lines closer to horizontal than to vertical
     (``JointLines.horizontal``: base and lift joints, not contraction joints or bench risers). None for a
@@ -38,7 +38,7 @@ class ReservoirRun(EffectRun):
     """What a run records of the water of its scene (:mod:`masonrydam.effects.reservoir`): the levels,
     the pore pressures of the recorded joints and the stability measures of the joint lines
     (:mod:`masonrydam.results.assess`); with ``[reservoir] dynamic`` the water moving with the dam
-    (:class:`~masonrydam.effects.dynamic_water.DynamicWater`) in the dynamic and modal stages."""
+    (:class:`~masonrydam.effects.reservoir.moving.DynamicWater`) in the dynamic and modal stages."""
 
     def __init__(self, context):
         model, static_stages, jgroups = context.model, context.static_stages, context.recorded_joint_groups

@@ -3,7 +3,7 @@ of the water and the matrices of the coupled problem (a pure module: no scene, n
 integration assembles the coupled system from what :func:`acoustic_matrices` returns).
 
 Physics (SI units: m, s, kg, Pa). ``p`` is the hydrodynamic pressure, Pa, positive in compression (it
-adds to the hydrostatic pressure of :mod:`masonrydam.effects.hydrostatics`). In the water (linear,
+adds to the hydrostatic pressure of :mod:`masonrydam.effects.reservoir.hydrostatics`). In the water (linear,
 inviscid, irrotational, small motion) it obeys the wave equation ``(1 / c^2) p_tt = lap p`` with ``c``
 the speed of sound (about 1440 m/s); on a wall of outward normal ``n`` (the fluid's) the momentum
 balance gives ``dp/dn = -rho a_n`` with ``a_n = a . n`` the wall's total acceleration along ``n``.
@@ -102,10 +102,10 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from ..elements.quadrature import tensor_rule
-from ..elements.shapes import (ELEMENT_TYPES, facet_area_normal, facet_outward_sign, facet_quadrature, facet_rule,
+from ...elements.quadrature import tensor_rule
+from ...elements.shapes import (ELEMENT_TYPES, facet_area_normal, facet_outward_sign, facet_quadrature, facet_rule,
                                reference_nodes, shape_functions)
-from ..mesh.facets import FACET_CORNERS, FACET_TYPES
+from ...mesh.facets import FACET_CORNERS, FACET_TYPES
 
 __all__ = ["FluidMesh", "AcousticMatrices", "build_fluid_mesh", "acoustic_matrices", "reflection_damping"]
 

@@ -8,7 +8,7 @@ Scene::
     face = "upstream_face" # facet set; only its part below the level is loaded
     tailwater = { level = 5.0, face = "downstream_face" }
     silt = { level = 12.0, submerged_density = 1100.0, lateral_coefficient = 0.5 }
-    uplift = { joints = ["base_joint", "lift_joints"] }   # masonrydam.effects.uplift
+    uplift = { joints = ["base_joint", "lift_joints"] }   # masonrydam.effects.reservoir.uplift
 
 A static stage applies it with the load ``{ type = "reservoir" }``: the water rises from an empty
 reservoir (the lowest point of the face) to ``level`` over the stage's increments, the tailwater and
@@ -19,7 +19,7 @@ Newton iteration, one sparse product). Later stages keep the water at the level 
 stages keep the static water forces (dynamic water: added mass, acoustic reservoir, is another
 effect).
 
-Loads (:mod:`masonrydam.effects.hydrostatics`, integrated exactly over the wetted part of each
+Loads (:mod:`masonrydam.effects.reservoir.hydrostatics`, integrated exactly over the wetted part of each
 facet): hydrostatic pressure ``rho_w g (level - z)`` normal to the face, so that on an inclined or
 stepped face the water weight above the face comes with it; tailwater the same on its face; silt as
 the geostatic stress of a submerged soil layer, vertical ``gamma' (level_silt - z)`` and horizontal
@@ -30,11 +30,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..checks import check_keys, choice, number, positive
-from ..errors import SceneError
-from ..mesh.facets import owner_centroids
-from ..materials.joint_laws import RESULT_OPEN, RESULT_SLIP
-from ..units import quantity
+from ...checks import check_keys, choice, number, positive
+from ...errors import SceneError
+from ...mesh.facets import owner_centroids
+from ...materials.joint_laws import RESULT_OPEN, RESULT_SLIP
+from ...units import quantity
 from . import uplift as _uplift
 
 #: default facet sets (the names of the dam generators)
@@ -362,13 +362,13 @@ def _finish_stage(context, stage):
 
 
 def _activate(context):
-    from .reservoir_run import activate
+    from .run import activate  # (run.py imports the classes of this module)
 
     return activate(context)
 
 
 def _effects():
-    from . import Effect
+    from .. import Effect
 
     return [Effect("reservoir", "[reservoir] with a { type = \"reservoir\" } load in a static stage", __name__,
                    "hydrostatics (White, Fluid Mechanics, ch. 2); USBR Design of Small Dams (1987) sec. 5.6; "

@@ -23,8 +23,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from ..errors import SceneError
-from ..mesh.facets import boundary_owners
+from ...errors import SceneError
+from ...mesh.facets import boundary_owners
 from .added_mass import face_nodes, nodal_normals, westergaard_coefficient, westergaard_mass
 
 
@@ -43,7 +43,7 @@ def _check_on_boundary(mesh, face) -> None:
 
 class DynamicWater:
     """The dynamic reservoir of a run. ``spec``: the normalised ``[reservoir]`` section; ``reservoir``:
-    the run's :class:`~masonrydam.effects.reservoir.Reservoir`; ``level``: the water level (m) at the end
+    the run's :class:`~masonrydam.effects.reservoir.water.Reservoir`; ``level``: the water level (m) at the end
     of the static stages; ``thickness``: the 2D out-of-plane thickness (m)."""
 
     def __init__(self, spec: dict, reservoir, model, level: float, thickness: float, mesh=None):
@@ -133,7 +133,7 @@ class DynamicWater:
         if self.acoustic is None or self.incompressible:
             return None
         if self._fluid_step is None:
-            from ..solvers.dynamic import AcousticStep
+            from ...solvers.dynamic import AcousticStep
 
             A = self.acoustic
             self._fluid_step = AcousticStep(A.G, A.H, A.L, A.Q, A.B_face, A.B_bottom, self.density)
@@ -193,7 +193,7 @@ def describe(scene, model) -> list[str]:
 
 
 def _effects():
-    from . import Effect
+    from .. import Effect
 
     return [Effect("dynamic_water", "[reservoir] dynamic = \"westergaard\" | \"acoustic\"", __name__,
                    "Westergaard 1933, Trans. ASCE 98; Kuo 1982, UCB/EERC-82/10; Zienkiewicz & Bettess 1978, IJNME 13; "

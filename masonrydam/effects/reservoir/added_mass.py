@@ -36,7 +36,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from ..elements.shapes import ELEMENT_TYPES, facet_outward_sign, facet_quadrature, facet_rule
+from ...elements.shapes import ELEMENT_TYPES, facet_outward_sign, facet_quadrature, facet_rule
 from .hydrostatics import region_points
 
 #: Gauss points per direction on a fully wet facet (the integrand has sqrt(depth))

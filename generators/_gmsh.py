@@ -48,7 +48,7 @@ DETERMINISTIC_OPTIONS = {
 
 
 def _import_gmsh():
-    try:
+    try:  # gmsh only for the dam generators: the wall, block and grid generators work without it
         import gmsh
     except ImportError as exc:  # pragma: no cover - gmsh is a dependency of the generators
         raise ImportError("the dam generators need the gmsh Python package (pip install gmsh)") from exc

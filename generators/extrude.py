@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from masonrydam.errors import MeshError
+from masonrydam.errors import MeshError, SceneError
 from masonrydam.mesh.model import CellBlock, FacetSet, Mesh
 
 
@@ -80,8 +80,7 @@ def extrude_2d(mesh: Mesh, depth: float, layers: int = 1) -> Mesh:
 def extruded(generator: str, parameters: dict, depth: float, layers: int = 1, key: str = "mesh.parameters") -> Mesh:
     """Scene generator: run the 2D ``generator`` with ``parameters`` (plain SI numbers) and
     extrude its model to a slab of thickness ``depth`` (m) with ``layers`` elements through it."""
-    from masonrydam.errors import SceneError
-
+    # generators/__init__.py builds GENERATORS from the modules, this one among them: looked up when called
     from . import GENERATORS
 
     if generator not in GENERATORS or generator == "extruded":

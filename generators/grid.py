@@ -13,6 +13,7 @@ from typing import Callable
 
 import numpy as np
 
+from masonrydam.elements.shapes import ELEMENT_TYPES
 from masonrydam.errors import MeshError
 from masonrydam.mesh.interfaces import insert_interfaces
 from masonrydam.mesh.model import CellBlock, FacetSet, Mesh
@@ -31,7 +32,9 @@ class Rect:
     kind: str = "unit"
 
 
-def _grid_lines(values, element_size):
+def grid_lines(values, element_size):
+    """The block edge coordinates ``values`` (sorted, duplicates removed) with lines added between them so
+    that no cell is wider than ``element_size``."""
     vals = np.unique(np.round(np.asarray(values, dtype=np.float64), 12))
     out = [vals[0]]
     for a, b in zip(vals[:-1], vals[1:]):
@@ -65,8 +68,8 @@ def rectangles_to_mesh(
         if not (r.x1 > r.x0 and r.y1 > r.y0):
             raise MeshError(f"block {r} has non-positive width or height")
     classify_joint = classify_joint or (lambda a, b, o: "bed" if o == "horizontal" else "head")
-    xs = _grid_lines([v for r in rects for v in (r.x0, r.x1)], element_size)
-    ys = _grid_lines([v for r in rects for v in (r.y0, r.y1)], element_size)
+    xs = grid_lines([v for r in rects for v in (r.x0, r.x1)], element_size)
+    ys = grid_lines([v for r in rects for v in (r.y0, r.y1)], element_size)
     ncx, ncy = len(xs) - 1, len(ys) - 1
     xc, yc = 0.5 * (xs[1:] + xs[:-1]), 0.5 * (ys[1:] + ys[:-1])
     owner = np.full((ncx, ncy), -1, dtype=np.int64)
@@ -160,8 +163,6 @@ def rectangles_to_mesh(
     for name, axis, val in (("base_edge", 1, ymin), ("top_edge", 1, ymax), ("left_edge", 0, xmin), ("right_edge", 0, xmax)):
         facets = []
         for b in blocks:
-            from masonrydam.elements.shapes import ELEMENT_TYPES
-
             for edge in ELEMENT_TYPES[b.type].edges:
                 nodes = b.cells[:, list(edge)]
                 on = np.all(np.abs(points[nodes, axis] - val) < tol, axis=1)

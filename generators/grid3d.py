@@ -21,7 +21,7 @@ from masonrydam.mesh.facets import element_facets
 from masonrydam.mesh.interfaces import insert_interfaces
 from masonrydam.mesh.model import CellBlock, FacetSet, Mesh
 
-from .grid import _grid_lines
+from .grid import grid_lines
 
 #: hex8 corner offsets (i, j, k) in units of the element step, VTK order
 _HEX_CORNERS = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]])
@@ -82,7 +82,7 @@ def boxes_to_mesh(
     classify_joint = classify_joint or (lambda a, b, axis: default[axis])
     lo = np.array([b.lo() for b in boxes])
     hi = np.array([b.hi() for b in boxes])
-    lines = [_grid_lines(np.concatenate([lo[:, a], hi[:, a]]), element_size) for a in range(3)]
+    lines = [grid_lines(np.concatenate([lo[:, a], hi[:, a]]), element_size) for a in range(3)]
     nc = [len(g) - 1 for g in lines]
     centres = [0.5 * (g[1:] + g[:-1]) for g in lines]
 

@@ -63,6 +63,8 @@ import numpy as np
 
 from masonrydam.errors import SceneError
 from masonrydam.mesh.facets import element_facets
+from masonrydam.mesh.model import FacetSet
+from masonrydam.units import quantity
 
 from .grid import Rect, rectangles_to_mesh
 
@@ -159,8 +161,6 @@ def check_bond(bond, key: str) -> str:
 
 
 def _length_value(v, key: str) -> float:
-    from masonrydam.units import quantity
-
     return quantity(v, "length", key)
 
 
@@ -447,8 +447,6 @@ def opening_facets(mesh, spec: WallSpec):
     """Facet sets ``opening_<i>``: the element facets (edges in 2D, faces in 3D) on the boundary of
     each hole (x = x0 or x1 for z in [z0, z1]; z = z0 or z1 for x in [x0, x1]), oriented outward
     from the material (into the hole)."""
-    from masonrydam.mesh.model import FacetSet
-
     dim = mesh.dim
     zc = dim - 1  # vertical axis
     zb = spec.base_beam_height

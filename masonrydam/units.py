@@ -18,7 +18,7 @@ import numpy as np
 from .errors import SceneError
 
 # unit -> (dimension, factor to SI)
-_UNITS = {
+UNITS = {
     "Pa": ("stress", 1.0), "kPa": ("stress", 1e3), "MPa": ("stress", 1e6), "GPa": ("stress", 1e9),
     "N/m2": ("stress", 1.0), "N/mm2": ("stress", 1e6), "kN/m2": ("stress", 1e3),
     "N/m3": ("stiffness", 1.0), "kN/m3": ("stiffness", 1e3), "MN/m3": ("stiffness", 1e6),
@@ -33,7 +33,7 @@ _UNITS = {
 }
 SI_UNIT = {"stress": "Pa", "stiffness": "N/m3", "length": "m", "density": "kg/m3", "force": "N",
            "angle": "deg", "acceleration": "m/s2", "time": "s", "fracture_energy": "N/m"}
-_NUM = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([A-Za-z/0-9.]+)?\s*$")
+NUMBER_WITH_UNIT = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([A-Za-z/0-9.]+)?\s*$")
 
 
 @dataclass(frozen=True)
@@ -119,7 +119,7 @@ _INDEX = re.compile(r"\[\d+\]")
 
 
 def _is_plain_number(text: str) -> bool:
-    m = _NUM.match(text)
+    m = NUMBER_WITH_UNIT.match(text)
     return m is not None and m.group(2) is None
 
 
@@ -164,15 +164,15 @@ def quantity(value, dimension: str, key: str) -> float:
         except OverflowError:
             raise SceneError(key, f"the integer given is too large for a number in {SI_UNIT[dimension]}") from None
     elif isinstance(value, str):
-        m = _NUM.match(value)
+        m = NUMBER_WITH_UNIT.match(value)
         if not m:
             raise SceneError(key, f"cannot read {value!r} as a quantity; write a number (SI, {SI_UNIT[dimension]}) "
                                   f"or e.g. '10 {SI_UNIT[dimension]}'")
         v, unit = float(m.group(1)), m.group(2)
         if unit is not None:
-            if unit not in _UNITS:
+            if unit not in UNITS:
                 raise SceneError(key, f"unknown unit {unit!r} in {value!r}")
-            dim, factor = _UNITS[unit]
+            dim, factor = UNITS[unit]
             if dim != dimension:
                 raise SceneError(key, f"unit {unit!r} is a {dim}, but this key expects a {dimension} "
                                       f"({SI_UNIT[dimension]})")

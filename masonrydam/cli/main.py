@@ -22,8 +22,16 @@ import warnings
 from importlib import resources
 from pathlib import Path
 
+import xarray as xr
+
+from .._version import __version__
 from ..checks import check_output_path
 from ..errors import MasonrydamError, RunStopped
+from ..mesh.io import check_mesh_output, write_mesh
+from ..results.files import open_result
+from ..scene import Scene, build_mesh, build_model, build_stages, effects, run
+from ..scene.scene import with_overrides
+from ..solvers.static.stepping import check_mechanisms
 
 
 def default_scene_path() -> Path:
@@ -37,10 +45,6 @@ def _scene_arg(args):
 
 
 def _cmd_run(args):
-    from ..scene.run import run
-
-    from ..scene.scene import with_overrides
-
     scene = _scene_arg(args)
     out = check_output_path(args.output or (scene.stem + ".nc"), "-o")
     run(with_overrides(scene, args.set), output=out, progress=not args.no_progress, summary=True)
@@ -48,10 +52,6 @@ def _cmd_run(args):
 
 
 def _cmd_check(args):
-    from ..scene import build_mesh, build_model, build_stages, effects
-    from ..scene.scene import Scene
-    from ..solvers.static.stepping import check_mechanisms
-
     sc = Scene.from_toml(_scene_arg(args))
     mesh = build_mesh(sc.normalized, sc.base_dir)
     model = build_model(sc.normalized, mesh)
@@ -65,10 +65,6 @@ def _cmd_check(args):
 
 
 def _cmd_export(args):
-    from ..mesh.io import check_mesh_output, write_mesh
-    from ..scene import build_mesh
-    from ..scene.scene import Scene
-
     check_mesh_output(args.output, "-o")  # an extension meshio writes, an existing folder: before any work
     sc = Scene.from_toml(_scene_arg(args))
     mesh = build_mesh(sc.normalized, sc.base_dir)
@@ -80,8 +76,8 @@ def _cmd_export(args):
 def _cmd_export_results(args):
     """A result file as a ParaView time series: ``.xdmf`` (+ ``.h5``) or ``.pvd`` (+ one ``.vtu`` per step),
     with ``OUT.units.json`` beside it (:func:`masonrydam.results.paraview.export_results`)."""
+    # the ParaView export (meshio, h5py) only for this command: keeps 'masonrydam run' start-up short
     from ..results import paraview
-    from ..results.files import open_result
 
     path = Path(args.result)
     out = check_output_path(args.output or f"{path.stem}.xdmf", "-o")
@@ -105,7 +101,9 @@ def _cmd_export_results(args):
 
 
 def _cmd_records(args):
+    # obspy only for the records command: keeps 'masonrydam run' start-up short
     from .. import records as rec
+    from ..records.plotting import plot_record
 
     if args.records_command == "list":
         rows = []
@@ -119,8 +117,6 @@ def _cmd_records(args):
         for r in [head] + rows:
             print("  ".join(c.ljust(w) for c, w in zip(r, widths)).rstrip())
         return 0
-    from ..records.plotting import plot_record
-
     name = args.name
     out = check_output_path(args.output or f"{Path(name).stem}.png", "-o")
     if name in rec.record_names() or not Path(name).is_file():
@@ -154,8 +150,6 @@ def _cmd_plot(args):
     pushover curve; with ``--mode N`` the mode shape N of a result with a modal stage
     (:func:`masonrydam.results.mode_plot.mode_figure`); with ``--deformed`` the deformed blocks and joint
     states of one step (:func:`masonrydam.results.deformed.deformed_figure`)."""
-    from ..results.files import open_result
-
     path = Path(args.result)
     quantity, select = getattr(args, "quantity", None), getattr(args, "select", None)
     chosen = [opt for opt, given in (("deformed", args.deformed), ("pushover", args.pushover),
@@ -168,6 +162,7 @@ def _cmd_plot(args):
         for opt in ("nodes", "joints", "component"):
             if getattr(args, opt) is not None:
                 raise MasonrydamError(f"--{opt} applies to histories, not to the deformed shape (--deformed)")
+        # figure modules only for the plot command: keeps 'masonrydam run' start-up short
         from ..results.deformed import deformed_figure
 
         out = check_output_path(args.output or f"{path.stem}_deformed.png", "-o")
@@ -184,6 +179,7 @@ def _cmd_plot(args):
         for opt in ("nodes", "joints", "scale"):
             if getattr(args, opt) is not None:
                 raise MasonrydamError(f"--{opt} does not apply to a pushover curve (--pushover)")
+        # figure modules only for the plot command: keeps 'masonrydam run' start-up short
         from ..results.pushover import pushover_figure
 
         out = check_output_path(args.output or f"{path.stem}_pushover.png", "-o")
@@ -212,14 +208,17 @@ def _cmd_plot(args):
     out = check_output_path(args.output or default, "-o")
     ds = open_result(path)  # an incomplete result warns (one line on the command line)
     if args.mode is not None:
+        # figure modules only for the plot command: keeps 'masonrydam run' start-up short
         from ..results.mode_plot import mode_figure
 
         fig = mode_figure(ds, args.mode, scale=args.scale, title=path.name)
     elif quantity is not None:
+        # figure modules only for the plot command: keeps 'masonrydam run' start-up short
         from ..results.histories import parse_selection, quantity_figure
 
         fig = quantity_figure(ds, quantity, parse_selection(select), title=path.name)
     else:
+        # figure modules only for the plot command: keeps 'masonrydam run' start-up short
         from ..results.histories import default_figure
 
         fig = default_figure(ds, path.name, args.component, args.nodes, args.joints)
@@ -231,6 +230,7 @@ def _cmd_plot(args):
 def _cmd_ensemble(args):
     """Run an ensemble file on dask (:func:`masonrydam.ensemble.runner.run_ensemble`): members already in the
     store beside the output are not run again."""
+    # the ensemble room only for the ensemble commands: keeps 'masonrydam run' start-up short
     from ..ensemble.runner import run_ensemble
 
     path = Path(args.ensemble)
@@ -249,10 +249,9 @@ def _cmd_ensemble(args):
 def _cmd_ensemble_report(args):
     """IDA curves and lognormal fragility curves of an ensemble dataset, as figures and a table
     (:func:`masonrydam.ensemble.report.ensemble_report`)."""
-    import xarray as xr
-
-    from ..ensemble.report import ensemble_report, write_table_csv
+    # scipy.stats (a second to import) only for the ensemble report: keeps 'masonrydam run' start-up short
     from ..ensemble.fragility import fragility_table
+    from ..ensemble.report import ensemble_report, write_table_csv
 
     path = Path(args.result)
     if not path.exists():
@@ -283,8 +282,8 @@ def _cmd_assess(args):
     """Stability table of the joint lines of a result with a reservoir, at one step, against the criteria
     of a load condition (:func:`masonrydam.results.assess.assessment_report`); exit code 0 whether or not
     the sections meet them."""
+    # the stability assessment only for this command: keeps 'masonrydam run' start-up short
     from ..results import assess
-    from ..results.files import open_result
 
     path = Path(args.result)
     csv_out = check_output_path(args.csv, "--csv") if args.csv else None
@@ -304,14 +303,13 @@ def _cmd_assess(args):
 def history_figure(ds, title: str, comp: str = "x", nodes=None, joints=None):
     """The history figure of ``masonrydam plot``: :func:`masonrydam.results.histories.history_figure`
     (kept under this name for callers that import it from the command line module)."""
+    # figure modules only for the plot command: keeps 'masonrydam run' start-up short
     from ..results.histories import history_figure as figure
 
     return figure(ds, title, comp, nodes, joints)
 
 
 def main(argv=None) -> int:
-    from .._version import __version__
-
     p = argparse.ArgumentParser(prog="masonrydam", description="Nonlinear analysis of jointed masonry and block dams")
     p.add_argument("--version", action="version", version=f"masonrydam {__version__}")
     sub = p.add_subparsers(dest="command", required=True)

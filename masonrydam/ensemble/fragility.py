@@ -42,6 +42,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+import xarray as xr
 from scipy import optimize, special, stats
 
 from ..errors import MasonrydamError
@@ -401,8 +402,6 @@ def _profile_interval(profile, center, target, scale, reach=60.0):
 
 def as_dataset(ds):
     """An xarray Dataset, or the path of one (netCDF), opened."""
-    import xarray as xr
-
     if isinstance(ds, xr.Dataset):
         return ds
     try:
@@ -424,7 +423,9 @@ def run_dims(ds) -> list[str]:
     return [d for d in RUN_DIMS if d in var.dims]
 
 
-def _check_ensemble(ds):
+def check_ensemble_dataset(ds):
+    """FragilityError unless ``ds`` is an ensemble dataset: a ``status`` on ``record`` and ``intensity``
+    holding only the member status codes."""
     if "status" not in ds:
         raise FragilityError("the ensemble dataset has no 'status' variable (0 completed, 1 collapse, 2 numerical)")
     dims = ds["status"].dims
@@ -462,7 +463,7 @@ def failure_indicator(ds, demand: str | None = None, limit: float | None = None)
     counted by :func:`fragility_table`); failed is False there.
     """
     ds = as_dataset(ds)
-    _check_ensemble(ds)
+    check_ensemble_dataset(ds)
     status = ds["status"]
     collapsed = status == STATUS_COLLAPSE
     usable = (status == STATUS_COMPLETED) | collapsed
@@ -581,7 +582,7 @@ def parameter_combinations(ds) -> list[dict]:
     return [dict(zip(dims, combo)) for combo in itertools.product(*values)]
 
 
-def _select(da, params: dict):
+def at_parameters(da, params: dict):
     """``da`` at one parameter combination (by position, so that float values need no tolerance)."""
     where = {}
     for d, v in params.items():
@@ -594,8 +595,8 @@ def counts_per_intensity(failed, usable, params: dict | None = None):
     """``(im, z, n, excluded)`` for one parameter combination: the intensities (in the dataset's order),
     the failures and the usable runs at each (summed over record and sample), and the runs left out."""
     params = params or {}
-    f = _select(failed, params)
-    u = _select(usable, params)
+    f = at_parameters(failed, params)
+    u = at_parameters(usable, params)
     agg = [d for d in f.dims if d != INTENSITY_DIM]
     z = f.sum(dim=agg).transpose(INTENSITY_DIM).values.astype(float)
     n = u.sum(dim=agg).transpose(INTENSITY_DIM).values.astype(float)
@@ -621,7 +622,7 @@ def fragility_table(ds, demand: str | None = None, limit: float | None = None, l
     rows = []
     for params in parameter_combinations(ds):
         im, z, n, excluded = counts_per_intensity(failed, usable, params)
-        st = _select(ds["status"], params).values
+        st = at_parameters(ds["status"], params).values
         n_numerical = int(((st == STATUS_NUMERICAL) | (st == STATUS_ERROR)).sum())
         n_not_run = int((st == STATUS_NOT_RUN).sum())
         keep = n > 0

@@ -26,9 +26,9 @@ from pathlib import Path
 import numpy as np
 
 from .fragility import (G, INTENSITY_DIM, STATUS_COLLAPSE, STATUS_COMPLETED, STATUS_NOT_RUN, STATUS_NUMERICAL,
-                        FragilityError,
-                        FragilityRow, _check_ensemble, _select, as_dataset, demand_variables, failure_definition,
-                        fragility_table, intensity_units, parameter_combinations, parameter_dims, run_dims)
+                        FragilityError, FragilityRow, as_dataset, at_parameters, check_ensemble_dataset,
+                        demand_variables, failure_definition, fragility_table, intensity_units, parameter_combinations,
+                        parameter_dims, run_dims)
 
 #: demands tried in this order when an IDA figure is asked for without one
 DEFAULT_DEMANDS = ("peak_drift", "peak_displacement")
@@ -92,6 +92,7 @@ def _gid(kind: str, params: dict, **more) -> str:
 def _colors(k: int):
     if k <= 10:
         return [f"C{i}" for i in range(k)]
+    # matplotlib (a second to import) only when a figure is drawn
     from matplotlib import colormaps
 
     cmap = colormaps["viridis"]
@@ -99,6 +100,7 @@ def _colors(k: int):
 
 
 def _new_figure(width=9.0, height=5.5):
+    # matplotlib (a second to import) only when a figure is drawn
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -129,8 +131,8 @@ def ida_curves(ds, demand: str, params: dict | None = None):
     (numerical failures below it). Intensities in the dataset's units. Runs that stood again above the
     first collapse ("structural resurrection") end at the first collapse, as in Vamvatsikos & Cornell."""
     params = params or {}
-    st = _select(ds["status"], params)
-    dv = _select(ds[demand].broadcast_like(ds["status"]), params)
+    st = at_parameters(ds["status"], params)
+    dv = at_parameters(ds[demand].broadcast_like(ds["status"]), params)
     runs = run_dims(ds)
     st = st.transpose(*runs, INTENSITY_DIM)
     dv = dv.transpose(*runs, INTENSITY_DIM)
@@ -183,7 +185,7 @@ def ida_figure(ds, demand: str | None = None, title: str | None = None):
     the last point that stood to a cross at the right edge at the collapse intensity, and numerical
     failures as open circles at the demand they reached. Returns a matplotlib Figure (Agg)."""
     ds = as_dataset(ds)
-    _check_ensemble(ds)
+    check_ensemble_dataset(ds)
     if demand is None:
         demand = default_demand(ds)
         if demand is None:
@@ -224,6 +226,7 @@ def ida_figure(ds, demand: str | None = None, title: str | None = None):
         what = f"median of {len(curves)} " + ("runs (records x samples)" if "sample" in run_dims(ds) else "records")
         ax.plot(d_m, im_m * scale, color=color, lw=2.4, gid=_gid("median", params),
                 label=f"{label}: {what}" if params else what)
+    # matplotlib (a second to import) only when a figure is drawn
     from matplotlib.lines import Line2D
 
     handles, labels = ax.get_legend_handles_labels()
@@ -387,7 +390,7 @@ def ensemble_report(ds, demand: str | None = None, limit: float | None = None, l
     :func:`default_demand`, left out when the dataset has no demand variable). Write the table as CSV
     with ``write_table_csv(fragility_table(ds, demand, limit, level), path)``."""
     ds = as_dataset(ds)
-    _check_ensemble(ds)
+    check_ensemble_dataset(ds)
     rows = fragility_table(ds, demand, limit, level)
     scale, im_label = intensity_axis(ds)
     shape = [f"{ds.sizes['record']} records", f"{ds.sizes[INTENSITY_DIM]} intensities"]

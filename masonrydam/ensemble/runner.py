@@ -20,6 +20,11 @@ keep what finished; one file per member needs no locking and makes resuming a di
 """
 from __future__ import annotations
 
+import contextlib
+import copy
+import functools
+import hashlib
+import io
 import json
 import math
 import os
@@ -28,8 +33,15 @@ import time
 from pathlib import Path
 
 import numpy as np
+import xarray as xr
 
-from ..errors import MasonrydamError
+import masonrydam
+
+from ..errors import ConvergenceError, MasonrydamError, MechanismError, NumericalError
+from ..scene.scene import Scene
+from .measures import measure_attrs, member_measures
+from .members import enumerate_members, member_axes, sample_coordinates
+from .spec import load_spec
 
 #: member status codes (the dataset's ``status``)
 STATUS_COMPLETED = 0
@@ -60,8 +72,6 @@ def fingerprint(member, settings: dict) -> str:
     """A hash of what decides a member's outcome: its whole scene (base scene, fixed keys, record, intensity,
     parameters) and the ensemble ``settings`` that shape its measures (demand sets, history). An outcome in the
     store is reused only when its fingerprint is the member's (a changed base scene reruns the members)."""
-    import hashlib
-
     text = json.dumps({"scene": member.scene, "base_dir": str(member.base_dir), **settings}, sort_keys=True,
                       default=str)
     return hashlib.sha1(text.encode()).hexdigest()[:16]
@@ -74,13 +84,6 @@ def run_member(member, store: str, measure, keep_history: bool = False, fp: str 
     reason, wall_time, measures). Every failure is an outcome: a mechanism, or no convergence in the dynamic
     stage ``dynamic_stage``, is a collapse; other non-convergence a numerical failure; anything else an error
     with its type and message."""
-    import contextlib
-    import io
-
-    import masonrydam
-    from ..errors import ConvergenceError, MechanismError, NumericalError
-    from ..scene.scene import Scene
-
     store = Path(store)
     history = store / f"{member.member_id}.nc" if keep_history else None
     t0 = time.perf_counter()
@@ -121,12 +124,6 @@ def done_members(store: Path) -> dict[str, dict]:
 
 def _warm(scene: dict, base_dir: str) -> float:
     """A short run of ``scene`` on a worker (numba compiles or loads its cache); returns its wall time (s)."""
-    import contextlib
-    import io
-
-    import masonrydam
-    from ..scene.scene import Scene
-
     t0 = time.perf_counter()
     with contextlib.redirect_stdout(io.StringIO()):
         try:
@@ -138,8 +135,6 @@ def _warm(scene: dict, base_dir: str) -> float:
 
 def short_scene(scene: dict, steps: int = 3) -> dict:
     """``scene`` with every dynamic stage cut to ``steps`` steps (for the warm-up)."""
-    import copy
-
     s = copy.deepcopy(scene)
     for st in s.get("stages", []):
         if st.get("type") == "dynamic":
@@ -152,6 +147,7 @@ def connect(workers: int | None = None, scheduler: str | None = None, timeout: f
     """A ``dask.distributed.Client``: to ``scheduler`` (an address), or to a new LocalCluster of ``workers``
     single-threaded worker processes. MasonrydamError naming ``--scheduler`` (or ``[execution] scheduler``)
     when it cannot be reached."""
+    # dask.distributed (a second to import) only for running an ensemble
     from distributed import Client, LocalCluster
 
     if scheduler:
@@ -176,6 +172,7 @@ def run_members(members, store: Path, measure, client, keep_history=False, warm=
     """Run the ``members`` whose outcome is not yet in ``store`` (or was obtained with another fingerprint,
     :func:`fingerprint` of ``settings``) on ``client`` (one task each); returns every outcome in the store
     (member_id -> outcome). ``warm``: ``(scene, base_dir)`` run once on each worker first."""
+    # dask.distributed (a second to import) only for running an ensemble
     from distributed import as_completed
 
     store.mkdir(parents=True, exist_ok=True)
@@ -220,10 +217,6 @@ def assemble(outcomes: dict, axes: dict, attrs: dict, members: dict):
     axes: ordered ``name -> (values, attrs)`` of the member coordinates (``record``, ``intensity``, ``p_<name>``,
     ``sample``); members: ``member_id -> Member``, whose ``position`` (axis -> index) places its outcome (an outcome
     of no member is left out). The demand variables' units and long names are :func:`~.measures.measure_attrs`."""
-    import xarray as xr
-
-    from .measures import measure_attrs
-
     names = list(axes)
     shape = tuple(len(axes[n][0]) for n in names)
     data: dict[str, np.ndarray] = {}
@@ -270,12 +263,6 @@ def run_ensemble(path, output, workers: int | None = None, scheduler: str | None
     """Run the ensemble file ``path`` into ``output`` (netCDF; outcomes in ``<output>.members/``) and return the
     dataset. ``workers`` / ``scheduler`` override the file's ``[execution]``; the members already in the store
     are not run again."""
-    import functools
-
-    from .measures import member_measures
-    from .members import enumerate_members, member_axes, sample_coordinates
-    from .spec import load_spec
-
     spec = load_spec(path)
     members = enumerate_members(spec)
     axes = member_axes(spec)

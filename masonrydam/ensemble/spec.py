@@ -65,7 +65,9 @@ from ..checks import number as _number
 from ..checks import seconds as _seconds
 from ..errors import SceneError
 from ..materials.joint_laws import joint_law
-from ..units import SI_UNIT, quantity
+from ..scene.schema import plain
+from ..scene.scene import Scene, path_parts, read_toml, set_key
+from ..units import NUMBER_WITH_UNIT, SI_UNIT, UNITS, quantity
 
 #: suffixes (lower case) of the files taken from ``axes.records.folder``: PEER acceleration files, plain
 #: text and the obspy formats masonrydam.records.readers reads (velocity/displacement files are left out)
@@ -233,8 +235,6 @@ class EnsembleSpec:
     def member_scene(self, record: RecordSpec, intensity: float, assignments=()) -> dict:
         """The raw scene of one member: a copy of the base scene with ``record`` at ``intensity`` (m/s2) in
         the ground motion and ``assignments`` (``(scene key, value)`` pairs) set with ``set_key``."""
-        from ..scene.scene import set_key
-
         data = copy.deepcopy(self.base_scene)
         st = data["stages"][self.stage]
         gm = st.get("ground_motion")
@@ -256,8 +256,6 @@ class EnsembleSpec:
 
 def load_ensemble(path) -> EnsembleSpec:
     """Read and check the ensemble file ``path`` (TOML)."""
-    from ..scene.scene import read_toml
-
     path = Path(path)
     return parse_ensemble(read_toml(path, "ensemble", "an ensemble"), path.parent, path=path)
 
@@ -270,8 +268,6 @@ def load_spec(path) -> EnsembleSpec:
 def parse_ensemble(data: dict, ensemble_dir=".", path=None) -> EnsembleSpec:
     """Check the ensemble dictionary ``data`` (as read from TOML); relative paths are relative to
     ``ensemble_dir``. ``path``: the file it came from (for the default name), or None."""
-    from ..scene.schema import plain
-
     data = plain(data)
     ensemble_dir = Path(ensemble_dir)
     _check_keys(data, {"ensemble", "axes", "execution"}, "")
@@ -319,8 +315,6 @@ def parse_ensemble(data: dict, ensemble_dir=".", path=None) -> EnsembleSpec:
 
 
 def _base_scene(ens, ensemble_dir):
-    from ..scene.scene import Scene
-
     if "scene" not in ens:
         raise SceneError("ensemble.scene", "is required: the base scene file, relative to the ensemble file")
     if not isinstance(ens["scene"], str) or not ens["scene"].strip():
@@ -338,8 +332,6 @@ def _base_scene(ens, ensemble_dir):
     if not isinstance(fixed, dict):
         raise SceneError("ensemble.set", f"expected a table of scene keys and values, got {fixed!r}")
     if fixed:
-        from ..scene.scene import set_key
-
         data = sc.data
         for key, value in fixed.items():
             try:
@@ -423,6 +415,7 @@ def _file_options(d, key, defaults=None):
 
 
 def _file_record(path: Path, name: str, options: dict, key: str, option_key: str) -> RecordSpec:
+    # obspy only where the ensemble reads records: keeps 'masonrydam ensemble-report' start-up short
     from .. import records as rec
 
     try:
@@ -434,6 +427,7 @@ def _file_record(path: Path, name: str, options: dict, key: str, option_key: str
 
 
 def _records(d, ensemble_dir):
+    # obspy only where the ensemble reads records: keeps 'masonrydam ensemble-report' start-up short
     from .. import records as rec
 
     key = "axes.records"
@@ -547,8 +541,6 @@ def _intensity(d):
 def _split_quantity(value, key):
     """``(SI value, dimension)`` of a parameter value: a plain number -> (float, None); ``"<number> <unit>"``
     with a known unit (or s, ms) -> (SI float, dimension); anything else -> (value, None), not a quantity."""
-    from ..units import _NUM, _UNITS
-
     if isinstance(value, bool):
         return value, None
     if isinstance(value, (int, float)):
@@ -556,11 +548,11 @@ def _split_quantity(value, key):
             raise SceneError(key, f"must be a finite number, got {value!r}")
         return float(value), None
     if isinstance(value, str):
-        m = _NUM.match(value)
+        m = NUMBER_WITH_UNIT.match(value)
         if m and m.group(2) is None:
             return value, None  # a number written as a string: the scene decides what it is
-        if m and m.group(2) in _UNITS:
-            dim, factor = _UNITS[m.group(2)]
+        if m and m.group(2) in UNITS:
+            dim, factor = UNITS[m.group(2)]
             return float(m.group(1)) * factor, dim
         if m and m.group(2) in ("s", "ms"):
             return float(m.group(1)) * (1.0 if m.group(2) == "s" else 1e-3), "time"
@@ -705,6 +697,7 @@ def _sampling(axes, parameters):
 def latin_hypercube(d: int, n: int, seed: int) -> np.ndarray:
     """``(n, d)`` points in (0, 1): one Latin hypercube (:class:`scipy.stats.qmc.LatinHypercube`), one point
     in each of the ``n`` bins ``[k/n, (k+1)/n)`` of every column; the same for the same seed."""
+    # scipy.stats (a second to import) only for sampled parameters, not on every worker
     from scipy.stats import qmc
 
     try:
@@ -718,6 +711,7 @@ def latin_hypercube(d: int, n: int, seed: int) -> np.ndarray:
 
 def transform(u, dist: dict) -> np.ndarray:
     """The quantiles ``u`` (in (0, 1)) of the distribution ``dist`` (SI parameters, as parsed)."""
+    # scipy.stats (a second to import) only for sampled parameters, not on every worker
     from scipy.stats import norm
 
     u = np.asarray(u, dtype=float)
@@ -731,6 +725,7 @@ def transform(u, dist: dict) -> np.ndarray:
 
 def cdf(x, dist: dict) -> np.ndarray:
     """The distribution function of ``dist`` at ``x`` (the inverse of :func:`transform`)."""
+    # scipy.stats (a second to import) only for sampled parameters, not on every worker
     from scipy.stats import norm
 
     x = np.asarray(x, dtype=float)
@@ -747,8 +742,6 @@ def cdf(x, dist: dict) -> np.ndarray:
 # ------------------------------------------------------------------------------------------------
 
 def _normalize(data, spec):
-    from ..scene.scene import Scene
-
     Scene(data, base_dir=spec.scene_dir)
 
 
@@ -756,13 +749,11 @@ def _check_parameter_keys(spec: EnsembleSpec):
     """Every swept key, with each of its values (grid) or samples, set alone on the base scene must give a
     valid scene; the error names ``axes.parameters[i].key`` (a key the scene does not know, or that would
     change the member's record or intensity) or the value (``.values[j]``, ``.distribution``)."""
-    from ..scene.scene import _path_parts, set_key
-
-    gm_parts = _path_parts(spec.ground_motion_key)
+    gm_parts = path_parts(spec.ground_motion_key)
     for p in spec.parameters:
         k = p.ensemble_key
         try:
-            parts = _path_parts(p.key)
+            parts = path_parts(p.key)
         except SceneError as exc:
             raise SceneError(f"{k}.key", f"'{p.key}': {exc}") from None
         if parts[:len(gm_parts)] == gm_parts and (len(parts) == len(gm_parts) or
@@ -809,13 +800,11 @@ def _creates_tables(data, parts) -> str | None:
 
 def _names_the_key(exc: SceneError, key: str, parts) -> bool:
     """Whether the scene's complaint is about the key itself (an unknown key or table), not its value."""
-    from ..scene.scene import _path_parts
-
     msg = str(exc)
     if "unknown key" not in msg and "expected a table" not in msg:
         return False
     try:
-        where = _path_parts(exc.key)
+        where = path_parts(exc.key)
     except SceneError:
         return True
     return parts[:len(where)] == where  # the complaint is on the key's path

@@ -24,6 +24,7 @@ def plot_record(trace, path, damping: float = 0.05, periods=None, title: str | N
 def record_figure(trace, damping: float = 0.05, periods=None, title: str | None = None):
     """The figure of :func:`plot_record` (a matplotlib Figure): acceleration (g), velocity (cm/s) and
     displacement (cm) against time, and the pseudo-acceleration spectrum (g) at ``damping``."""
+    # matplotlib (a second to import) only when a figure is drawn
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 

@@ -130,6 +130,7 @@ def resample(trace, dt: float, method: str = "polyphase") -> obspy.Trace:
     fraction with a denominator up to 1000. ``"fourier"``: obspy's ``Trace.resample`` (FFT; when
     down-sampling obspy first applies its automatic low-pass).
     """
+    # scipy.signal (a second to import) only for resampling: keeps the start of seismic runs short
     from scipy.signal import resample_poly
 
     tr = _start(trace)

@@ -24,9 +24,14 @@ whole base in compression), the middle half (unusual: 75 % of it), the line (ext
 """
 from __future__ import annotations
 
+import csv
+import json
+
 import numpy as np
 
+from ..errors import MasonrydamError
 from ..materials.joint_laws import RESULT_OPEN
+from .files import step_position
 
 #: the section variables: name -> (units, long name)
 SECTION_VARIABLES = {
@@ -154,8 +159,6 @@ def criteria_text(condition: str = "usual") -> str:
 
 def _check_condition(condition):
     if condition not in SLIDING_CRITERIA:
-        from ..errors import MasonrydamError
-
         raise MasonrydamError(f"load condition must be one of {list(CONDITIONS)}, got {condition!r}")
 
 
@@ -217,10 +220,6 @@ def criteria_checks(ds_step, condition: str = "usual") -> dict:
 def _no_sections_error(ds, label):
     """The error for a result without section variables (a scene without a reservoir, or whose reservoir
     has no joint line to assess)."""
-    import json
-
-    from ..errors import MasonrydamError
-
     try:
         reservoir = json.loads(ds.attrs.get("scene", "{}")).get("reservoir")
     except (TypeError, ValueError):
@@ -241,15 +240,11 @@ def select_step(ds, step: int | None, label: str = "result", option: str = "--st
     steps, or a step that is not in it, naming ``option``."""
     if "section" not in ds.dims or "sliding_safety_factor" not in ds.variables:
         raise _no_sections_error(ds, label)
-    from .files import step_position
-
     return step_position(ds, step, option, f"'{label}'")
 
 
 def stage_name(ds, i: int) -> str:
     """Name of the stage of the step at position ``i`` (attribute ``stage_names`` of ``stage``)."""
-    import json
-
     if "stage" not in ds.variables:
         return "?"
     k = int(ds["stage"].values[i])
@@ -359,8 +354,6 @@ def assessment_report(ds, i: int, condition: str = "usual", label: str = "result
 
 
 def _thickness(ds):
-    import json
-
     try:
         return float(json.loads(ds.attrs.get("scene", "{}"))["model"]["thickness"])
     except (TypeError, ValueError, KeyError):
@@ -395,8 +388,6 @@ def write_assessment_csv(ds, i: int, path, condition: str = "usual") -> None:
     (N, m, Pa, ratios as 1) at full precision (Python's shortest repr that round-trips), a header row
     naming each column and its units, the flags of :func:`criteria_flags` (``"; "``-joined, empty
     when none) in the last column ``flags (CONDITION)``."""
-    import csv
-
     st = ds.isel(step=i)
     dim = 3 if "section_z" in ds.variables else 2
     cols = assessment_columns(dim)

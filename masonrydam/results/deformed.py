@@ -50,7 +50,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..elements.shapes import ELEMENT_TYPES
 from ..errors import MasonrydamError
+from .files import step_position
+from .mode_plot import auto_scale, node_coordinates
 
 #: the automatic scale makes the largest drawn nodal displacement this fraction of the model's largest extent
 AUTO_FRACTION = 0.05
@@ -147,8 +150,6 @@ COMPONENTS = ("x", "y", "z")
 
 def select_step(ds, step: int | None, option: str = "--step") -> int:
     """Position along ``step`` of ``step`` (:func:`masonrydam.results.files.step_position`)."""
-    from .files import step_position
-
     return step_position(ds, step, option)
 
 
@@ -171,8 +172,6 @@ def deformed_data(ds, step: int | None = -1, scale: float | None = None,
     Errors (:class:`~masonrydam.errors.MasonrydamError`): a file without connectivity, a step not in the
     file, a bad scale, a result that records none of the blocks' nodes; ``slice`` given for a 2D result, a
     bad axis, a value outside the model's range or a plane that cuts no block (naming ``--slice``)."""
-    from .mode_plot import node_coordinates
-
     comps = [str(c) for c in ds.component.values]
     if len(comps) == 3:
         return _slice_data(ds, step, scale, slice)
@@ -244,8 +243,6 @@ def _check_connectivity(ds):
 
 
 def _step_and_scale(ds, step, scale, coords):
-    from .mode_plot import auto_scale
-
     k = select_step(ds, -1 if step is None else step)
     u = np.asarray(ds.displacement.isel(step=k).transpose("node", "component").values, dtype=float)
     if scale is None:
@@ -305,9 +302,6 @@ def slice_plane(plane, coords: np.ndarray) -> tuple:
 
 
 def _slice_data(ds, step, scale, plane) -> DeformedSlice:
-    from ..elements.shapes import ELEMENT_TYPES
-    from .mode_plot import node_coordinates
-
     _check_connectivity(ds)
     coords = node_coordinates(ds)
     a, value = slice_plane(plane, coords)
@@ -423,6 +417,7 @@ def deformed_figure(ds, step: int | None = -1, scale: float | None = None, title
     :data:`OPENING_WIDTH` pt for the most open point). The legend gives the number of points in each state,
     the title the slice (3D), the step, its stage and load factor and the scale. ``title``: an optional first
     line of the title (the file name on the command line)."""
+    # matplotlib (a second to import) only when a figure is drawn
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.collections import LineCollection, PolyCollection
     from matplotlib.figure import Figure

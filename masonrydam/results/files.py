@@ -18,7 +18,15 @@ import os
 import warnings
 from pathlib import Path
 
-from ..errors import OutputError
+import numpy as np
+import xarray as xr
+
+from ..errors import MasonrydamError, OutputError
+
+try:  # HDF5's lock on a working file is seen through flock, where the platform has it (POSIX)
+    import fcntl
+except ImportError:  # pragma: no cover - not POSIX
+    fcntl = None
 
 
 #: first bytes of a netCDF classic file and of a netCDF-4 (HDF5) file
@@ -45,10 +53,6 @@ def claim_working_file(work: Path) -> None:
     skipped."""
     if not work.exists():
         return
-    try:
-        import fcntl
-    except ImportError:  # pragma: no cover - not POSIX
-        fcntl = None
     try:
         if fcntl is not None:
             with open(work, "rb") as fh:
@@ -96,8 +100,6 @@ def open_result(path, load: bool = True):
     with an :class:`IncompleteResultWarning` that says what it is: a run that was stopped or failed (its
     ``status``), or one left by a killed process (``status = "running"``). A file that is not netCDF,
     or not a masonrydam result, raises :class:`~masonrydam.errors.OutputError` naming the path."""
-    import xarray as xr
-
     p = Path(path)
     if not p.exists():
         raise OutputError(f"result file '{p}' does not exist")
@@ -125,10 +127,6 @@ def step_position(ds, step: int | None, option: str = "--step", label: str = "th
     """Position along ``step`` of ``step``: a value of the ``step`` coordinate (0 or more), or a negative index
     from the end (None: the last step). MasonrydamError for a result without steps or a step not in it, naming
     ``option``, the step and the range."""
-    import numpy as np
-
-    from ..errors import MasonrydamError
-
     n = int(ds.sizes.get("step", 0))
     if n == 0:
         raise MasonrydamError(f"{label} has no steps (status '{ds.attrs.get('status', '?')}': the run stopped "

@@ -28,6 +28,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import MasonrydamError
+from .pushover import pushover_data, pushover_figure
 
 #: energy terms drawn by ``masonrydam plot`` (those that are not zero throughout)
 PLOTTED_ENERGIES = ("input", "external", "kinetic", "strain", "damping", "joint_stored", "joint_friction",
@@ -109,6 +110,7 @@ def _decorate_x(ax, axis: StepAxis):
     """Label the x axis; several static stages: a dotted line where one stage ends, the stage names in a
     second row of tick labels under the middle of each stage's span, and (load-factor axis) tick labels
     that give the load factor within the stage."""
+    # matplotlib (a second to import) only when a figure is drawn
     from matplotlib.ticker import FuncFormatter, MultipleLocator
 
     ax.set_xlabel(axis.label)
@@ -134,6 +136,7 @@ def _decorate_x(ax, axis: StepAxis):
 
 
 def _new_figure(n_panels: int, height: float = 2.6):
+    # matplotlib (a second to import) only when a figure is drawn
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -453,8 +456,6 @@ def pushover_component(ds, comp: str | None = None):
     when given and a static stage drives it, else the component of the last driving stage (variable
     ``driven``); None for a dynamic result, a result without driven DOFs among the recorded nodes or
     without a converged step of the driving stage."""
-    from .pushover import pushover_data
-
     if "driven" not in ds or not ds.sizes.get("step", 0) or is_dynamic(ds):
         return None
     comps = [str(c) for c in ds["component"].values]
@@ -480,7 +481,5 @@ def default_figure(ds, title: str, comp: str | None = None, nodes=None, joints=N
     if not nodes and not joints:
         c = pushover_component(ds, comp)
         if c is not None:
-            from .pushover import pushover_figure
-
             return pushover_figure(ds, c, title=title)
     return history_figure(ds, title, comp or "x", nodes, joints)

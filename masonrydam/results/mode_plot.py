@@ -112,6 +112,7 @@ def mode_figure(ds, mode: int, scale: float | None = None, title: str | None = N
     (:class:`~masonrydam.errors.MasonrydamError`) name the option (``--mode``, ``--scale``): a result
     without modes, a mode number not in it, NaN modes (the modal stage did not run), a nil or non-finite
     scale."""
+    # matplotlib (a second to import) only when a figure is drawn
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 

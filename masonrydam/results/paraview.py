@@ -90,8 +90,12 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
+import h5py
+import meshio
 import numpy as np
+from meshio.xdmf import TimeSeriesWriter
 
+from ..elements.shapes import ELEMENT_TYPES
 from ..errors import MasonrydamError, OutputError
 
 #: output suffixes and their formats
@@ -235,8 +239,6 @@ class _Geometry:
 
 def _block_cells(ds, node_ids, dim):
     """(meshio type, block_cell positions, point positions (n, k)) per cell type, and the number left out."""
-    from ..elements.shapes import ELEMENT_TYPES
-
     if "block_cell_nodes" not in ds.variables or not ds.sizes.get("block_cell", 0):
         return [], 0
     model = np.asarray(ds.block_cell_nodes.values).astype(np.int64)
@@ -613,9 +615,6 @@ def _write_xdmf(output: Path, geom, data, positions, times, source):
     """XDMF + HDF5 through meshio's TimeSeriesWriter. meshio 5.3 opens the HDF5 file as ``stem + ".h5"``
     in the current folder while the XDMF refers to it relative to the XDMF file; the HDF5 file is opened
     here beside the output instead (same name, so the reference holds wherever the output goes)."""
-    import h5py
-    from meshio.xdmf import TimeSeriesWriter
-
     h5 = output.with_suffix(".h5")
     if source is not None and Path(source).resolve() == h5.resolve():
         raise MasonrydamError(f"-o {str(output)!r}: its HDF5 file {str(h5)!r} would replace the result file; "
@@ -647,8 +646,6 @@ def vtu_name(output: Path, step: int, width: int = 4) -> str:
 
 
 def _write_pvd(output: Path, geom, data, positions, times, step_numbers):
-    import meshio
-
     width = max(4, len(str(int(np.max(step_numbers)))))
     cells = [(k, c) for k, c in geom.cells]
     files, lines = [], []

@@ -7,6 +7,8 @@ chosen component (N, the force the actuator applies to the structure), its displ
 """
 from __future__ import annotations
 
+import json
+
 import numpy as np
 
 from ..errors import MasonrydamError
@@ -35,8 +37,6 @@ def pushover_data(ds, component: str = "x", stage: int | None = None):
     nodes = driven == s
     stages_used = [s - 1]
     if stage is None and "pushover_stages" in ds.attrs:
-        import json
-
         stages_used = json.loads(ds.attrs["pushover_stages"]).get(component, stages_used)
     steps = np.flatnonzero(np.isin(ds.stage.values, stages_used))
     if len(steps) == 0:
@@ -51,6 +51,7 @@ def pushover_data(ds, component: str = "x", stage: int | None = None):
 def pushover_figure(ds, component: str = "x", title: str | None = None):
     """The pushover curve (force in kN against displacement in mm) of :func:`pushover_data` as a
     matplotlib Figure; the peak is marked and labelled."""
+    # matplotlib (a second to import) only when a figure is drawn
     import matplotlib
 
     matplotlib.use("Agg")

@@ -63,7 +63,7 @@ def read_toml(path: Path, key: str, what: str, hint: str = "") -> dict:
         raise SceneError(key, f"'{path}' is not valid TOML: {exc}") from None
 
 
-def _path_parts(path: str) -> list:
+def path_parts(path: str) -> list:
     """``"stages[1].loads[0].pressure"`` -> ``["stages", 1, "loads", 0, "pressure"]``."""
     import re
 
@@ -82,7 +82,7 @@ def set_key(data: dict, path: str, value) -> None:
     """Set the scene key ``path`` (dotted, with list indices: ``stages[1].loads[0].pressure``) of the raw
     scene ``data`` to ``value``, in place. Tables along the path that do not exist are created; a list index
     must exist. Raises SceneError naming the path where it does not lead anywhere."""
-    parts = _path_parts(path)
+    parts = path_parts(path)
     node = data
     for part, nxt in zip(parts[:-1], parts[1:]):
         if isinstance(part, int):

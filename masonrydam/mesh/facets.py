@@ -24,8 +24,8 @@ from ..elements.shapes import ELEMENT_TYPES
 from ..errors import MeshError
 from .model import Mesh
 
-__all__ = ["FACET_TYPES", "FACET_CORNERS", "element_facets", "facet_keys", "FacetTable", "element_centroids",
-           "owner_centroids", "boundary_owners"]
+__all__ = ["FACET_TYPES", "FACET_CORNERS", "element_facets", "corner_keys", "facet_keys", "FacetTable",
+           "element_centroids", "owner_centroids", "boundary_owners"]
 
 #: facet types of a boundary facet set: edges in 2D, faces in 3D (node orders of
 #: :mod:`masonrydam.elements.shapes`)

@@ -1,5 +1,8 @@
-"""The parts of a Newton step shared by the static load steps and the implicit dynamic steps.
+"""One Newton loop, and its parts, shared by the static load steps and the implicit dynamic steps.
 
+- :func:`newton_iterations`: the loop (convergence test, chatter guard, correction, line search and update, to
+  an iteration limit) over a :class:`NewtonStep`, which says what an iterate is, its force scale, the correction
+  and how the iterate moves along it;
 - :class:`ConvergenceTest`: the force residual against a force scale, and the work of the last correction
   against the first (Crisfield, *Non-linear Finite Element Analysis of Solids and Structures*, vol. 1, 1991,
   sec. 9.3.3);
@@ -10,15 +13,16 @@
 - :class:`StepCutting`: how often a step that fails may be halved;
 - and, in :mod:`.chatter`, the guard against joint-state patterns that cycle.
 
-The static stepping (:mod:`.static.stepping`) and the implicit dynamic step (:mod:`.dynamic.implicit`) each run
-their own loop over these parts: they differ in what an iteration evaluates (the static tangent is evaluated
-at the top of every iteration, the dynamic step carries the line search's last evaluation over), in the
-iteration matrix (a factorization per tangent, or the dynamic effective-matrix solver with its cached and
-low-rank-updated factorizations) and in the work they measure; see docs/dynamics.md.
+The static stepping (:mod:`.static.stepping`) and the implicit dynamic step (:mod:`.dynamic.implicit`) each give
+the loop their own :class:`NewtonStep`: they differ in what an iterate holds (a tangent and a residual, or the
+step's accelerations and velocities too), in the iteration matrix (a factorization per tangent, or the dynamic
+effective-matrix solver with its cached and low-rank-updated factorizations), in the line search and in the
+work they measure; see docs/dynamics.md.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 
@@ -156,3 +160,72 @@ class StepCutting:
     def can_cut(self, cuts: int, size: float | None = None) -> bool:
         """Whether a step of ``size`` already cut ``cuts`` times in a row may be halved once more."""
         return cuts + 1 <= self.max_cuts and (self.smallest is None or size / 2.0 >= self.smallest)
+
+
+class IterationFailed(Exception):
+    """Raised by :meth:`NewtonStep.advance` where the new iterate cannot be evaluated (a material law gives up
+    there): the loop ends without convergence."""
+
+
+class NewtonStep(Protocol):
+    """What :func:`newton_iterations` needs of the step it solves. An iterate is any object with a
+    ``residual_norm`` (N)."""
+
+    def force_scale(self, iterate, iteration: int) -> float:
+        """The force scale (N) of the convergence test at ``iterate``, the ``iteration``-th."""
+
+    def after_guard(self, iterate, action: str):
+        """The iterate evaluated again at the same displacements after the chatter guard's ``action``
+        ("stabilize" or "release")."""
+
+    def correction(self, iterate):
+        """The Newton correction at ``iterate`` (free DOFs)."""
+
+    def advance(self, iterate, correction):
+        """(new iterate, work of the correction at ``iterate``, work of the step taken), the new iterate along
+        the correction (after a line search) and evaluated; raises :class:`IterationFailed` where it cannot be
+        evaluated."""
+
+
+@dataclass
+class NewtonResult:
+    """converged; iterate: the last iterate (None where it could not be evaluated); iterations: the
+    corrections taken."""
+
+    converged: bool
+    iterate: object
+    iterations: int
+
+
+def newton_iterations(step: NewtonStep, start, test: ConvergenceTest, max_iterations: int, guard=None,
+                      on_check=None) -> NewtonResult:
+    """Newton iterations of ``step`` from the evaluated iterate ``start``, at most ``max_iterations``
+    corrections: converged when ``test`` passes; ``guard`` (a :class:`~.chatter.ChatterGuard`, None for a linear
+    model) observes every iterate that is corrected, and an iterate it acts on is evaluated again
+    (:meth:`NewtonStep.after_guard`). ``on_check(iteration, residual_norm, scale)`` is told of every test."""
+    first_work = last_work = None
+    current = start
+    for it in range(max_iterations + 1):
+        rn = current.residual_norm
+        scale = step.force_scale(current, it)
+        if on_check is not None:
+            on_check(it, rn, scale)
+        if test.converged(rn, scale, first_work, last_work):
+            return NewtonResult(True, current, it)
+        if it == max_iterations:
+            break
+        if guard is not None:
+            # cycling: the stabilized iteration; settled: back to the consistent tangent (the guard's module
+            # docstring); either way the iteration matrix and residual are evaluated again
+            action = guard.observe()
+            if action is not None:
+                current = step.after_guard(current, action)
+        dx = step.correction(current)
+        try:
+            current, work_here, work = step.advance(current, dx)
+        except IterationFailed:
+            return NewtonResult(False, None, it + 1)
+        if first_work is None:
+            first_work = work_here
+        last_work = work
+    return NewtonResult(False, current, max_iterations)

@@ -27,7 +27,7 @@ from ..chatter import ChatterGuard
 from ..joint_space import (MAX_INITIAL_STIFFNESS_ITERATIONS, SPLIT_INITIAL_STIFFNESS_ITERATIONS, JointSpace,
                            joint_space_size)
 from ..linear.direct import SingularMatrix
-from ..newton import ConvergenceTest, CycleDamping, backtracking_line_search, force_scale
+from ..newton import ConvergenceTest, CycleDamping, backtracking_line_search, force_scale, newton_iterations
 from .energy import energy_growth
 from .kernels import newmark_kinematics, newmark_residual
 from .settings import OPEN_TANGENT_DYNAMIC
@@ -180,12 +180,12 @@ class ImplicitStep:
         self.sticking_so_far = st.Kdata is None
         self.guard = ChatterGuard(m, OPEN_TANGENT_DYNAMIC)
         self.test = ConvergenceTest(s.force_tolerance, s.energy_tolerance, ROUNDOFF_FRACTION)
+        #: the norm of the step's first residual (N), the Newton state of the effective-matrix solves
+        self.r0 = 0.0
+        self.kind_prev, self.rn_prev, self.allow_modified = None, math.inf, s.modified_newton
+        self.damping = CycleDamping()
 
     # -- the step's equations -----------------------------------------------------------------------
-    def force_scale(self, ma_norm, f_int, r0=0.0):
-        """Force scale of the convergence test (N)."""
-        return force_scale(ma_norm, float(np.linalg.norm(f_int[self.free])), self.p1_norm, r0)
-
     def residual(self, u, f_int):
         """(R, a1, v1, ||M a1||) at the displacements ``u`` with internal forces ``f_int``."""
         eq, free = self.eq, self.free
@@ -269,7 +269,7 @@ class ImplicitStep:
         two substitutions, or its last iterate, as the iterate the Newton iterations go on from (they accept
         it at once when the full residual is within tolerance); (None, why) where the step is to be halved."""
         s, m = self.s, self.model
-        ref = self.force_scale(current.ma_norm, current.f_int)
+        ref = self.force_scale(current)
         try:
             u_js, its, converged, why = js.solve_step(
                 current.u, current.R, JOINT_SPACE_FORCE_FRACTION * s.force_tolerance * ref,
@@ -284,7 +284,7 @@ class ImplicitStep:
             f_j, _ = m.evaluate(u_js, want_tangent=False)
             self.sticking_so_far = True
             current = self.iterate_at(u_js, f_j, None)
-            ref = self.force_scale(current.ma_norm, current.f_int)
+            ref = self.force_scale(current)
             converged = converged and current.residual_norm <= s.force_tolerance * ref
         if converged:
             self.stats.joint_space_steps += 1
@@ -305,70 +305,74 @@ class ImplicitStep:
     def _newton(self, current, r0):
         """Newton iterations from ``current`` (``r0``: the norm of the step's first residual); returns (the
         converged iterate, "") or (None, why)."""
-        m, s, free = self.model, self.s, self.free
-        h = self.h
-        kind_prev, rn_prev, allow_modified = None, math.inf, s.modified_newton
-        damping = CycleDamping()
-        first_work = last_work = None
-        it = 0
-        while True:
-            rn = current.residual_norm
-            ref = self.force_scale(current.ma_norm, current.f_int, r0 if it > 0 else 0.0)
-            if self.test.converged(rn, ref, first_work, last_work):
-                return current, ""
-            if it >= s.max_iterations:
-                why = (f"Newton residual {rn / ref:.3g} of the force scale (tolerance {s.force_tolerance:g}) "
-                       f"after {it} iterations")
-                if self.nonlinear:
-                    nchg = sum(int((g.state_codes(trial=True) != g.state_codes(trial=False)).sum())
-                               for g in m.igroups if g.nonlinear)
-                    why += f"; {nchg} joint point(s) changed state in the step"
-                return None, why
-            if self.nonlinear:
-                # cycling: the stabilized iteration; settled: back to the consistent tangent (the
-                # guard's module docstring); either way the iteration matrix and residual again
-                action = self.guard.observe()
-                if action is not None:
-                    self.stats.stabilized_steps += action == "stabilize"
-                    current = self.iterate_at(current.u)
-                    rn = current.residual_norm
-            # modified Newton (the latest factorization, only with modified_newton) while it
-            # contracts well; once it does not, exact iteration matrices for the rest of the step
-            if kind_prev == "modified" and rn > MODIFIED_NEWTON_CONTRACTION * rn_prev:
-                allow_modified = False
-            if current.Kdata is None:
-                dx, kind_prev = self.effective.solve(self.eq.elastic_effective(h), -current.R,
-                                                     allow_inexact=allow_modified, key=("elastic", h))
-            else:
-                dx, kind_prev = self.effective.solve(current.Kdata + self.inertia_damping, -current.R,
-                                                     allow_inexact=allow_modified)
-            rn_prev = rn
-            if damping.observe(rn):
-                self.stats.damped_iterations += 1
-            dx = damping.factor * dx
-            if first_work is None:
-                first_work = abs(float(dx @ current.R))
-            # backtracking line search on the residual norm (joint laws are non-smooth: a full
-            # Newton step can jump across many stick/slip/open switches and cycle)
-            u = current.u
+        m, s = self.model, self.s
+        self.r0 = r0
+        self.kind_prev, self.rn_prev, self.allow_modified = None, math.inf, s.modified_newton
+        self.damping = CycleDamping()
+        result = newton_iterations(self, current, self.test, s.max_iterations,
+                                   guard=self.guard if self.nonlinear else None)
+        if result.converged:
+            return result.iterate, ""
+        last = result.iterate
+        why = (f"Newton residual {last.residual_norm / self.force_scale(last, result.iterations):.3g} of the force "
+               f"scale (tolerance {s.force_tolerance:g}) after {result.iterations} iterations")
+        if self.nonlinear:
+            nchg = sum(int((g.state_codes(trial=True) != g.state_codes(trial=False)).sum())
+                       for g in m.igroups if g.nonlinear)
+            why += f"; {nchg} joint point(s) changed state in the step"
+        return None, why
 
-            def iterate_along(step, u=u, dx=dx):
-                u_s = u.copy()
-                u_s[free] += step * dx
-                return self.iterate_at(u_s)
+    # -- the Newton step (masonrydam.solvers.newton.NewtonStep) -----------------------------------------
+    def force_scale(self, iterate, iteration=0):
+        """Force scale of the convergence test (N): the inertia, internal and end-of-step external forces and,
+        after the first iteration, the step's first residual."""
+        return force_scale(iterate.ma_norm, float(np.linalg.norm(iterate.f_int[self.free])), self.p1_norm,
+                           self.r0 if iteration > 0 else 0.0)
 
-            u_try = u.copy()
-            u_try[free] += dx
-            step, current = 1.0, self.iterate_at(u_try)
-            if self.nonlinear and s.line_search and current.residual_norm > rn:
-                step, current = backtracking_line_search(iterate_along, attrgetter("residual_norm"),
-                                                         current.residual_norm, rn)
-                if step != 1.0:
-                    self.stats.line_searches += 1
-            last_work = abs(float(step * (dx @ current.R)))
-            it += 1
-            self.stats.iterations += 1
-            self.count_iterations(1)
+    def after_guard(self, iterate, action):
+        self.stats.stabilized_steps += action == "stabilize"
+        return self.iterate_at(iterate.u)
+
+    def correction(self, iterate):
+        """The correction from the effective-matrix solver: modified Newton (the latest factorization, only
+        with ``modified_newton``) while it contracts well, once it does not exact iteration matrices for the
+        rest of the step; damped while the residual norm comes back every other iteration."""
+        rn = iterate.residual_norm
+        if self.kind_prev == "modified" and rn > MODIFIED_NEWTON_CONTRACTION * self.rn_prev:
+            self.allow_modified = False
+        if iterate.Kdata is None:
+            dx, self.kind_prev = self.effective.solve(self.eq.elastic_effective(self.h), -iterate.R,
+                                                      allow_inexact=self.allow_modified, key=("elastic", self.h))
+        else:
+            dx, self.kind_prev = self.effective.solve(iterate.Kdata + self.inertia_damping, -iterate.R,
+                                                      allow_inexact=self.allow_modified)
+        self.rn_prev = rn
+        if self.damping.observe(rn):
+            self.stats.damped_iterations += 1
+        return self.damping.factor * dx
+
+    def advance(self, iterate, dx):
+        """The iterate along ``dx``: the full step, or a shorter one of the backtracking line search on the
+        residual norm where the full step does not reduce it (joint laws are non-smooth: a full Newton step can
+        jump across many stick/slip/open switches and cycle)."""
+        free, u, rn = self.free, iterate.u, iterate.residual_norm
+        work_here = abs(float(dx @ iterate.R))
+
+        def iterate_along(step):
+            u_s = u.copy()
+            u_s[free] += step * dx
+            return self.iterate_at(u_s)
+
+        u_try = u.copy()
+        u_try[free] += dx
+        step, new = 1.0, self.iterate_at(u_try)
+        if self.nonlinear and self.s.line_search and new.residual_norm > rn:
+            step, new = backtracking_line_search(iterate_along, attrgetter("residual_norm"), new.residual_norm, rn)
+            if step != 1.0:
+                self.stats.line_searches += 1
+        self.stats.iterations += 1
+        self.count_iterations(1)
+        return new, work_here, abs(float(step * (dx @ new.R)))
 
     def _finish(self, current, can_split, error_check):
         """The converged iterate as the step's end state: its energy balance, the refusals of a step that

@@ -8,11 +8,12 @@ Per step: full Newton (consistent tangent) or modified Newton (the initial elast
 factorized once for the whole analysis), each with an optional line search (Crisfield 1991,
 Non-linear Finite Element Analysis of Solids and Structures, vol. 1, sec. 9.3). A step that does
 not converge is cut in half and retried, and the step length grows back after successes; a stage
-fails when a step would become shorter than ``1 / (steps * 2**max_step_cuts)``. Convergence needs both the force residual
-``||r|| <= force_tolerance * max(||f_ext||, ||f_int||, ||r_0||)`` (r_0: the step's first residual, so
+fails when a step would become shorter than ``1 / (steps * 2**max_step_cuts)``. Convergence needs both the force
+residual ``||r|| <= force_tolerance * max(||f_ext||, ||f_int||, ||r_0||)`` (r_0: the step's first residual, so
 that a state with no force at all, such as an open joint, still has a scale) and the energy of the last correction
-``|du . r| <= energy_tolerance * |du_0 . r_0|``. The convergence test, the secant line search and the step
-cutting are the Newton parts shared with the dynamic steps (:mod:`masonrydam.solvers.newton`).
+``|du . r| <= energy_tolerance * |du_0 . r_0|``. The iterations run in the Newton loop shared with the dynamic
+steps (:func:`masonrydam.solvers.newton.newton_iterations`, over :class:`LoadStepNewton`), with its convergence
+test, secant line search and step cutting.
 
 A factorization is reused while the tangent is unchanged (same values): a scene whose joints stay
 linear is therefore solved with a single factorization; a changed tangent is refactorized with the
@@ -41,7 +42,8 @@ from ..diagnostics import find_free_parts
 from ..joint_space import MAX_INITIAL_STIFFNESS_ITERATIONS, JointSpace, joint_space_size, lazy_flexibility
 from ..linear.iterative import rigid_body_modes
 from ..linear.direct import SingularMatrix, SymmetricFactorization, make_solver, resolve_backend
-from ..newton import ConvergenceTest, StepCutting, force_scale, secant_line_search
+from ..newton import (ConvergenceTest, IterationFailed, StepCutting, force_scale, newton_iterations,
+                      secant_line_search)
 
 #: tangent factor of open joint points in ordinary Newton iterations: a tiny stiffness in the
 #: tangent only (tractions stay zero) so that a block resting on a single contact point does not make
@@ -205,6 +207,92 @@ def joint_mechanisms(model, limit: int = 4) -> list[str]:
     if len(found) > limit:
         out.append(f"and {len(found) - limit} more joint(s) in such a state")
     return out
+
+
+class LoadStepIterate:
+    """A Newton iterate of a load step: ``u`` (n_dof,) m, ``f_int`` (n_dof,) N, the tangent ``K`` (None where it was
+    not asked for), the residual ``r`` (n_eq,) N on the free DOFs and its norm, and the norms of the external
+    (with the state-dependent loads) and internal forces (N)."""
+
+    __slots__ = ("u", "f_int", "K", "r", "residual_norm", "f_ext_norm", "f_int_norm")
+
+    def __init__(self, u, f_int, K, r, f_ext_norm, f_int_norm):
+        self.u, self.f_int, self.K, self.r = u, f_int, K, r
+        self.residual_norm = float(np.linalg.norm(r))
+        self.f_ext_norm, self.f_int_norm = f_ext_norm, f_int_norm
+
+
+class LoadStepNewton:
+    """The Newton step of one load step of ``solver`` (a :class:`StaticSolver`) under the external forces
+    ``f_ext`` (n_dof,) N, for :func:`masonrydam.solvers.newton.newton_iterations`: full Newton (the tangent
+    factorized, :meth:`StaticSolver._factorize`) or modified Newton (the initial tangent), the secant line search
+    on the work of the correction, bonds latched while the chatter ``guard`` stabilizes.
+
+    ``r0_norm``: the norm of the step's first residual (N), the force scale of a step with no load.
+    """
+
+    def __init__(self, solver, f_ext, guard):
+        self.solver, self.model, self.s = solver, solver.model, solver.s
+        self.f_ext, self.guard = f_ext, guard
+        self.free = solver.model.dofmap.free
+        self.r0_norm = None
+
+    def evaluate(self, u) -> LoadStepIterate:
+        """The iterate at ``u``; :class:`~masonrydam.solvers.newton.IterationFailed` where a law's return mapping
+        gives up there (an iterate far off the path, or a trial increment too large for it: the attempt failed and
+        the step is cut like one that does not converge; the last such message goes into the error if the cuts
+        do not help)."""
+        m, solver = self.model, self.solver
+        want_K = self.s.method == "newton" or solver._initial is None
+        try:
+            f_int, K = m.evaluate(u, want_tangent=want_K)
+        except NumericalError as exc:
+            solver._law_failure = str(exc)
+            raise IterationFailed(str(exc)) from None
+        if self.guard.stabilized:
+            m.latch_broken_bonds()
+        f_now = solver._with_state_load(self.f_ext)
+        r_full = f_now - f_int
+        if not np.isfinite(r_full).all():
+            raise NumericalError("NaN or infinity in the residual (check loads and stiffnesses)")
+        return LoadStepIterate(u, f_int, K, r_full[self.free], np.linalg.norm(f_now), np.linalg.norm(f_int))
+
+    def force_scale(self, iterate, iteration):
+        """``max(||f_ext||, ||f_int||, ||r_0||)`` (N; see the module docstring)."""
+        return force_scale(iterate.f_ext_norm, iterate.f_int_norm, self.r0_norm)
+
+    def after_guard(self, iterate, action):
+        """The tangent and residual again at the same displacements (the open points' tangent changed)."""
+        m, solver = self.model, self.solver
+        solver.stats.stabilized_steps += action == "stabilize"
+        f_int, K = m.evaluate(iterate.u, want_tangent=True)
+        r = (solver._with_state_load(self.f_ext) - f_int)[self.free]
+        return LoadStepIterate(iterate.u, f_int, K, r, iterate.f_ext_norm, iterate.f_int_norm)
+
+    def correction(self, iterate):
+        """``K^-1 r`` with the tangent's factorization, or the initial one (modified Newton)."""
+        solver = self.solver
+        if self.s.method == "modified_newton":
+            if solver._initial is None:
+                solver._initial = solver._linear_solver(iterate.K)
+                solver.stats.factorizations += 1
+                solver.stats.analyses += 1
+            fact = solver._initial
+        else:
+            fact = solver._factorize(iterate.K)
+        du = fact.solve(iterate.r)
+        solver.stats.iterations += 1
+        return du
+
+    def advance(self, iterate, du):
+        """The iterate at ``u + s du``, ``s`` from the secant line search (1 without); the work ``|s du . r|``."""
+        step = 1.0
+        if self.s.line_search:
+            step = self.solver._line_search(iterate.u, du, iterate.r, self.f_ext)
+        u = iterate.u.copy()
+        u[self.free] += step * du
+        work = abs(step * float(du @ iterate.r))
+        return self.evaluate(u), work, work
 
 
 class StaticSolver:
@@ -378,65 +466,23 @@ class StaticSolver:
         transient tension in early iterates does not destroy cohesion.
         """
         m, s = self.model, self.s
-        free = m.dofmap.free
-        energy0 = None
-        last_energy = None
         guard = ChatterGuard(m, OPEN_TANGENT_REGULAR)
-        test = ConvergenceTest(s.force_tolerance, s.energy_tolerance)
-        for it in range(s.max_iterations + 1):
-            want_K = s.method == "newton" or self._initial is None
-            try:
-                f_int, K = m.evaluate(u, want_tangent=want_K)
-            except NumericalError as exc:
-                # a state where a law's return mapping gives up (an iterate far off the path, or a trial
-                # increment too large for it): the attempt failed and the step is cut like one that does
-                # not converge; the last such message goes into the error if the cuts do not help
-                self._law_failure = str(exc)
-                return False, u, it, None
-            if guard.stabilized:
-                m.latch_broken_bonds()
-            f_now = self._with_state_load(f_ext)
-            r_full = f_now - f_int
-            if not np.isfinite(r_full).all():
-                raise NumericalError("NaN or infinity in the residual (check loads and stiffnesses)")
-            r = r_full[free]
-            if it == 0 and r0_norm is None:
-                r0_norm = float(np.linalg.norm(r))
-            ref = force_scale(np.linalg.norm(f_now), np.linalg.norm(f_int), r0_norm)
-            rn = float(np.linalg.norm(r))
+        step = LoadStepNewton(self, f_ext, guard)
+        try:
+            start = step.evaluate(u)
+        except IterationFailed:
+            return False, u, 0, None
+        step.r0_norm = start.residual_norm if r0_norm is None else r0_norm
+
+        def tell_progress(it, rn, ref):
             self._status(f"iteration {it}, residual {rn / ref:.1e}")
-            if test.converged(rn, ref, energy0, last_energy):
-                return True, u, it, f_int
-            if it == s.max_iterations:
-                break
-            if m.nonlinear:
-                # cycling: the stabilized iteration; settled: back to the consistent tangent (the guard's
-                # module docstring); either way the iteration matrix and residual are evaluated again
-                action = guard.observe()
-                if action is not None:
-                    self.stats.stabilized_steps += action == "stabilize"
-                    f_int, K = m.evaluate(u, want_tangent=True)
-                    r = (self._with_state_load(f_ext) - f_int)[free]
-            if s.method == "modified_newton":
-                if self._initial is None:
-                    self._initial = self._linear_solver(K)
-                    self.stats.factorizations += 1
-                    self.stats.analyses += 1
-                fact = self._initial
-            else:
-                fact = self._factorize(K)
-            du = fact.solve(r)
-            self.stats.iterations += 1
-            step = 1.0
-            if s.line_search:
-                step = self._line_search(u, du, r, f_ext)
-            u = u.copy()
-            u[free] += step * du
-            e = abs(step * float(du @ r))
-            if energy0 is None:
-                energy0 = e
-            last_energy = e
-        return False, u, s.max_iterations, None
+
+        result = newton_iterations(step, start, ConvergenceTest(s.force_tolerance, s.energy_tolerance),
+                                   s.max_iterations, guard=guard if m.nonlinear else None, on_check=tell_progress)
+        last = result.iterate
+        if result.converged:
+            return True, last.u, result.iterations, last.f_int
+        return False, u if last is None else last.u, result.iterations, None
 
     def _arc_length(self, si, st, u, u_start, f_base, lam, stage_stats, dl0, direction, mode="cylindrical",
                     direction_dlam=None):

@@ -20,7 +20,7 @@ from ..errors import SceneError
 from .base import DynamicStageParts, Effect, EffectRun, ModelContext, RunContext, StaticStageLoads, add_force
 
 __all__ = ["DynamicStageParts", "Effect", "EffectRun", "ModelContext", "RunContext", "StaticStageLoads", "activate",
-           "add_force", "load_types", "normalize_dynamic_load", "register", "registry", "sections", "simulated", "unregister"]
+           "add_force", "effect_reference", "effect_sections_meaning", "load_types", "normalize_dynamic_load", "register", "registry", "sections", "simulated", "unregister"]
 
 #: effects registered from outside the package (:func:`register`), after the built-in ones
 _REGISTERED: list[Effect] = []
@@ -113,6 +113,20 @@ def normalize_dynamic_load(raw, key: str, dim: int) -> dict:
     if not owners:
         raise SceneError(key, "no registered effect takes loads in dynamic stages")
     return owners[0].dynamic_loads(raw, key, dim)
+
+
+def effect_reference(place: str) -> tuple:
+    """The scene-reference tables (:class:`~masonrydam.keys.Section`) the effects place at ``place``
+    (:attr:`Effect.scene_keys_place`), in registry order."""
+    return tuple(section for e in registry().values() if e.scene_keys_place == place for section in e.scene_keys)
+
+
+def effect_sections_meaning() -> dict:
+    """Top-level section name -> one line, for every section an effect owns (registry order)."""
+    out = {}
+    for e in registry().values():
+        out.update(e.section_meanings)
+    return out
 
 
 def simulated(scene: dict, model) -> list[str]:

@@ -188,7 +188,10 @@ class Effect:
     stage after its loads (e.g. to turn what the loads asked for into ``varying``); dynamic_stage:
     ``(model_context, stage_spec, index, parts) -> None`` adding to a :class:`DynamicStageParts`;
     dynamic_loads: the normaliser ``(raw, key, dim) -> dict`` of the ``loads`` entries of a dynamic stage,
-    for the effect that owns them."""
+    for the effect that owns them; scene_keys: the :class:`~masonrydam.keys.Section` tables of its scene keys
+    for the scene reference (docs/scene.md); scene_keys_place: where they go there (``"section"``: with the
+    top-level sections at the end, ``"dynamic_stage"``: with the keys of dynamic stages); section_meanings:
+    one line per top-level section it owns, for the reference's table of sections."""
 
     name: str
     asked_by: str
@@ -203,3 +206,6 @@ class Effect:
     finish_stage: Callable | None = None
     dynamic_stage: Callable | None = None
     dynamic_loads: Callable | None = None
+    scene_keys: tuple = ()
+    scene_keys_place: str = "section"
+    section_meanings: dict = field(default_factory=dict)

@@ -34,6 +34,8 @@ import numpy as np
 from ..checks import check_keys, choice, number
 from ..checks import seconds as _seconds
 from ..errors import SceneError
+from ..keys import REQUIRED, TIME, Section
+from ..keys import key as row
 from ..pulses import PULSE_SHAPES, unit_pulse
 from .base import EffectRun, add_force
 from .loads import load_vector
@@ -222,13 +224,40 @@ def _activate(context):
     return DynamicLoadsRun() if any(st.loads is not None for st in context.dynamic_stages) else None
 
 
+# -- the rows of its scene keys in the scene reference (docs/scene.md) ----------------------------------------
+_TF = "stages[].loads[].time_function"
+_TIME_LOADS = Section("Loads of a dynamic stage", "A load of a dynamic stage is a static load of type "
+                      + ", ".join(f"`{t}`" for t in DYNAMIC_LOAD_TYPES) + " with the keys it has in a static stage "
+                      "and a `time_function`, by which its magnitude is multiplied at the stage time t (from the "
+                      "stage's start).", (
+    row(f"{_TF}", "table", "how the load varies in time", default=REQUIRED, variants=("dynamic",)),
+    row(f"{_TF}.type", "string", "`table`: linear between points; `file`: the same from a text file; `pulse`; "
+       "`harmonic`: sin(2 pi f s + phase)", default=REQUIRED, choices=TIME_FUNCTIONS, variants=TIME_FUNCTIONS),
+    row(f"{_TF}.time", "list", "times, strictly increasing (plain numbers)", "s", default=REQUIRED,
+       variants=("table",)),
+    row(f"{_TF}.values", "list", "values at those times (the end values hold outside)", default=REQUIRED,
+       variants=("table",)),
+    row(f"{_TF}.path", "string", "a text file of columns, time (s) first, relative to the scene file's folder",
+       default=REQUIRED, variants=("file",)),
+    row(f"{_TF}.column", "integer", "the value column, from 0 without the time column", default=0, variants=("file",)),
+    row(f"{_TF}.shape", "string", "1 (rectangular), a half sine or a symmetric triangle of peak 1 over `duration`",
+       default="rectangular", choices=PULSE_SHAPES, variants=("pulse",)),
+    row(f"{_TF}.duration", "number", "pulse length; harmonic: length of the shaking (default: to the end)", "s",
+       TIME, default_text="required (pulse)", variants=("pulse", "harmonic")),
+    row(f"{_TF}.start", "number", "when it starts", "s", TIME, default=0, variants=("pulse", "harmonic")),
+    row(f"{_TF}.frequency", "number", "frequency", "Hz", default=REQUIRED, variants=("harmonic",)),
+    row(f"{_TF}.phase", "number", "phase", "deg", default=0.0, variants=("harmonic",)),
+), "type")
+
+
 def _effects():
     from . import Effect
 
     return [Effect("dynamic_loads", "a dynamic stage's 'loads' with a 'time_function'", __name__,
                    "consistent nodal forces scaled in time; closed forms of Chopra (2012), Dynamics of Structures, "
                    "eqs. 3.1.6 and 4.3.2", "tests/test_dynamic_loads.py", _describe, activate=_activate,
-                   dynamic_stage=_add_loads_in_time, dynamic_loads=normalize_dynamic_load)]
+                   dynamic_stage=_add_loads_in_time, dynamic_loads=normalize_dynamic_load, scene_keys=(_TIME_LOADS,),
+                   scene_keys_place="dynamic_stage")]
 
 
 EFFECTS = _effects()

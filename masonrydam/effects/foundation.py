@@ -103,6 +103,8 @@ import scipy.sparse as sp
 from ..checks import boolean, check_keys, choice
 from ..elements.shapes import ELEMENT_TYPES, facet_outward_sign, facet_quadrature, facet_rule
 from ..errors import SceneError
+from ..keys import Section
+from ..keys import key as row
 from ..mesh.facets import FACET_TYPES, boundary_owners
 from .base import EffectRun, add_force
 
@@ -738,13 +740,29 @@ def describe(scene, model) -> list[str]:
             f"boundaries; {how}"]
 
 
+# -- the rows of its scene keys in the scene reference (docs/scene.md) ----------------------------------------
+_FOUNDATION = Section("[foundation]", "The rock under a dam (an element group of the mesh).", (
+    row("foundation.mass", "bool", "false: massless rock; true: rock with mass, absorbing boundaries and a `motion`",
+       default=False),
+    row("foundation.group", "string", "the rock's element group", default=DEFAULT_GROUP),
+    row("foundation.absorbing", "bool or table", "Lysmer-Kuhlemeyer dashpots `{ bottom, sides }` (true: the default "
+       "sets; false: none)", default_text="`true`: the two sets below"),
+    row("foundation.motion", "string", "mass = true: the record is an outcrop motion (free-field forces at a "
+       "compliant base) or a within-rock motion (a rigid base)", default_text="required with mass", choices=MOTIONS),
+    row("foundation.absorbing.bottom", "string or list", "facet set(s) of the bottom", default=DEFAULT_BOTTOM),
+    row("foundation.absorbing.sides", "string or list", "facet set(s) of the sides", default=DEFAULT_SIDES),
+))
+
+
 def _effects():
     from . import Effect
 
     return [Effect("foundation", "[foundation] with mass = true", __name__,
                    "Lysmer & Kuhlemeyer 1969 (ASCE J. Eng. Mech. Div. 95(EM4)); Joyner & Chen 1975 (BSSA 65); "
                    "Nielsen 2006 (ABAQUS Users' Conf.); Lokke & Chopra 2018 (EESD 47)", "tests/test_foundation.py",
-                   describe, activate=activate)]
+                   describe, activate=activate, scene_keys=(_FOUNDATION,),
+                   section_meanings={"foundation": "the rock under a dam: massless, or with mass and absorbing "
+                                                   "boundaries"})]
 
 
 EFFECTS = _effects()

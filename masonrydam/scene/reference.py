@@ -15,21 +15,17 @@ from __future__ import annotations
 
 import inspect
 import sys
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 from generators import GENERATORS
 from generators.dams import PRESETS
 from generators.walls import BONDS
 
-from ..effects import load_types
-from ..effects.dynamic_loads import DYNAMIC_LOAD_TYPES, TIME_FUNCTIONS
-from ..effects.foundation import DEFAULT_BOTTOM, DEFAULT_GROUP, DEFAULT_SIDES, MOTIONS
+from ..effects import effect_reference, effect_sections_meaning, load_types
 from ..effects.large_kinematics import JOINT_FRAMES, KINEMATICS
 from ..effects.plasticity import CONTINUUM_LAWS
-from ..effects.reservoir import DEFAULT_FACE, DEFAULT_TAILWATER_FACE, DYNAMIC, MAX_FREQUENCY, SOUND_SPEED
-from ..effects.uplift import CRACKED, EARTHQUAKE
 from ..elements.quadrature import QUADRATURE_SCHEMES
-from ..pulses import PULSE_SHAPES
+from ..keys import ABSENT, REQUIRED, TIME, UNIT, Key, Section, key
 from ..pulses import PULSE_SHAPES
 from ..materials import joint_laws as jl
 from ..results.writer import OutputOptions
@@ -41,63 +37,7 @@ from .schema import (AUTO_DT_MAX_DEFAULT, AUTO_TOLERANCE_DEFAULT, G_STANDARD, HY
 __all__ = ["Key", "Section", "REQUIRED", "ABSENT", "SECTIONS", "keys", "render_markdown", "main"]
 
 
-class _Marker:
-    def __init__(self, text):
-        self.text = text
-
-    def __repr__(self):
-        return self.text
-
-
-#: default of a key that must be given
-REQUIRED = _Marker("required")
-#: default of an optional key without a value of its own (left out: the feature is off, or the value is
-#: computed; the meaning says which)
-ABSENT = _Marker("-")
-
-#: ``unit_string`` values: any unit of the key's dimension (``"16.7 GPa"``, ``"10 mm"``, ``"0.3 g"``), or a
-#: time in seconds or milliseconds (``"10 ms"``)
-UNIT = "yes"
-TIME = "s, ms"
-
-
-@dataclass(frozen=True)
-class Key:
-    """One scene key.
-
-    path: dotted, ``[]`` for list items, ``<name>`` for user names; type: number, integer, string, bool,
-    list or table (or several, "number or string"); unit: SI unit (empty: dimensionless or none);
-    unit_string: whether a string with a unit is accepted (:data:`UNIT`, :data:`TIME` or empty);
-    default: a value, :data:`REQUIRED` or :data:`ABSENT`; default_text: the default in words, where it is
-    computed; choices: the allowed values (the schema's tuple); variants: the values of the section's
-    discriminator (``type`` of a stage or load, ``law`` of a material, ``step`` of a processing step,
-    the generator) for which the key applies (empty: always); meaning: one line."""
-
-    path: str
-    type: str
-    meaning: str
-    unit: str = ""
-    unit_string: str = ""
-    default: object = ABSENT
-    default_text: str = ""
-    choices: tuple | None = None
-    variants: tuple = ()
-
-
-@dataclass(frozen=True)
-class Section:
-    """One table of the reference: title, a paragraph, the rows; discriminator: the key whose values
-    :attr:`Key.variants` lists (shown as the column "For")."""
-
-    title: str
-    text: str
-    keys: tuple
-    discriminator: str = ""
-
-
-def _k(path, type_, meaning, unit="", unit_string="", default=ABSENT, default_text="", choices=None, variants=()):
-    return Key(path, type_, meaning, unit, unit_string, default, default_text,
-               None if choices is None else tuple(choices), tuple(variants))
+_k = key
 
 
 _TOP = Section("Top level", "The sections of a scene. Unknown keys are errors anywhere, with the closest known "
@@ -112,8 +52,7 @@ _TOP = Section("Top level", "The sections of a scene. Unknown keys are errors an
        default=REQUIRED),
     _k("solver", "table", "settings of the static solver", default_text="{}"),
     _k("output", "table", "what the result file records and how it is written", default_text="{}"),
-    _k("reservoir", "table", "water on a dam: reservoir, tailwater, silt, uplift, water in earthquakes"),
-    _k("foundation", "table", "the rock under a dam: massless, or with mass and absorbing boundaries"),
+    *(_k(name, "table", meaning) for name, meaning in effect_sections_meaning().items()),
 ))
 
 _MODEL = Section("[model]", "", (
@@ -607,30 +546,6 @@ _STAGE_OUTPUT = Section("[stages.output]", "What a dynamic stage records. Every 
     _k("stages[].output.joints", "string or list", "`\"all\"` or joint sets", default_text="[output] joints"),
 ))
 
-_TF = "stages[].loads[].time_function"
-_TIME_LOADS = Section("Loads of a dynamic stage", "A load of a dynamic stage is a static load of type "
-                      + ", ".join(f"`{t}`" for t in DYNAMIC_LOAD_TYPES) + " with the keys it has in a static stage "
-                      "and a `time_function`, by which its magnitude is multiplied at the stage time t (from the "
-                      "stage's start).", (
-    _k(f"{_TF}", "table", "how the load varies in time", default=REQUIRED, variants=("dynamic",)),
-    _k(f"{_TF}.type", "string", "`table`: linear between points; `file`: the same from a text file; `pulse`; "
-       "`harmonic`: sin(2 pi f s + phase)", default=REQUIRED, choices=TIME_FUNCTIONS, variants=TIME_FUNCTIONS),
-    _k(f"{_TF}.time", "list", "times, strictly increasing (plain numbers)", "s", default=REQUIRED,
-       variants=("table",)),
-    _k(f"{_TF}.values", "list", "values at those times (the end values hold outside)", default=REQUIRED,
-       variants=("table",)),
-    _k(f"{_TF}.path", "string", "a text file of columns, time (s) first, relative to the scene file's folder",
-       default=REQUIRED, variants=("file",)),
-    _k(f"{_TF}.column", "integer", "the value column, from 0 without the time column", default=0, variants=("file",)),
-    _k(f"{_TF}.shape", "string", "1 (rectangular), a half sine or a symmetric triangle of peak 1 over `duration`",
-       default="rectangular", choices=PULSE_SHAPES, variants=("pulse",)),
-    _k(f"{_TF}.duration", "number", "pulse length; harmonic: length of the shaking (default: to the end)", "s",
-       TIME, default_text="required (pulse)", variants=("pulse", "harmonic")),
-    _k(f"{_TF}.start", "number", "when it starts", "s", TIME, default=0, variants=("pulse", "harmonic")),
-    _k(f"{_TF}.frequency", "number", "frequency", "Hz", default=REQUIRED, variants=("harmonic",)),
-    _k(f"{_TF}.phase", "number", "phase", "deg", default=0.0, variants=("harmonic",)),
-), "type")
-
 _SOLVER = Section("[solver]", "The static solver (Newton with step cutting; the dynamic stages have their own "
                   "settings).", (
     _k("solver.method", "string", "`newton`: a new tangent every iteration; `modified_newton`: the step's first one",
@@ -664,62 +579,10 @@ _OUTPUT = Section("[output]", "What the result file records, and how steps reach
        "s", TIME, _OUT.flush_seconds),
 ))
 
-_RESERVOIR = Section("[reservoir]", "Water on a dam. A static stage applies it with the load `{ type = "
-                     "\"reservoir\" }`; `level` is on the vertical axis (the axis gravity acts along).", (
-    _k("reservoir.level", "number", "water level", "m", UNIT, REQUIRED),
-    _k("reservoir.density", "number", "water density", "kg/m3", UNIT, 1000.0),
-    _k("reservoir.face", "string", "facet set the water loads (only its part below the level)",
-       default=DEFAULT_FACE),
-    _k("reservoir.tailwater", "table", "water downstream `{ level, face }`"),
-    _k("reservoir.silt", "table", "silt against the face `{ level, submerged_density, lateral_coefficient, face }`"),
-    _k("reservoir.uplift", "table", "pore pressure in joints `{ joints, drains, cracked, earthquake }`"),
-    _k("reservoir.dynamic", "string", "the water in dynamic and modal stages: static pressure only, Westergaard's "
-       "added mass, or acoustic pressure elements", default="none", choices=DYNAMIC),
-    _k("reservoir.acoustic", "table", "dynamic = \"acoustic\": the fluid domain"),
-    _k("reservoir.tailwater.level", "number", "tailwater level", "m", UNIT, REQUIRED),
-    _k("reservoir.tailwater.face", "string", "facet set it loads", default=DEFAULT_TAILWATER_FACE),
-    _k("reservoir.silt.level", "number", "silt surface (not above the water)", "m", UNIT, REQUIRED),
-    _k("reservoir.silt.submerged_density", "number", "submerged density of the silt", "kg/m3", UNIT, REQUIRED),
-    _k("reservoir.silt.lateral_coefficient", "number", "horizontal / vertical stress, in (0, 3]", default=0.5),
-    _k("reservoir.silt.face", "string", "facet set it loads", default_text="the reservoir's face"),
-    _k("reservoir.uplift.joints", "list", "joint sets with pore pressure (a single string is one)",
-       default=REQUIRED),
-    _k("reservoir.uplift.drains", "table", "a drain line `{ distance, efficiency }` (default: none)"),
-    _k("reservoir.uplift.cracked", "string", "pressure in the cracked part from the heel: full reservoir head, the "
-       "intact profile, or none", default="full_head", choices=CRACKED),
-    _k("reservoir.uplift.earthquake", "string", "pore pressure in joints that open during the dynamic stages",
-       default="static", choices=EARTHQUAKE),
-    _k("reservoir.uplift.drains.distance", "number", "distance of the drain line from the upstream end", "m", UNIT,
-       REQUIRED),
-    _k("reservoir.uplift.drains.efficiency", "number", "drain efficiency, 0 to 1", default=REQUIRED),
-    _k("reservoir.acoustic.length", "number", "reservoir length upstream of the face (Sommerfeld far end)", "m",
-       UNIT, default_text="3 H"),
-    _k("reservoir.acoustic.sound_speed", "number or string", "speed of sound, or `\"incompressible\"`", "m/s",
-       default=SOUND_SPEED),
-    _k("reservoir.acoustic.bottom_reflection", "number", "wave reflection coefficient of the bottom, in (-1, 1] (1: "
-       "rigid)", default=1.0),
-    _k("reservoir.acoustic.element_size", "number", "size of the first layer of fluid elements", "m", UNIT,
-       default_text="the wetted facets' median"),
-    _k("reservoir.acoustic.max_frequency", "number", "highest frequency resolved with 10 elements per wavelength "
-       "(the largest layer)", "Hz", default=MAX_FREQUENCY),
-))
-
-_FOUNDATION = Section("[foundation]", "The rock under a dam (an element group of the mesh).", (
-    _k("foundation.mass", "bool", "false: massless rock; true: rock with mass, absorbing boundaries and a `motion`",
-       default=False),
-    _k("foundation.group", "string", "the rock's element group", default=DEFAULT_GROUP),
-    _k("foundation.absorbing", "bool or table", "Lysmer-Kuhlemeyer dashpots `{ bottom, sides }` (true: the default "
-       "sets; false: none)", default_text="`true`: the two sets below"),
-    _k("foundation.motion", "string", "mass = true: the record is an outcrop motion (free-field forces at a "
-       "compliant base) or a within-rock motion (a rigid base)", default_text="required with mass", choices=MOTIONS),
-    _k("foundation.absorbing.bottom", "string or list", "facet set(s) of the bottom", default=DEFAULT_BOTTOM),
-    _k("foundation.absorbing.sides", "string or list", "facet set(s) of the sides", default=DEFAULT_SIDES),
-))
-
 #: the tables of the reference, in the order of docs/scene.md
 SECTIONS: tuple = (_TOP, _MODEL, _MESH, *_GENERATOR_SECTIONS, _MATERIALS, _JOINTS, _SUPPORTS, _STATIC, _LOADS,
-                   _MODAL, _DYNAMIC, _DAMPING, _GROUND, _PROCESSING, _INITIAL, _INITIAL_DISPLACEMENT, _STAGE_OUTPUT, _TIME_LOADS, _SOLVER,
-                   _OUTPUT, _RESERVOIR, _FOUNDATION)
+                   _MODAL, _DYNAMIC, _DAMPING, _GROUND, _PROCESSING, _INITIAL, _INITIAL_DISPLACEMENT, _STAGE_OUTPUT,
+                   *effect_reference("dynamic_stage"), _SOLVER, _OUTPUT, *effect_reference("section"))
 
 
 def keys() -> list:

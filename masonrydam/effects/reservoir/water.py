@@ -32,6 +32,8 @@ import numpy as np
 
 from ...checks import check_keys, choice, number, positive
 from ...errors import SceneError
+from ...keys import REQUIRED, UNIT, Section
+from ...keys import key as row
 from ...mesh.facets import owner_centroids
 from ...materials.joint_laws import RESULT_OPEN, RESULT_SLIP
 from ...units import quantity
@@ -367,6 +369,48 @@ def _activate(context):
     return activate(context)
 
 
+# -- the rows of its scene keys in the scene reference (docs/scene.md) ----------------------------------------
+_RESERVOIR = Section("[reservoir]", "Water on a dam. A static stage applies it with the load `{ type = "
+                     "\"reservoir\" }`; `level` is on the vertical axis (the axis gravity acts along).", (
+    row("reservoir.level", "number", "water level", "m", UNIT, REQUIRED),
+    row("reservoir.density", "number", "water density", "kg/m3", UNIT, 1000.0),
+    row("reservoir.face", "string", "facet set the water loads (only its part below the level)",
+       default=DEFAULT_FACE),
+    row("reservoir.tailwater", "table", "water downstream `{ level, face }`"),
+    row("reservoir.silt", "table", "silt against the face `{ level, submerged_density, lateral_coefficient, face }`"),
+    row("reservoir.uplift", "table", "pore pressure in joints `{ joints, drains, cracked, earthquake }`"),
+    row("reservoir.dynamic", "string", "the water in dynamic and modal stages: static pressure only, Westergaard's "
+       "added mass, or acoustic pressure elements", default="none", choices=DYNAMIC),
+    row("reservoir.acoustic", "table", "dynamic = \"acoustic\": the fluid domain"),
+    row("reservoir.tailwater.level", "number", "tailwater level", "m", UNIT, REQUIRED),
+    row("reservoir.tailwater.face", "string", "facet set it loads", default=DEFAULT_TAILWATER_FACE),
+    row("reservoir.silt.level", "number", "silt surface (not above the water)", "m", UNIT, REQUIRED),
+    row("reservoir.silt.submerged_density", "number", "submerged density of the silt", "kg/m3", UNIT, REQUIRED),
+    row("reservoir.silt.lateral_coefficient", "number", "horizontal / vertical stress, in (0, 3]", default=0.5),
+    row("reservoir.silt.face", "string", "facet set it loads", default_text="the reservoir's face"),
+    row("reservoir.uplift.joints", "list", "joint sets with pore pressure (a single string is one)",
+       default=REQUIRED),
+    row("reservoir.uplift.drains", "table", "a drain line `{ distance, efficiency }` (default: none)"),
+    row("reservoir.uplift.cracked", "string", "pressure in the cracked part from the heel: full reservoir head, the "
+       "intact profile, or none", default="full_head", choices=_uplift.CRACKED),
+    row("reservoir.uplift.earthquake", "string", "pore pressure in joints that open during the dynamic stages",
+       default="static", choices=_uplift.EARTHQUAKE),
+    row("reservoir.uplift.drains.distance", "number", "distance of the drain line from the upstream end", "m", UNIT,
+       REQUIRED),
+    row("reservoir.uplift.drains.efficiency", "number", "drain efficiency, 0 to 1", default=REQUIRED),
+    row("reservoir.acoustic.length", "number", "reservoir length upstream of the face (Sommerfeld far end)", "m",
+       UNIT, default_text="3 H"),
+    row("reservoir.acoustic.sound_speed", "number or string", "speed of sound, or `\"incompressible\"`", "m/s",
+       default=SOUND_SPEED),
+    row("reservoir.acoustic.bottom_reflection", "number", "wave reflection coefficient of the bottom, in (-1, 1] (1: "
+       "rigid)", default=1.0),
+    row("reservoir.acoustic.element_size", "number", "size of the first layer of fluid elements", "m", UNIT,
+       default_text="the wetted facets' median"),
+    row("reservoir.acoustic.max_frequency", "number", "highest frequency resolved with 10 elements per wavelength "
+       "(the largest layer)", "Hz", default=MAX_FREQUENCY),
+))
+
+
 def _effects():
     from .. import Effect
 
@@ -374,7 +418,9 @@ def _effects():
                    "hydrostatics (White, Fluid Mechanics, ch. 2); USBR Design of Small Dams (1987) sec. 5.6; "
                    "USACE EM 1110-2-2200 (1995) ch. 3", "tests/test_reservoir.py, tests/test_hydrostatics.py",
                    describe, activate=_activate, stage_loads={"reservoir": _add_reservoir_load},
-                   finish_stage=_finish_stage)]
+                   finish_stage=_finish_stage, scene_keys=(_RESERVOIR,),
+                   section_meanings={"reservoir": "water on a dam: reservoir, tailwater, silt, uplift, water in "
+                                                  "earthquakes"})]
 
 
 EFFECTS = _effects()

@@ -39,6 +39,7 @@ def block(tie=True, load_set="right"):
                 {"type": "nodal", "set": load_set, "force": [0.0, -P]}]}]}
 
 
+@pytest.mark.slow
 def test_tie_matches_the_exact_constrained_solution():
     ds = masonrydam.run(block())
     sc = Scene(block(tie=False))

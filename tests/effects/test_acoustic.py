@@ -57,6 +57,7 @@ def series_force(w=0.0, c=C, depth=H, terms=4000):
     return 16.0 * depth**2 / np.pi**3 * np.sum(1.0 / (m**3 * cm))
 
 
+@pytest.mark.reference
 def test_series_values():
     # PROBLEMS.md sec. 4 numbers: base 0.7425 rho a H, resultant 0.5428 rho a H^2
     assert series_pressure(H)[0] / H == pytest.approx(0.7425, abs=1e-4)
@@ -122,6 +123,7 @@ def toward_reservoir(dim):
 
 
 @pytest.mark.parametrize("ftype, n, length", [("line2", 20, 3 * H), ("line2", 20, 5 * H), ("line3", 10, 3 * H)])
+@pytest.mark.reference
 def test_westergaard_rigid_wall_2d(ftype, n, length):
     coords, facets, inward = wall_2d(np.linspace(0.0, H, n + 1), quadratic=ftype == "line3")
     t = 0.7
@@ -192,6 +194,7 @@ def test_compressible_harmonic_2d():
     assert f[0::2].sum().real / RHO == pytest.approx(series_force(), rel=0.02)
 
 
+@pytest.mark.slow
 def test_resonance_and_bottom_absorption_2d():
     """Peak of |F(w)| at the first cut-off w_1 = pi c / (2H) (f = c / 4H) for a rigid bottom; with the far
     plane at 5H the truncation moves it up by 2 % (measured: 1.02 w_1 on this scan; 3H: 4.6 %, 10H:

@@ -45,6 +45,7 @@ def series_resultant(omega, c, H, terms=2001):
 
 
 @pytest.mark.parametrize("c", ["incompressible", 1440.0])
+@pytest.mark.reference
 def test_slowly_varying_acceleration_gives_the_exact_series(c):
     """A ground acceleration rising slowly (0.5 s against H / c = 0.5 ms) on a rigid dam: the pressure on
     the face tends to the incompressible series, base 0.7425 rho a H, resultant 0.5428 rho a H^2 (2 %)."""
@@ -65,6 +66,7 @@ def test_slowly_varying_acceleration_gives_the_exact_series(c):
     assert "acoustic elements" in ds.attrs["simulated_effects"]
 
 
+@pytest.mark.reference
 def test_harmonic_excitation_follows_the_compressible_series():
     """Harmonic ground acceleration at half the reservoir's first frequency c / (4 H) on a rigid dam
     (H = 10 m, c = 1440 m/s: f_1 = 36 Hz): the steady amplitude of the resultant is the series with the

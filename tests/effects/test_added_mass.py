@@ -33,6 +33,7 @@ def _column(H, n, order=1, x=0.0):
 @pytest.mark.parametrize("order", [1, 2])
 @pytest.mark.parametrize("lumped", [False, True])
 @pytest.mark.parametrize("level", [10.0, 8.7])
+@pytest.mark.reference
 def test_resultant_on_a_rigid_vertical_face(order, lumped, level):
     """A rigid translation a of the face: the force -M_a iota a has the resultant 7/12 rho a H^2, with the
     water line on a node or inside a facet."""
@@ -49,6 +50,7 @@ def test_resultant_on_a_rigid_vertical_face(order, lumped, level):
     np.testing.assert_allclose((M - M.T).toarray(), 0.0, atol=1e-9)
 
 
+@pytest.mark.reference
 def test_pressure_parabola_at_the_nodes():
     """Lumped (HRZ) added mass per node over the node's tributary length tends to 7/8 rho sqrt(H z)."""
     H = 10.0
@@ -141,6 +143,7 @@ def test_rigid_block_with_westergaard_water(mass):
     assert "Westergaard" in ds.attrs["reservoir_dynamic"]
 
 
+@pytest.mark.reference
 def test_rigid_face_pressure_and_resultant_in_time():
     """A stiff block fixed at its base (no joint) under a slowly rising ground acceleration: the
     hydrodynamic force is -7/12 rho a H^2 T and the face pressure the 7/8 parabola (Westergaard 1933)."""

@@ -387,6 +387,7 @@ def test_block_within_reproduces_free_field():
     assert err < 0.05
 
 
+@pytest.mark.slow
 def test_block_3d_two_horizontal_components():
     """3D (hex8, 2 x 2 elements in plan, quad4 side faces): x and y components at once (S waves) and
     z (P wave): every node follows the 1D free field of each component."""

@@ -547,6 +547,7 @@ def test_nonlinear_elevation_fully_wet_is_exact():
         assert np.abs(F - ref).max() / np.abs(ref).max() < 1e-13
 
 
+@pytest.mark.slow
 def test_curved_tri6_and_quad9_subdivision_converges():
     """Curved tri6 and quad9 faces (mid / centre nodes moved out of the plane and up or down), partly
     wet: the default result agrees with a 1e-12 subdivision to 1e-8 of the largest nodal force; a level

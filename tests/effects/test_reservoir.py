@@ -121,6 +121,7 @@ def classic_cracked_base(H, cw, m, h):
     return Lc, N, e
 
 
+@pytest.mark.slow
 def test_cracked_base_against_the_classic_iteration():
     """A slender section (crest 5 m, slope 0.5, water at the crest) whose base cracks: with full head in
     the crack (cracked = "full_head", the crack grown at every iteration) the cracked length is that of
@@ -294,6 +295,8 @@ def _example(name):
     return tomllib.loads((EXAMPLES / name).read_text())
 
 
+@pytest.mark.slow
+@pytest.mark.reference
 def test_koyna_reservoir_example_on_a_coarse_mesh():
     """examples/koyna_reservoir.toml at element size 2.9 m: at the 1967 level (91.75 m) every joint line
     is closed and meets the usual sliding criterion (no cohesion on the lifts); the flood stage ends
@@ -344,6 +347,7 @@ def test_static_water_stays_applied_in_a_dynamic_stage():
     np.testing.assert_allclose(dyn.sliding_safety_factor.values[-1], static.sliding_safety_factor.values, rtol=1e-6)
 
 
+@pytest.mark.slow
 def test_each_monolith_base_is_a_section_of_its_own():
     """Two monoliths side by side on one rock block: their base joints share rock nodes but not dam
     nodes, so each is a line of its own (counted along the dam axis), each carrying half the prism's

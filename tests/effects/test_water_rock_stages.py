@@ -48,6 +48,7 @@ def _history(ds, var="displacement"):
     return t[keep], d[var].values[keep]
 
 
+@pytest.mark.slow
 def test_compressible_water_carries_over_between_stages():
     dt = 0.002
     t = np.arange(0.0, 0.4 + 1e-12, dt)
@@ -70,6 +71,7 @@ def test_compressible_water_carries_over_between_stages():
 
 
 @pytest.mark.parametrize("rule", ["full_head", "none"])
+@pytest.mark.slow
 def test_uplift_entered_in_the_shaking_carries_over(rule):
     s = uplift_scene(rule)
     dt = 0.002
@@ -86,6 +88,7 @@ def test_uplift_entered_in_the_shaking_carries_over(rule):
     np.testing.assert_allclose(u2, u1, atol=1e-4 * np.abs(u1).max())
 
 
+@pytest.mark.slow
 def test_uplift_options_order_the_response():
     """Water entering the opened heel pushes the block further than the static uplift, and a drained
     crack less (crest displacement at the end of the pulse)."""

@@ -206,6 +206,8 @@ def _punch_mesh(path, h_fine=0.02, h_coarse=0.3, L=3.0, D=2.0, b=0.5):
 
 
 @pytest.mark.parametrize("law,integration", [("von_mises", "full"), ("tresca", "reduced")])
+@pytest.mark.slow
+@pytest.mark.reference
 def test_prandtl_punch(tmp_path, law, integration):
     """A smooth rigid strip footing on a von Mises or Tresca half-space (plane strain): the limit pressure
     is (2 + pi) k, k the shear strength, sigma_y / sqrt(3) for von Mises and sigma_y / 2 for Tresca
@@ -231,6 +233,7 @@ def test_prandtl_punch(tmp_path, law, integration):
     assert q[-1] / q[-10] - 1 < 0.002  # a plateau, not a locked, still rising curve
 
 
+@pytest.mark.slow
 def test_plastic_block_under_an_impact_dynamic():
     """Dynamic stage with an elasto-plastic block: a von Mises cube (massless, uniaxial stress, E A / L =
     k, yield force F_y = sigma_y A) stopping a mass M launched at v0. Energy: M v0^2 / 2 = F_y u_y / 2 +
@@ -290,6 +293,7 @@ def _softening_bar(h, regularisation_length, H=-5e9):
                                                                  "components": ["z"], "value": [8e-3]}]}]}
 
 
+@pytest.mark.slow
 def test_regularised_softening_is_mesh_objective():
     """Crack-band regularisation (Bazant & Oh 1983; Pietruszczak & Mroz 1981): each element softens with
     H_e = H l_e / l_ref, so a band of any thickness l_e dissipates the same energy and the bar's softening

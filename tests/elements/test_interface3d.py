@@ -667,6 +667,7 @@ def _along_x(x, t):
     return xs, np.array([t[np.isclose(x, v)].mean() for v in xs])
 
 
+@pytest.mark.reference
 def test_gauss_tractions_oscillate_nodal_integration_does_not():
     """Reference problem 7 (Schellekens & de Borst 1993, IJNME 36:43-66) in 3D with quad4 faces: a
     stiff linear joint (kn = 1e15 Pa/m) under a sharply varying normal load (notch tip). Gauss (2x2)

@@ -366,6 +366,7 @@ def _elastic_line2_ke(scheme):
     return out["ke"][0]
 
 
+@pytest.mark.reference
 def test_nodal_integration_decouples_node_pairs():
     """Schellekens & de Borst (1993): with nodal (lumped / Newton-Cotes) integration the interface is
     a set of node-pair springs (bottom i couples only with top i); Gauss integration couples

@@ -204,6 +204,7 @@ def _node_dofs(nodes, dim):
     return (np.asarray(nodes)[:, None] * dim + np.arange(dim)).ravel()
 
 
+@pytest.mark.slow
 def test_cantilever_under_an_end_rotation_rolls_into_a_circle():
     """A plane-strain cantilever (nu = 0) whose end section is turned by theta up to 2 pi: the axis is an
     arc of radius L / theta, a full circle at the end, with the end moment E I theta / L."""
@@ -298,6 +299,8 @@ def _half_cycle(ds):
 
 
 @pytest.mark.parametrize("frame", ["mid_surface", "bottom"])
+@pytest.mark.slow
+@pytest.mark.reference
 def test_housner_free_rocking_half_cycle(frame):
     """Reference problem 3: a 0.5 x 2.0 m block launched about its corner so that it reaches half its
     slenderness angle comes back upright within 3 % of the nonlinear equation of motion (1 % asserted, at two
@@ -325,6 +328,8 @@ def test_housner_free_rocking_half_cycle(frame):
 
 
 @pytest.mark.parametrize("dim", [2, 3])
+@pytest.mark.slow
+@pytest.mark.reference
 def test_tilt_table_toppling_when_sliding_is_prevented(dim):
     """Weight plus a horizontal body force lambda g (a table tilted by tan(alpha) = lambda): a block that
     cannot slide (tan(phi) = 5.7 > b/h) topples at tan(alpha) = b/h = 0.25 (2D, and a 0.5 x 0.5 x 2 m
@@ -381,6 +386,7 @@ def _sliding_scene(kinematics, v0, frame="bottom"):
                         "initial_velocity": {"groups": ["block"], "velocity": [v0, 0.0]}, "output": {"stride": 10}}]}
 
 
+@pytest.mark.slow
 def test_block_sliding_far_on_a_long_joint():
     """A block launched at 3 m/s on a rigid, straight Coulomb joint (tan(phi) = 0.577) slides
     v0^2 / (2 g tan(phi)) = 0.795 m, three element lengths, without turning (Newton's second law with Coulomb

@@ -137,6 +137,7 @@ def _outer_radial(ds):
     return (u[:, on, 0] * x[on] + u[:, on, 1] * y[on]) / B
 
 
+@pytest.mark.reference
 def test_thick_cylinder_first_yield(tmp_path):
     """No Gauss point yields at 0.99 p_y; at 1.02 p_y points yield, all in the first layer at r = a (2 mm;
     its innermost Gauss points lie 0.24 mm off the bore, where q is 0.5 % below q(a)). The first-yield
@@ -171,6 +172,7 @@ def test_thick_cylinder_first_yield(tmp_path):
     assert q_max[1] == pytest.approx(SY, rel=1e-9)
 
 
+@pytest.mark.reference
 def test_thick_cylinder_limit_pressure(tmp_path):
     """Pressure raised in steps of 0.05 p_lim towards 1.2 p_lim; the stage stops at the limit (no
     equilibrium beyond it: the tangent of the fully plastic ring is singular)."""
@@ -210,6 +212,7 @@ def _cylinder_quad8(tmp_path, integration, P):
     return masonrydam.run(s)
 
 
+@pytest.mark.reference
 def test_thick_cylinder_limit_pressure_quad8_reduced(tmp_path):
     """quad8 with the reduced 2 x 2 rule (``integration = "reduced"``) finds the limit pressure; with the
     full 3 x 3 rule it locks (Nagtegaal, Parks & Rice 1974) and carries 1.5 p_lim."""

@@ -43,6 +43,7 @@ def ensemble(tmp_path_factory):
     return path, out, ds
 
 
+@pytest.mark.slow
 def test_dask_ensemble_equals_the_members_run_one_by_one(ensemble, tmp_path):
     path, out, ds = ensemble
     assert dict(ds.sizes) == {"record": 3, "intensity": 4, "p_friction_angle": 2}
@@ -65,6 +66,7 @@ def test_dask_ensemble_equals_the_members_run_one_by_one(ensemble, tmp_path):
         np.testing.assert_array_equal(back.peak_slip_joints.values, slip.values)
 
 
+@pytest.mark.slow
 def test_resume_runs_only_the_missing_members(ensemble, tmp_path, capsys):
     path, out, ds = ensemble
     store = members_dir(out)
@@ -82,6 +84,7 @@ def test_resume_runs_only_the_missing_members(ensemble, tmp_path, capsys):
     np.testing.assert_array_equal(again.peak_slip_joints.values, ds.peak_slip_joints.values)
 
 
+@pytest.mark.slow
 def test_unreachable_scheduler_and_bad_workers_are_named(ensemble, capsys):
     path, out, _ = ensemble
     with pytest.raises(MasonrydamError, match="--scheduler tcp://127.0.0.1:9"):
@@ -90,6 +93,7 @@ def test_unreachable_scheduler_and_bad_workers_are_named(ensemble, capsys):
     assert "--workers" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_report_from_the_command_line(ensemble, tmp_path, capsys):
     _, out, _ = ensemble
     assert main(["ensemble-report", str(out), "--demand", "peak_slip_joints", "--limit", "0.02",
@@ -115,6 +119,7 @@ def test_fixed_keys_of_every_member(tmp_path):
     assert err.value.key == "ensemble.set.stages[7].duration"
 
 
+@pytest.mark.slow
 def test_changed_outcomes_are_rerun_and_errors_are_outcomes(ensemble, tmp_path, capsys):
     """An outcome obtained with another scene (its fingerprint differs) is run again, not reused; a member that
     cannot be run (here a scene the schema refuses) is an outcome with status 3 and its reason."""
@@ -141,6 +146,7 @@ def test_changed_outcomes_are_rerun_and_errors_are_outcomes(ensemble, tmp_path, 
     assert rec["status"] == STATUS_ERROR and "integrator" in rec["reason"]
 
 
+@pytest.mark.slow
 def test_report_with_a_demand_and_no_limit_draws_its_ida(ensemble, tmp_path, capsys):
     _, out, ds = ensemble
     assert main(["ensemble-report", str(out), "--demand", "peak_slip_joints", "-o", str(tmp_path / "r")]) == 0

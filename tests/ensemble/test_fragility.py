@@ -78,6 +78,7 @@ def test_fit_is_the_maximum_and_its_intervals_are_the_profile_likelihood_ones():
     assert wald.median_ci == pytest.approx(fit.median_ci, rel=0.05)
 
 
+@pytest.mark.slow
 def test_interval_coverage_over_seeded_synthetic_datasets():
     covered_median = covered_beta = 0
     for seed in range(200):
@@ -325,6 +326,7 @@ def test_fragility_figure_markers_are_the_empirical_fractions():
     fig.canvas.draw()
 
 
+@pytest.mark.slow
 def test_ensemble_report_from_a_netcdf_file(tmp_path):
     path = tmp_path / "ensemble.nc"
     _ensemble().to_netcdf(path)

@@ -552,6 +552,7 @@ def _rk4_peaks(a, dt, periods, zetas, sub):
     return peak
 
 
+@pytest.mark.slow
 def test_spectrum_against_brute_force_fine_step_integration_on_el_centro(elcentro):
     a, dt = elcentro.data[:800], elcentro.stats.delta  # the strong part, first 16 s
     periods = np.array([0.1, 0.2, 0.5, 1.0, 2.0, 4.0])
@@ -587,6 +588,7 @@ def test_spectrum_rigid_limit_and_input_checks(elcentro):
 # command line and packaging
 # ---------------------------------------------------------------------------------------------
 
+@pytest.mark.slow
 def test_cli_records_list_and_show(tmp_path, capsys):
     assert cli_main(["records", "list"]) == 0
     out = capsys.readouterr().out

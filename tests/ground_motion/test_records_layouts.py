@@ -230,6 +230,7 @@ def test_scene_column_is_validated_with_its_key(ground, words):
     assert exc.value.key == "stages[0].ground_motion.x.column" and words in str(exc.value)
 
 
+@pytest.mark.slow
 def test_cli_records_show_column_and_option_names(tmp_path, capsys):
     path = _two_components(tmp_path / "two.txt")
     png = tmp_path / "two.png"

@@ -1,4 +1,4 @@
-"""Tests of the composite interface law (masonrydam.materials.composite_interface).
+"""Tests of the composite interface law (masonrydam.materials.composite).
 
 Sources: Lourenco & Rots (1997), J. Eng. Mech. 123(7) 660-668, and Lourenco (1996), PhD thesis TU
 Delft, ch. 4 ([LR97]/[L96]): tension cut-off with exponential softening governed by GfI, Coulomb
@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 
 from masonrydam.errors import NumericalError
-from masonrydam.materials import composite_interface as ci
-from masonrydam.materials.composite_interface import (
+from masonrydam.materials import composite as ci
+from masonrydam.materials.composite import (
     CAP,
     CAP_SOFTENING_FACTOR,
     ELASTIC,

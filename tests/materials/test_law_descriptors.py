@@ -7,7 +7,7 @@ import pytest
 
 from masonrydam.elements.continuum_plastic import LAW_IDS
 from masonrydam.errors import SceneError
-from masonrydam.materials import composite_interface as ci
+from masonrydam.materials import composite as ci
 from masonrydam.materials import mohr_coulomb as mc
 from masonrydam.materials.continuum_laws import continuum_law, continuum_laws
 from masonrydam.materials.joint_laws import (FUSED_KERNELS, RESULT_CRUSHED, RESULT_OPEN, RESULT_SLIP, RESULT_STICK,

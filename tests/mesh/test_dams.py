@@ -138,6 +138,7 @@ def interface_normals(mesh, joint):
 # ---------------------------------------------------------------------------------------------
 
 
+@pytest.mark.reference
 def test_koyna_preset_is_the_published_section():
     """The preset's polygon is reference problem 5's, its area the value computed from the published
     dimensions; the same section from parameters (slopes from the published vertices) is identical."""
@@ -260,6 +261,7 @@ def test_named_faces_2d_are_outward_and_wet_below_the_reservoir():
     assert np.abs(x[wet[:, 1], 1] - x[wet[:, 0], 1]).sum() == pytest.approx(80.0, rel=1e-12)
 
 
+@pytest.mark.reference
 def test_self_weight_of_koyna_section_through_a_scene(monkeypatch):
     """Plane strain, 1 m thick, base fixed, lifts on stiff linear joints: the base reactions sum to
     the section's weight rho g A (A from the published dimensions) and have no horizontal resultant."""

@@ -48,6 +48,7 @@ def _write_two_blocks(path):
         gmsh.finalize()
 
 
+@pytest.mark.reference
 def test_block_from_gmsh_file_slides_at_mu_w(tmp_path):
     msh = tmp_path / "two_blocks.msh"
     _write_two_blocks(msh)
@@ -106,6 +107,7 @@ def _write_two_boxes_tet(path, order=1):
         gmsh.finalize()
 
 
+@pytest.mark.reference
 def test_tetrahedral_gmsh_file_with_triangular_interfaces_slides_at_mu_w(tmp_path):
     """3D: a gmsh tetrahedral mesh read through meshio gets 6-node (3 + 3) triangular interfaces on
     the joint surface; a block pushed horizontally (oblique, in x and y) slides at mu W along the

@@ -213,6 +213,7 @@ def test_two_wythe_stack_bond_collar_count():
 # ------------------------------------------------------------------------------------------------
 # bonds as built: half units and closers at the ends, one body per unit
 # ------------------------------------------------------------------------------------------------
+@pytest.mark.reference
 def test_eindhoven_wall_half_units_alternate_ends():
     """990 mm = 4.5 expanded units: every course has 4 whole units and a half unit, at the right end
     in even courses and at the left end in odd courses (PROBLEMS.md sec. 6, 16 free courses)."""

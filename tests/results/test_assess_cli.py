@@ -122,6 +122,7 @@ def test_table_matches_dataset(dam_nc, capsys):
     assert out.rstrip().endswith("all 1 sections meet the usual criteria")
 
 
+@pytest.mark.slow
 def test_cracked_base_is_flagged(crack_nc, capsys, tmp_path):
     """Cracked base (resultant at 0.80 L, 39 % open, sliding factor 1.535): usual flags the resultant
     (middle third) and the cracked ratio but not the sliding factor, lists both under the table and says
@@ -151,6 +152,7 @@ def test_cracked_base_is_flagged(crack_nc, capsys, tmp_path):
     assert out.rstrip().endswith("all 1 sections meet the extreme criteria")
 
 
+@pytest.mark.slow
 def test_csv_round_trips(crack_nc, capsys, tmp_path):
     """--csv: a header row with units, one row per section whose floats equal the dataset's bit for bit
     (SI units), the step written, and the flags column naming the failures of the printed table."""

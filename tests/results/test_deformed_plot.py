@@ -461,6 +461,7 @@ def test_slice_across_inclined_joints(ds3):
     assert set(jx[higher.joint_point][np.abs(ds3.joint_normal_z.values[higher.joint_point]) > 0.99]) == {0.5}
 
 
+@pytest.mark.slow
 def test_cli_slice(result_3d, ds3, result, tmp_path, capsys, monkeypatch):
     from matplotlib.image import imread
 

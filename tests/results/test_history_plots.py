@@ -174,6 +174,7 @@ def test_file_without_records_and_result_without_motion(dyn):
     assert len(fig.axes) == 3 and "ground" not in " ".join(ax.get_ylabel() for ax in fig.axes)
 
 
+@pytest.mark.slow
 def test_history_figure_still_importable_from_the_cli(dyn):
     from masonrydam.cli.main import history_figure as from_cli
 

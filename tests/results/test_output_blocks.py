@@ -30,6 +30,7 @@ def run_with(tmp_path, name, **output):
     return xr.load_dataset(path), path
 
 
+@pytest.mark.slow
 def test_blocks_of_any_size_give_the_same_file_contents(tmp_path):
     one, _ = run_with(tmp_path, "one", buffer_steps=1)
     seven, _ = run_with(tmp_path, "seven", buffer_steps=7)  # 151 steps: 21 blocks and a remainder of 4
@@ -56,6 +57,7 @@ def test_single_precision_is_the_float32_rounding_of_double(tmp_path):
     assert spath.stat().st_size < 0.7 * dpath.stat().st_size
 
 
+@pytest.mark.slow
 def test_compression_keeps_every_bit(tmp_path):
     plain, ppath = run_with(tmp_path, "plain")
     packed, cpath = run_with(tmp_path, "packed", compression=4)

@@ -256,6 +256,7 @@ def test_shrunk_only_keeps_blocks_on_model_nodes(results, tmp_path):
     assert len(mesh.points) == ds.sizes["node"] + 4 * s.n_joint_cells
 
 
+@pytest.mark.slow
 def test_every_and_steps(results, tmp_path):
     ds = load(results["static"])
     n = ds.sizes["step"]

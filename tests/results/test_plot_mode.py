@@ -152,6 +152,7 @@ def test_figure_errors(ds):
         mode_figure(ds, 1, scale=float("nan"))
 
 
+@pytest.mark.slow
 def test_cli_writes_png(modal_nc, tmp_path, capsys, monkeypatch):
     png = tmp_path / "m2.png"
     rc, out, err = run_cli(capsys, modal_nc, "--mode", 2, "-o", png)
@@ -208,6 +209,7 @@ def test_cli_options_for_histories_only(modal_nc, tmp_path, capsys):
     assert rc == 2 and "--scale" in err and "--mode" in err
 
 
+@pytest.mark.slow
 def test_3d_mode_shape(tmp_path_factory):
     path = _write(tmp_path_factory, "modal3d", scene_3d())
     with xr.open_dataset(path) as d:

@@ -42,6 +42,7 @@ def test_pushover_data_and_figure(wall):
     assert "peak" in ax.get_legend().get_texts()[1].get_text()
 
 
+@pytest.mark.slow
 def test_pushover_cli_and_errors(wall, tmp_path):
     out = tmp_path / "push.png"
     r = subprocess.run([sys.executable, "-c", "import sys; from masonrydam.cli.main import main; sys.exit(main())",

@@ -55,6 +55,7 @@ def write_earlier_result(path):
     return ds
 
 
+@pytest.mark.slow
 def test_failing_run_keeps_an_open_earlier_result(tmp_path):
     """Another process holds the earlier result open (lazily, with xarray); a run that fails after
     validation leaves that file byte for byte, the reader reads its old values, and the failed run's
@@ -150,6 +151,7 @@ def wait_for_steps(proc, work, settle=2.0, timeout=120.0):
 
 @pytest.mark.parametrize("sig, code, status", [(signal.SIGINT, 130, "interrupted"),
                                                (signal.SIGTERM, 143, "terminated")])
+@pytest.mark.slow
 def test_signal_stops_at_the_end_of_a_step_and_keeps_the_steps(tmp_path, sig, code, status):
     """SIGINT / SIGTERM on `masonrydam run` over an earlier result: exit 130 / 143, one line naming the
     step, the time and the file, no traceback; the earlier result stays byte for byte; the kept steps
@@ -183,6 +185,7 @@ def test_signal_stops_at_the_end_of_a_step_and_keeps_the_steps(tmp_path, sig, co
     np.testing.assert_array_equal(ds.joint_state.values, ref.joint_state.values)
 
 
+@pytest.mark.slow
 def test_two_quick_ctrl_c_end_the_process_without_a_traceback(tmp_path):
     """Two SIGINT in a row (the second stops at once if the step has not ended yet): exit 130, one
     line, no traceback, and a readable file with the steps converged before."""
@@ -199,6 +202,7 @@ def test_two_quick_ctrl_c_end_the_process_without_a_traceback(tmp_path):
     assert ds.sizes["step"] >= 3 and np.isfinite(ds.displacement.values).all()
 
 
+@pytest.mark.slow
 def test_sigkill_leaves_the_earlier_result_and_a_readable_running_file(tmp_path):
     proc, out = start_cli_run(tmp_path)
     write_earlier_result(out)
@@ -285,6 +289,7 @@ def test_file_system_mistakes_are_one_line_messages(tmp_path, capsys):
         assert code == 2 and text in err and len(err.strip().splitlines()) == 1, (argv, err)
 
 
+@pytest.mark.slow
 def test_plot_names_what_is_wrong_with_the_file(tmp_path, capsys):
     text = tmp_path / "notes.nc"
     text.write_text("not a result")

@@ -320,6 +320,7 @@ def test_non_convergence_keeps_converged_steps(tmp_path):
 # ------------------------------------------------------------------------------------------------
 # command line
 # ------------------------------------------------------------------------------------------------
+@pytest.mark.slow
 def test_cli_run_default(tmp_path, capsys):
     out = tmp_path / "w.nc"
     rc = main(["run", "--default", "-o", str(out), "--no-progress"])

@@ -35,6 +35,7 @@ def _rotation(ds):
     return np.arctan2(d[:, left, 1] - d[:, right, 1], 0.5 + d[:, right, 0] - d[:, left, 0])
 
 
+@pytest.mark.reference
 def test_arc_length_follows_the_toppling_branch():
     s = tilted_block("large")
     s["stages"][1].update({"control": "arc_length", "steps": 20, "until_failure": True})
@@ -49,6 +50,7 @@ def test_arc_length_follows_the_toppling_branch():
     assert "arc-length" in ds.attrs["limit_state"] and ds.attrs["arc_length_steps"] > 10
 
 
+@pytest.mark.slow
 def test_load_control_switches_to_arc_length_where_it_stalls(tmp_path):
     """The same block loaded to 0.5 g under load control: the steps stall at the peak (0.25 g), the stage
     goes on under arc-length control and follows the descending branch; it cannot reach 0.5 g on it, so

@@ -44,6 +44,7 @@ def end_curve(ds, top_y, width):
     return u, sigma
 
 
+@pytest.mark.slow
 def test_tension_softening_through_the_joint():
     ds = masonrydam.run(bar(0.1, 5e-4, steps=400))
     u, sigma = end_curve(ds, 0.2, 0.1)
@@ -57,7 +58,7 @@ def test_tension_softening_through_the_joint():
     assert "composite masonry joints" in ds.attrs["simulated_effects"]
 
 
-@pytest.mark.parametrize("control", ["opening", "load"])
+@pytest.mark.parametrize("control", ["opening", pytest.param("load", marks=pytest.mark.slow)])
 def test_snap_back_followed_by_indirect_displacement_control(control):
     """L = 10 m, four times the snap-back length E (GfI / ft^2 - 1/kn) = 2.8 m: under displacement control
     the end would have to move back after the peak. ``control = "opening"`` follows it from the start;
@@ -79,6 +80,7 @@ def test_snap_back_followed_by_indirect_displacement_control(control):
         assert ds.attrs["arc_length_switches"] == 1
 
 
+@pytest.mark.slow
 def test_viscous_regularisation_converges_to_the_inviscid_softening_curve():
     """Duvaut-Lions relaxation (``relaxation_time``; Simo & Hughes 1998 sec. 2.7): pulled at a finite rate the
     joint carries an overstress above ft at the peak, and the softening branch departs from the inviscid closed

@@ -125,6 +125,7 @@ def test_elastic_step_dissipates_nothing_and_plastic_work_is_the_closed_form():
     assert d == pytest.approx(exact, rel=1e-6)
 
 
+@pytest.mark.slow
 def test_snap_back_followed_by_dissipation_control():
     """L = 10 m (a snap-back): the traced branch is the closed form, and the joint's dissipation adds up to
     GfI A, converging as the stage's steps (its resolution) grow."""
@@ -183,6 +184,7 @@ def test_a_failing_control_hands_its_last_state_to_the_next(monkeypatch):
     assert stage["steps"] == len(u)  # every converged step of the three controls, recorded once
 
 
+@pytest.mark.slow
 def test_dissipation_control_takes_over_where_the_other_controls_fail(monkeypatch):
     """Load control stalls at the bar's peak; the cylindrical arc and the opening control are made to fail at
     once, so dissipation control starts from the stalled state (its first target from the work done so far)

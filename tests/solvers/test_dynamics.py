@@ -123,7 +123,7 @@ def test_sdof_harmonic_base_motion_matches_exact_solution():
     assert np.abs(u - exact).max() <= 0.01 * np.abs(exact).max()
 
 
-@pytest.mark.parametrize("integrator", ["newmark_average", "central_difference"])
+@pytest.mark.parametrize("integrator", [pytest.param("newmark_average", marks=pytest.mark.slow), "central_difference"])
 def test_sdof_el_centro_matches_exact_piecewise_linear_solution(integrator):
     """El Centro 1940 NS (bundled Peknold record, dt = 0.02 s), T = 0.5 s, 2 % damping. The exact
     solution for an excitation linear between samples (Chopra 2012, Table 5.2.1) on the analysis
@@ -380,6 +380,7 @@ def timoshenko_cantilever_frequencies(L, H, E, nu, rho, t, f_max, kappa):
     return [scipy.optimize.brentq(det, fs[i], fs[i + 1]) for i in range(len(fs) - 1) if np.sign(d[i]) != np.sign(d[i + 1])]
 
 
+@pytest.mark.slow
 def test_cantilever_modal_frequencies_converge_to_beam_theory():
     """Cantilever L/H = 20 (quad8, plane stress, nu = 0, consistent mass), clamped at x = 0, against
     - Timoshenko beam theory with Cowper's (1966) shear coefficient kappa = 10 (1 + nu) / (12 + 11 nu)
@@ -450,6 +451,7 @@ def newmark_half_sine_slip(A, ay, tp):
 
 
 @pytest.mark.parametrize("shape", ["rectangular", "half_sine"])
+@pytest.mark.reference
 def test_newmark_sliding_block_permanent_slip(shape):
     """Reference problem 1 (Newmark 1965): an elastic block on a Mohr-Coulomb joint (c = 0, mu = 0.2,
     kn = ks = 1e10 Pa/m) after a gravity stage, horizontal pulse of amplitude A = 0.4 g.
@@ -482,6 +484,8 @@ def test_newmark_sliding_block_permanent_slip(shape):
     assert s_hist[np.searchsorted(t, t_stop - 0.05)] < expected - 0.5 * ay * 0.05**2 / 2
 
 
+@pytest.mark.slow
+@pytest.mark.reference
 def test_central_difference_sliding_block():
     """Explicit central difference with the joints evaluated once per step: the rectangular-pulse
     sliding block (Newmark 1965) within 0.5 % (the code reaches 2.7e-3: the joint law evaluated once
@@ -521,6 +525,7 @@ B, H = ROCKING_BLOCK_WIDTH, ROCKING_BLOCK_HEIGHT  # block width 2b and height 2h
 
 
 @pytest.mark.parametrize("factor, rocks", [(0.98, False), (1.02, True)])
+@pytest.mark.reference
 def test_housner_rocking_starts_at_g_b_over_h(factor, rocks):
     """Reference problem 3 (Housner 1963): a block on a no-tension frictional joint starts to rock when
     the base acceleration exceeds g b/h. A ground acceleration raised slowly (0.5 s, quasi-static for
@@ -566,6 +571,7 @@ def free_rocking(integrator, dt, theta_ratio=0.02, duration=0.3, **kw):
     return rec[:, 0], rec[:, 1], rec[:, 2], th0, alpha
 
 
+@pytest.mark.reference
 def test_housner_free_rocking_quarter_period_impact_and_energy():
     """Reference problem 3 (Housner 1963), block 0.3 x 1.5 m released from theta0 = 0.02 alpha:
     - time to the first impact T/4 = acosh(1 / (1 - theta0/alpha)) / p, p = sqrt(3 g / (4 R)), within
@@ -609,6 +615,7 @@ def test_energy_never_grows_at_impacts_with_the_trapezoidal_rule():
 # scenes, results, failures
 # ----------------------------------------------------------------------------------------------
 
+@pytest.mark.slow
 def test_time_history_file_stride_selection_energy_and_provenance(tmp_path):
     """The netCDF file of a dynamic scene: time coordinate (NaN for static steps), every stride-th step,
     the selected nodes and joints, velocity / acceleration relative and absolute (absolute = relative +
@@ -713,6 +720,7 @@ def test_non_converging_step_raises_with_time_and_keeps_the_file(tmp_path):
     assert ds.sizes["step"] >= 2 and np.isfinite(ds.displacement.values).all()
 
 
+@pytest.mark.slow
 def test_killed_run_leaves_a_readable_incomplete_file(tmp_path):
     """A run killed halfway (SIGKILL) leaves its working file (killed.partial.nc) that xarray reads,
     with the steps written (each one flushed) and completed = false, status = running; the target

@@ -190,6 +190,7 @@ def test_woodbury_update_equals_the_dense_solve():
     np.testing.assert_allclose(x, np.linalg.solve(K, b), rtol=1e-10, atol=1e-12)
 
 
+@pytest.mark.reference
 def test_sliding_block_same_history_as_the_general_path_and_newmark_slip():
     """Reference problem 1: rectangular pulse A = 0.4 g for 0.2 s on a joint with mu = 0.2. Permanent
     slip of a rigid block (Newmark 1965): s = A t_p^2 (A - a_y) / (2 a_y) with a_y = mu g. The condensed
@@ -245,6 +246,7 @@ def test_sticking_steps_take_no_joint_space_iteration():
     assert int(a["dynamic_factorizations"]) == 1
 
 
+@pytest.mark.slow
 def test_rocking_block_same_history_as_the_general_path():
     """Reference problem 3 (Housner 1963): the block 0.3 x 1.5 m on a no-tension joint under a
     half-sine ground pulse of 1.5 g b/h lifts off (joint points open), rocks on its toe and lands on
@@ -374,6 +376,7 @@ def test_reevaluating_some_points_equals_a_full_residual_evaluation():
     assert e1[0] == pytest.approx(err_r, rel=1e-12)
 
 
+@pytest.mark.slow
 def test_holding_flipping_points_cuts_the_iterations_of_a_cracking_dam(monkeypatch):
     """When the neck of the Koyna section cracks (first 3 s of El Centro at 0.5 g), points on the
     stick/slip and open/closed boundaries flip state from one Newton iteration to the next. Holding

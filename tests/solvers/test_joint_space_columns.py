@@ -105,6 +105,7 @@ def _slip(ds):
     return -ds.displacement.sel(component="x").isel(node=top).mean(axis=1).values
 
 
+@pytest.mark.reference
 def test_lazy_columns_give_the_dense_history_and_newmark_slip(monkeypatch):
     """The sliding block (every step of the pulse slides) with the columns of S computed when first
     needed (JOINT_SPACE_MAX lowered to 0) gives the history of the dense flexibility to round-off and
@@ -165,6 +166,7 @@ def test_a_store_too_small_for_a_step_hands_it_to_the_general_path(monkeypatch):
     assert _slip(ds)[-1] == pytest.approx(A * tp**2 * (A - ay) / (2 * ay), rel=5e-4)
 
 
+@pytest.mark.slow
 def test_static_steps_with_lazy_columns_reach_the_dense_state(monkeypatch):
     """The 3D dam example (coarse: element_size 20) under self-weight, where contraction-joint points
     slide and open: static steps solved in joint space with the columns computed when first needed

@@ -539,6 +539,7 @@ def test_refactorization_with_the_kept_analysis_solves_the_new_matrix():
     assert not Factorization(K, "superlu").refactorize(K2)
 
 
+@pytest.mark.slow
 def test_static_run_reuses_the_symbolic_analysis():
     """A nonlinear static run with PARDISO analyses the tangent pattern once per constraint set (and
     again only where the kept matching perturbs pivots), not once per factorization, and reports both

@@ -30,6 +30,8 @@ def sliding_slip(**kw):
     return -float(ds.joint_slip.isel(step=-1).values.mean()), ds
 
 
+@pytest.mark.slow
+@pytest.mark.reference
 def test_auto_dt_sliding_block_reaches_the_converged_slip_in_fewer_steps():
     """Newmark (1965) rectangular pulse on the elastic block of reference problem 1 (kn = ks = 1e10 Pa/m).
 
@@ -62,6 +64,7 @@ def test_auto_dt_sliding_block_reaches_the_converged_slip_in_fewer_steps():
     assert ds.attrs["dynamic_steps_rejected"] == stage["steps_rejected"]
 
 
+@pytest.mark.slow
 def test_auto_dt_linear_sdof_under_el_centro_within_one_percent_rms():
     """A linear SDOF (T = 0.5 s, 2 % damping) under El Centro 1940 NS (bundled Peknold record, 0.02 s):
     the exact response to the piecewise-linear record (Chopra 2012, Table 5.2.1) on the record's grid.
@@ -112,6 +115,7 @@ def koyna_section(dt, duration=4.0):
     return Scene(sc, base_dir=EXAMPLES)
 
 
+@pytest.mark.slow
 def test_koyna_at_a_large_step_warns_that_contact_events_created_energy(tmp_path):
     """The Koyna section (reference problem 5) with stiff lift joints (kn = 1e11 Pa/m: rattle modes of a
     few hundred Hz) stepped at dt = 0.01 s: compressed joint points open within a step, and the
@@ -135,6 +139,7 @@ def test_koyna_at_a_large_step_warns_that_contact_events_created_energy(tmp_path
         assert d.attrs["energy_numerical_relative"] > 0
 
 
+@pytest.mark.slow
 def test_rocking_impacts_are_a_named_loss():
     """A 0.3 x 1.5 m block on a stiff no-tension joint (kn = 1e12 Pa/m) rocked by a 2 Hz base motion of
     2 g b/h (Housner 1963: it rocks above g b/h), dt = 0.5 ms: its impacts lose energy, named as the
@@ -171,6 +176,7 @@ def test_auto_dt_scene_errors_name_the_key(stage, key, match):
     assert err.value.key == key
 
 
+@pytest.mark.slow
 def test_accuracy_study_quick_variant_runs_and_converges(capsys):
     """benchmarks/accuracy_cost.py --quick (the CI variant of docs/accuracy.md's study) on its two cheap
     cases: the sliding block's slip error falls from dt = 10 ms to 2.5 ms and dt = "auto" at 1e-4 is
@@ -214,6 +220,7 @@ def test_chord_error_is_the_exact_velocity_missed_by_a_linear_load():
     assert h.peak_velocity == pytest.approx(0.05, rel=1e-12)  # trapezoids: 0.05, then 0.05 + 0
 
 
+@pytest.mark.slow
 def test_auto_dt_koyna_with_linear_joints_within_one_percent_rms_of_the_converged_history():
     """Issue 14's acceptance on the Koyna section (reference problem 5) with every joint linear
     (kn = ks = 1e11 Pa/m), coarse mesh (2.9 m), first 4 s of El Centro at 0.5 g: dt = "auto" at its

@@ -51,6 +51,8 @@ def sliding_row(ds):
     return rows[k], normal
 
 
+@pytest.mark.slow
+@pytest.mark.reference
 def test_constant_load_j4d_slides_at_coulomb_friction():
     ds = masonrydam.run(j4d(**{"stages[1].loads[0].components": ["x"], "stages[1].loads[0].value": ["4 mm"]}))
     d, f, _ = pushover_data(ds)
@@ -70,6 +72,7 @@ def test_constant_load_j4d_slides_at_coulomb_friction():
     assert np.ptp(uy) <= 1e-4 * np.abs(uy).max()
 
 
+@pytest.mark.slow
 def test_dissipation_control_follows_the_displacement_controlled_j4d_curve():
     """``control = "dissipation"`` (Verhoosel, Remmers & Gutierrez 2009): the same equilibrium path as
     displacement control where that converges (constant vertical load: no snap-back at the wall's scale),
@@ -90,6 +93,8 @@ def test_dissipation_control_follows_the_displacement_controlled_j4d_curve():
     assert dissipated > 2e-3 * TAN_PHI * P * LENGTH * THICKNESS
 
 
+@pytest.mark.slow
+@pytest.mark.reference
 def test_cyclic_j4d_hysteresis_plateaus_are_coulomb_friction():
     spec = importlib.util.spec_from_file_location("cyclic", EXAMPLES / "eindhoven_J4D_cyclic.py")
     mod = importlib.util.module_from_spec(spec)

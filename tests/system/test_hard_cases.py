@@ -157,6 +157,7 @@ def free_rocking_history(integrator, dt=5e-4, duration=1.0, theta_ratio=0.02, **
                "energy (Housner: r^2 = 89 %) and the mechanical energy rises across the 7th and 10th impacts "
                "(+6 %, +8 %); there is no contact damping or restitution parameter to remove the vibrations")),
 ])
+@pytest.mark.slow
 def test_free_rocking_repeated_impacts_no_spurious_sliding(integrator):
     """Housner (1963): a rigid block rocking on a rigid base with mu = 1 never slides (the impact impulse
     needs |P_x / P_y| = h (1 - r) / (b (1 + r)) = 0.15 of friction here), and every impact keeps the
@@ -234,6 +235,7 @@ def test_stick_slip_reversal_hysteresis_loop_area():
 RATIOS = [1e1, 1e2, 1e3, 1e4, 1e5, 1e6]
 
 
+@pytest.mark.slow
 def test_penalty_ratio_column_converges_to_the_jointless_answer():
     """A 1 x 4 m column (E = 10 GPa, nu = 0, plane stress, h = 0.25 m elements) with a Mohr-Coulomb
     joint at mid-height, self-weight and a 0.1 MPa top pressure, plus a sideways body force 0.5 g (the
@@ -280,6 +282,7 @@ def test_penalty_ratio_column_converges_to_the_jointless_answer():
 
 
 @pytest.mark.parametrize("ratio", RATIOS)
+@pytest.mark.reference
 def test_penalty_ratio_no_traction_oscillation_with_lumped_integration(ratio):
     """Schellekens & de Borst (1993), reference problem 7 of test_system: two blocks (E = 2 GPa) on a
     stiff cohesive joint that stops at a notch, the right block pulled (1e5 Pa on its 0.4 m end), h =
@@ -441,6 +444,7 @@ def ballistic_flight(A, t_ramp, t_hold):
     return u + v * v / (2 * G), tp + (v + math.sqrt(v * v + 2 * G * u)) / G
 
 
+@pytest.mark.slow
 def test_lift_off_flight_and_recontact_match_the_ballistic_closed_form():
     """The sliding block of test_dynamics (kn = 1e10 Pa/m) after its gravity stage; the ground drops
     with a downward acceleration ramped to 1.5 g in 20 ms, held 80 ms and ramped back: every joint
@@ -478,6 +482,7 @@ def test_lift_off_flight_and_recontact_match_the_ballistic_closed_form():
 # 7. brittle cascade through many joints
 # ------------------------------------------------------------------------------------------------
 
+@pytest.mark.slow
 def test_brittle_cascade_through_ten_joints_crosses_or_stops_quickly(tmp_path):
     """A stack of 11 blocks (1 x 0.25 m, E = 10 GPa, nu = 0, no weight) on 10 cohesive bed joints
     (ft = 0.1 MPa, c = 0.2 MPa, kn = 1e11 Pa/m), pulled at the top (displacement control) to twice the
@@ -789,6 +794,7 @@ def test_3d_mesh_uses_the_8_node_interface():
     assert sc.normalized["joints"]["joints"]["integration"] == "lumped"
 
 
+@pytest.mark.slow
 def test_3d_sliding_under_two_horizontal_components_follows_the_input():
     """Newmark (1965) in 3D: a 1 x 1 x 0.5 m block on a cohesionless joint (mu = 0.2) under rectangular
     pulses in x and y together, |a_g| = 0.4 g at 30 deg from x, 0.2 s. Isotropic Coulomb friction (seed
@@ -814,6 +820,8 @@ def test_3d_sliding_under_two_horizontal_components_follows_the_input():
 
 
 @pytest.mark.parametrize("factor, rocks", [(0.98, False), (1.02, True)])
+@pytest.mark.slow
+@pytest.mark.reference
 def test_3d_rocking_onset_under_two_horizontal_components(factor, rocks):
     """Housner's (1963) static rocking criterion for a box with a square base of half-width b and
     centroid height h under a horizontal acceleration k g at angle theta: the resultant of weight and
@@ -904,6 +912,7 @@ def disp_in_phase(A, omega, a_y, t1, sig, x):
                "back at 5-6 mm/s through the whole 11 ms stick window; every later cycle inherits it: slip "
                "history off by 6.7 % of its amplitude (0.09 % at dt = 1 ms)")),
 ])
+@pytest.mark.slow
 def test_two_way_stick_slip_under_harmonic_ground_motion(dt):
     """Stick-slip with reversals: the sliding block of test_dynamics (mu = 0.2) under a_g = 0.35 g
     sin(2 pi t / 0.5 s) for three cycles slides 6 times, alternately against the ground's
@@ -929,6 +938,7 @@ def test_two_way_stick_slip_under_harmonic_ground_motion(dt):
     assert np.abs(slip - ref).max() <= 0.01 * amplitude
 
 
+@pytest.mark.slow
 def test_chatter_free_contact_at_a_vanishing_normal_force():
     """Chatter: the sliding block of test_dynamics under a vertical harmonic ground acceleration of
     0.99 g (period 0.2 s, ramped in over 0.2 s): the contact force m (g + a_g) (d'Alembert, rigid

@@ -44,6 +44,7 @@ def top_force(ds, component, y_top):
 
 
 @pytest.mark.parametrize("beta_deg, c", [(10.0, 0.0), (20.0, 0.0), (10.0, 1e3)])
+@pytest.mark.reference
 def test_block_on_incline_horizontal_push(beta_deg, c):
     """Reference problem 2: horizontal force that pushes a block up a slope beta, friction phi,
     cohesion c on the contact area A: P = (W sin b + mu W cos b + c A) / (cos b - mu sin b),
@@ -80,6 +81,7 @@ def _rotated_top_nodes(ds, beta_deg, y_top):
     return np.nonzero(np.isclose(y_unrot, y_top, atol=1e-9))[0]
 
 
+@pytest.mark.reference
 def test_block_on_incline_slides_under_self_weight_only_if_tan_beta_exceeds_mu():
     """Reference problem 2: with c = 0 a block slides under its own weight iff tan(beta) > mu."""
     joint = {"normal_stiffness": 1e11, "shear_stiffness": 1e11, "friction_angle": 30.0}
@@ -199,6 +201,7 @@ def _direction_changes(values):
     return int((np.sign(d[1:]) != np.sign(d[:-1])).sum())
 
 
+@pytest.mark.reference
 def test_gauss_integration_oscillates_lumped_does_not():
     """Reference problem 7: with a stiff interface, Gauss integration couples the nodes and the
     tractions oscillate from point to point near a steep gradient; nodal (lumped) integration gives

@@ -127,6 +127,7 @@ def _critical_k(beta_deg, theta_deg, phi=30.0):
 
 
 @pytest.mark.parametrize("beta_deg, theta_deg", [(10.0, 60.0), (15.0, 135.0)])
+@pytest.mark.reference
 def test_block_on_incline_oblique_push_slides_at_closed_form_load(beta_deg, theta_deg):
     """Reference problem 2 in 3D with an oblique horizontal push (perfectly plastic joint): the
     block holds at 97 % of the closed-form seismic coefficient and slides (no equilibrium) at
@@ -253,6 +254,7 @@ def test_stack_of_blocks_under_top_pressure_is_uniform():
     np.testing.assert_allclose(uz_top.mean(), expected, rtol=1e-8)
 
 
+@pytest.mark.slow
 def test_dam_3d_gravity_general_newton_converges_where_joints_stay_open():
     """The 3D dam example (gravity only, element_size 20): contraction joints and abutment steps open
     under self-weight and stay open. The general Newton path must converge quadratically there: a

@@ -16,8 +16,14 @@ from ..elements.shapes import shape_functions
 from ..errors import STATUS_BAD_GEOMETRY, STATUS_BAD_JACOBIAN, STATUS_NAN, MeshError, NumericalError
 from ..materials.continuum_laws import continuum_law
 from ..materials.joint_laws import RESULT_OPEN, joint_law
+from ..materials.plasticity import P_VISCOSITY
 from ..mesh.model import INTERFACE_FACE_TYPE
 from .dofmap import DofMap
+
+#: [model] kinematics: small displacements (linear) or large (total Lagrangian, rotating joint frames)
+KINEMATICS = ("small", "large")
+#: [joints.<set>] frame with large kinematics: the surface whose current direction is the joint's frame
+JOINT_FRAMES = ("mid_surface", "bottom")
 
 
 def raise_for_status(status: int, info: np.ndarray, group: str, what: str, element_ids=None):
@@ -104,6 +110,11 @@ class ContinuumGroup:
     @property
     def plastic(self) -> bool:
         return self.continuum_law.plastic
+
+    @property
+    def viscous(self) -> bool:
+        """An elasto-plastic law with Perzyna viscosity > 0 in some element: its forces depend on the time step."""
+        return self.plastic and bool((self.law_params[:, P_VISCOSITY] > 0).any())
 
     @property
     def large(self) -> bool:

@@ -149,9 +149,7 @@ class Model:
     def rate_dependent(self) -> bool:
         """Some elasto-plastic group has Perzyna viscosity: its forces depend on :attr:`time_step`, not on the
         displacement alone."""
-        from ..materials.plasticity import P_VISCOSITY
-
-        return (any(g.plastic and (g.law_params[:, P_VISCOSITY] > 0).any() for g in self.cgroups)
+        return (any(g.viscous for g in self.cgroups)
                 or any(g.relaxation_time > 0 for g in self.igroups))
 
     @property

@@ -1,18 +1,13 @@
 """Large displacements (issue 17; the seed's total Lagrangian description): the effect ``[model] kinematics =
 "large"``, with ``[joints.<set>] frame``.
 
-Schema fragment: :data:`KINEMATICS`, :data:`JOINT_FRAMES`; model contribution: total Lagrangian
+Schema fragment: :data:`~masonrydam.assembly.groups.KINEMATICS`, :data:`~masonrydam.assembly.groups.JOINT_FRAMES`
+(the groups interpret them); model contribution: total Lagrangian
 blocks (:mod:`masonrydam.elements.continuum_large`) and joints whose frame turns with them
 (:mod:`masonrydam.elements.interface_large`), chosen per group by the scene builder; reference and tests:
 :data:`EFFECTS` (docs/continuum_nonlinearity.md).
 """
 from __future__ import annotations
-
-#: [model] kinematics: small displacements (linear) or large (total Lagrangian, rotating joint frames)
-KINEMATICS = ("small", "large")
-#: [joints.<set>] frame with large kinematics: the surface whose current direction is the joint's frame
-JOINT_FRAMES = ("mid_surface", "bottom")
-
 
 
 

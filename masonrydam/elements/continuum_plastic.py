@@ -19,14 +19,14 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from ..errors import STATUS_NAN, STATUS_OK
-from ..materials.continuum_laws import continuum_laws
+from ..errors import STATUS_NAN, STATUS_OK, SceneError
+from ..materials.continuum_laws import ELASTIC_LAW, continuum_law, continuum_laws
 from ..materials.drucker_prager import drucker_prager_point
 from ..materials.mohr_coulomb_solid import mohr_coulomb_solid_point
 from ..materials.plasticity import WORK_SIZE
 from ..materials.tresca import tresca_point
 from ..materials.von_mises import von_mises_point
-from .continuum import (DETJ_RTOL, _add_btdb, _add_btsigma, _bad_det_status, _block_finite, _dim_tag,
+from .continuum import (DETJ_RTOL, element_tables, _add_btdb, _add_btsigma, _bad_det_status, _block_finite, _dim_tag,
                         _gather_displacements, _gather_element, _gradients, _voigt_map)
 
 #: law identifiers of :func:`continuum_plastic_evaluate` (the branches of ``_plastic_impl``): each plastic law's
@@ -123,3 +123,50 @@ def continuum_plastic_evaluate(coords, conn, dN_ref, weights, thickness, u, para
     """
     return _plastic_impl(coords, conn, dN_ref, weights, thickness, u, params, param_index, state_committed,
                          state_trial, float(dt), bool(want_tangent), int(law), fe_out, ke_out, info, _dim_tag(coords))
+
+
+# -- the parameter table of a group ----------------------------------------------------------------------
+
+def element_sizes(coords: np.ndarray, conn: np.ndarray, type_name: str) -> np.ndarray:
+    """Characteristic length of each element (ne,) m: the square root of its area (2D) or the cube root of
+    its volume (3D), the crack-band width of a softening element (Bazant & Oh 1983, Mater. Struct. 16)."""
+    _, dN, w = element_tables(type_name)
+    J = np.einsum("gin,enj->egij", dN, coords[conn])
+    size = np.einsum("g,eg->e", w, np.abs(np.linalg.det(J)))
+    return size ** (1.0 / coords.shape[1])
+
+
+def law_parameter_table(m: dict, name: str, dim: int, hypothesis: str, coords=None, conn=None, type_name=None):
+    """The parameter table of an elasto-plastic material, None for an elastic one: one row (1, P), or one
+    row per element (ne, P) when a softening modulus is regularised by the element size (crack band:
+    ``H_e = H l_e / regularisation_length`` keeps the energy dissipated per unit area of a localised band
+    independent of the mesh; Bazant & Oh 1983; Pietruszczak & Mroz 1981, IJNME 17, for plasticity)."""
+    law = continuum_law(m.get("law", ELASTIC_LAW))
+    if not law.plastic:
+        return None
+    key = f"materials.{name}"
+    if dim == 2 and hypothesis != "plane_strain":
+        raise SceneError(f"{key}.law", f"\"{law.name}\" needs plane strain in 2D ([model] hypothesis = "
+                                       f"\"plane_strain\"; the laws keep the out-of-plane stress), got {hypothesis!r}")
+    soft_key, column = law.hardening_key, law.hardening_column
+
+    def row(h, where=""):
+        try:
+            r = law.parameters(m, h)
+        except ValueError as exc:
+            raise SceneError(key if not where else f"{key}.{soft_key}", str(exc) + where) from None
+        return np.asarray(r, dtype=np.float64)
+
+    h = m[soft_key]
+    base = row(h)
+    length = m.get("regularisation_length")
+    if length is None or h >= 0.0 or conn is None:
+        return np.ascontiguousarray(base.reshape(1, -1))
+    sizes = element_sizes(coords, conn, type_name)
+    big = int(np.argmax(sizes))
+    # the steepest softening is that of the largest element: it must not snap back within the element
+    row(h * sizes[big] / length, f" (element {big} of '{name}', size {sizes[big]:.4g} m, scaled from "
+                                 f"regularisation_length = {length:g} m: refine the mesh there, or soften less)")
+    table = np.repeat(base.reshape(1, -1), len(conn), axis=0)
+    table[:, column] = h * sizes / length
+    return np.ascontiguousarray(table)

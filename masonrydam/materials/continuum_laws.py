@@ -22,6 +22,8 @@ from typing import Callable
 
 import numpy as np
 
+from ..checks import choice, number, positive
+from ..errors import SceneError
 from . import drucker_prager, mohr_coulomb_solid, tresca, von_mises
 
 #: the elastic law's name (the default of ``[materials.<group>] law``)
@@ -143,3 +145,54 @@ def continuum_law(name: str) -> ContinuumLaw:
         return _LAWS[name]
     except (KeyError, TypeError):
         raise ValueError(f"unknown continuum law {name!r}; laws: {list(_LAWS)}") from None
+
+
+# -- the law keys of a material table ([materials.<group>]) --------------------------------------------------
+
+#: continuum laws of ``[materials.<group>] law`` and their own keys (with defaults; None: required), from the
+#: descriptors above
+CONTINUUM_LAWS = {law.name: dict(law.keys) for law in continuum_laws()}
+#: keys that may be absent (None: not given)
+_OPTIONAL_LAW_KEYS = ("dilation_angle", "regularisation_length")
+
+
+def material_law(d, key) -> dict:
+    """The elasto-plastic part of a material (``law`` and its parameters; SI, angles in degrees)."""
+    law = choice(d.get("law", ELASTIC_LAW), tuple(CONTINUUM_LAWS), f"{key}.law")
+    spec = CONTINUUM_LAWS[law]
+    for k in d:
+        if k in {kk for other in CONTINUUM_LAWS.values() for kk in other} and k not in spec:
+            raise SceneError(f"{key}.{k}", f"is a parameter of another law; law is \"{law}\"")
+    out = {"law": law}
+    for k, default in spec.items():
+        if k not in d:
+            if default is None and k not in _OPTIONAL_LAW_KEYS:
+                raise SceneError(f"{key}.{k}", f"is required for law = \"{law}\"")
+            out[k] = default
+            continue
+        v = d[k]
+        if k in ("yield_stress", "cohesion"):
+            out[k] = positive(v, "stress", f"{key}.{k}", allow_zero=(k == "cohesion"))
+        elif k in ("residual_yield_stress", "residual_cohesion"):
+            out[k] = positive(v, "stress", f"{key}.{k}", allow_zero=True)
+        elif k == "regularisation_length":
+            out[k] = positive(v, "length", f"{key}.{k}")
+        elif k in ("isotropic_hardening", "kinematic_hardening", "cohesion_hardening"):
+            out[k] = number(v, f"{key}.{k}")
+            if out[k] < 0.0 and k == "kinematic_hardening":
+                raise SceneError(f"{key}.{k}", f"must be >= 0 (Pa), got {v!r}")
+            if out[k] < 0.0 and "regularisation_length" not in d:
+                raise SceneError(f"{key}.{k}", f"{v!r} is softening: a softening continuum needs a regularisation "
+                                               "length (regularisation_length, m: the element size this softening "
+                                               "modulus holds for; each element's modulus is scaled by its size so "
+                                               "that the fracture energy does not depend on the mesh); or use a "
+                                               "hardening modulus >= 0")
+        elif k == "viscosity":
+            out[k] = number(v, f"{key}.{k}")
+            if out[k] < 0.0:
+                raise SceneError(f"{key}.{k}", f"the Perzyna viscosity (Pa s) must be >= 0, got {v!r}")
+        elif k in ("friction_angle", "dilation_angle"):
+            out[k] = number(v, f"{key}.{k}", 0.0, 89.9)
+        else:  # match
+            out[k] = choice(v, ("plane_strain", "outer", "inner"), f"{key}.{k}")
+    return out

@@ -17,7 +17,8 @@ from ..errors import SceneError
 from ..materials.continuum_laws import ELASTIC_LAW, continuum_law
 from ..materials.joint_laws import joint_law, joint_laws
 from ..materials.elastic import elasticity_matrix
-from ..effects import plasticity, simulated
+from ..effects import simulated
+from ..elements.continuum_plastic import law_parameter_table
 from ..mesh.io import read_mesh
 from ..mesh.model import Mesh
 from ..mesh.sets import node_set
@@ -67,7 +68,7 @@ def build_model(scene: dict, mesh: Mesh) -> Model:
             raise SceneError(f"materials.{b.name}.law", f"\"{law}\" is a small-strain law: with [model] kinematics = "
                                                         "\"large\" the blocks must be elastic (St. Venant-Kirchhoff); "
                                                         "use kinematics = \"small\" for elasto-plastic blocks")
-        law_params = plasticity.law_params(m, b.name, dim, hyp, mesh.points, b.cells, b.type)
+        law_params = law_parameter_table(m, b.name, dim, hyp, mesh.points, b.cells, b.type)
         try:
             cgroups.append(ContinuumGroup(b.name, b.type, b.cells, DofMap.node_dofs(b.cells, dim),
                                           np.ascontiguousarray(D), np.zeros(ne, dtype=np.int64), np.full(ne, t),

@@ -22,8 +22,8 @@ from generators.dams import PRESETS
 from generators.walls import BONDS
 
 from ..effects import effect_reference, effect_sections_meaning, load_types
-from ..effects.large_kinematics import JOINT_FRAMES, KINEMATICS
-from ..effects.plasticity import CONTINUUM_LAWS
+from ..assembly.groups import JOINT_FRAMES, KINEMATICS
+from ..materials.continuum_laws import CONTINUUM_LAWS
 from ..elements.quadrature import QUADRATURE_SCHEMES
 from ..keys import ABSENT, REQUIRED, TIME, UNIT, Key, Section, key
 from ..pulses import PULSE_SHAPES

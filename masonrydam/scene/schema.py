@@ -28,8 +28,8 @@ from ..checks import seconds as _time
 from ..checks import vector as _vector
 from ..units import quantity
 from ..effects import load_types, normalize_dynamic_load, sections
-from ..effects.large_kinematics import JOINT_FRAMES, KINEMATICS
-from ..effects.plasticity import CONTINUUM_LAWS, material_law
+from ..assembly.groups import JOINT_FRAMES, KINEMATICS
+from ..materials.continuum_laws import CONTINUUM_LAWS, material_law
 from ..materials.joint_laws import DEFAULT_JOINT_LAW, JOINT_KEYS, joint_law, joint_laws
 
 HYPOTHESES = ("plane_stress", "plane_strain")

@@ -15,7 +15,6 @@ from ..assembly.model import Model
 from ..effects import DynamicStageParts, ModelContext, StaticStageLoads, build_dynamic_stage, finish_static_stage
 from ..effects import stage_load_builders
 from ..errors import SceneError
-from ..materials.plasticity import P_VISCOSITY
 from ..mesh.model import Mesh
 from ..mesh.sets import node_set
 from ..solvers.dynamic import DynamicSettings, DynamicStage, ModalStage
@@ -54,7 +53,7 @@ def build_stages(scene: dict, mesh: Mesh, model: Model, base_dir: Path | None = 
         for j, ld in enumerate(st["loads"]):
             builders[ld["type"]](context, loads, ld, f"stages[{i}].loads[{j}]")
         finish_static_stage(context, loads)
-        viscous = [g.name for g in model.cgroups if g.plastic and g.law_params[0, P_VISCOSITY] > 0]
+        viscous = [g.name for g in model.cgroups if g.viscous]
         if viscous and "duration" not in st:
             raise SceneError(f"stages[{i}].duration", f"blocks {viscous} have Perzyna viscosity: a static stage needs "
                                                       "its duration (s), the time over which its load is applied (set "

@@ -308,7 +308,7 @@ def report(r, ref=None):
 
 def model_size(element_size):
     """DOF, elements and joint points per set of the model at ``element_size`` (built as ``masonrydam check`` does)."""
-    from masonrydam.scene.build import build_mesh, build_model
+    from masonrydam.scene import build_mesh, build_model
     from masonrydam.scene.scene import Scene
 
     sc = Scene(scene(element_size))

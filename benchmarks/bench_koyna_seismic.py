@@ -98,7 +98,7 @@ def main():
     ap.add_argument("--joint-space", nargs="+", default=["auto", "off"], choices=["auto", "on", "off"],
                     help="joint-space settings of the nonlinear runs (default: auto, then off for comparison)")
     args = ap.parse_args()
-    from masonrydam.scene.build import build_mesh
+    from masonrydam.scene import build_mesh
     from masonrydam.scene.scene import Scene
 
     sc = Scene(scene("linear", 1, args.element_size))

@@ -52,7 +52,7 @@ def substitution_time(element_size: float) -> tuple[float, int]:
     """Seconds of one L D L^T substitution of the all-stick stiffness (free DOFs), and its size."""
     import scipy.sparse as sp
 
-    from masonrydam.scene.build import build_mesh, build_model, build_stages
+    from masonrydam.scene import build_mesh, build_model, build_stages
     from masonrydam.scene.scene import Scene
     from masonrydam.solvers.linear.direct import SymmetricFactorization
     from masonrydam.assembly.elastic import elastic_tangent_data

@@ -93,7 +93,7 @@ def scene_dict(length, height, epu):
 
 def build(length, height, epu):
     """Build the model; returns (timings dict, K, b, info)."""
-    from masonrydam.scene.build import build_mesh, build_model, build_stages
+    from masonrydam.scene import build_mesh, build_model, build_stages
     from masonrydam.scene.scene import Scene
 
     t = {}

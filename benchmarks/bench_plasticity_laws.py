@@ -100,7 +100,7 @@ def laws(n):
 def element(n_side, name):
     from masonrydam.materials.plasticity import S_CODE
     from masonrydam.scene import Scene
-    from masonrydam.scene.build import build_mesh, build_model
+    from masonrydam.scene import build_mesh, build_model
 
     sc = Scene({"model": {"name": "b", "hypothesis": "plane_strain", "gravity": [0.0, 0.0]},
                 "mesh": {"generator": "blocks_2d", "parameters": {"element_size": 1.0 / n_side, "order": 2, "blocks": [

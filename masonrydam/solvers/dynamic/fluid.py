@@ -2,7 +2,7 @@
 
 Coupled equations (pressure formulation; Zienkiewicz & Bettess 1978, IJNME 13:1-16; Chopra &
 Chakrabarti 1981, EESD 9:363-383), on the free DOFs of the dam and the free pressure unknowns of the
-water (:mod:`masonrydam.effects.acoustic` builds the matrices):
+water (:mod:`masonrydam.effects.reservoir.acoustic` builds the matrices):
 
     M u'' + C u' + f_int(u) = f + Q p - M iota a_g
     G p'' + L p' + H p      = -rho (Q^T u'' + B a_g)
@@ -35,7 +35,7 @@ the water's ``A`` plus two dense products of size ``n_p x n_w``. After the dam's
 water is advanced with the same ``a1`` (:meth:`AcousticStep.finish`). For incompressible water
 (``G = L = 0``) ``M_w = rho Q H^-1 Q^T`` does not depend on ``h``: that case is a constant added mass and
 the run puts it in the mass matrix instead
-(:meth:`masonrydam.effects.acoustic.AcousticMatrices.added_mass`).
+(:meth:`masonrydam.effects.reservoir.acoustic.AcousticMatrices.added_mass`).
 
 Why written here: the condensation needs the integrator's coefficients and the dam's DOF numbering.
 ``A`` (symmetric positive definite, a 2D or 3D Laplacian-like matrix) gets the L D L^T with numba
@@ -70,7 +70,7 @@ class AcousticStep:
     G, H, L: (n_p, n_p) sparse (s2/m2, 1, s/m; times thickness in 2D); Q: (n_dof, n_p) sparse (m2);
     B_face, B_bottom: (n_p, dim) (m2), the ground's load split into the face translating with the frame
     (``Q^T iota``) and the reservoir bottom and banks, which move with the ground surface
-    (:class:`masonrydam.effects.acoustic.AcousticMatrices`); density: kg/m3. :meth:`attach` binds it to
+    (:class:`masonrydam.effects.reservoir.acoustic.AcousticMatrices`); density: kg/m3. :meth:`attach` binds it to
     the stage's free DOFs and integrator."""
 
     def __init__(self, G, H, L, Q, B_face, B_bottom, density):

@@ -3,106 +3,14 @@ Perzyna viscosity, small strains, plane strain and 3D (issue 17, continuum plast
 
 Point-level numba kernels: :func:`drucker_prager_point` (one integration point; what an element
 kernel calls), :func:`drucker_prager_update` (a batch) and the Python wrapper
-:func:`drucker_prager_evaluate`. Voigt order, tensor conventions and the shared state columns:
-:mod:`masonrydam.materials.plasticity`. Stresses are positive in tension; ``p = tr(sigma)/3`` is
-the mean stress (negative in compression).
+:func:`drucker_prager_evaluate`. Parameter row: float64, ``N_DP_PARAMS`` columns in SI units, built by
+:func:`drucker_prager_params`, which computes the three cone coefficients from the Mohr-Coulomb angles
+(``match`` of :func:`drucker_prager_coefficients`: outer, inner or plane-strain cone); state row: float64,
+``N_DP_STATE`` columns, the shared ones of :mod:`masonrydam.materials.plasticity` (codes CODE_ELASTIC,
+CODE_PLASTIC on the cone, CODE_APEX). Cone and apex returns in closed form with their consistent tangent
+(de Souza Neto, Peric & Owen 2008, sec. 8.3, boxes 8.8-8.9).
 
-Parameter row (float64, ``N_DP_PARAMS`` columns; build it with :func:`drucker_prager_params`,
-which computes the three cone coefficients from the Mohr-Coulomb angles)::
-
-    P_E                      E        Young's modulus (Pa), > 0
-    P_NU                     nu       Poisson's ratio, -1 < nu < 0.5
-    P_VISCOSITY              eta_v    Perzyna viscosity (Pa s), >= 0; 0 = rate independent
-    P_COHESION               c0       initial cohesion (Pa), >= 0
-    P_COHESION_HARDENING     H        slope of the cohesion against eps_bar (Pa); < 0 is softening
-    P_RESIDUAL_COHESION      c_r      residual cohesion (Pa), 0 <= c_r <= c0: softening stops there
-    P_FRICTION_COEF          eta      friction coefficient of the yield cone, >= 0
-    P_COHESION_COEF          xi       cohesion coefficient, > 0
-    P_DILATANCY_COEF         eta_bar  dilatancy coefficient of the flow potential, 0 <= eta_bar <= eta
-
-State row (float64, ``N_DP_STATE`` columns, zeros is the virgin state): the shared columns
-``S_STRESS`` (6), ``S_PLASTIC_STRAIN`` (6), ``S_EQ_PLASTIC_STRAIN`` (the hardening variable
-``eps_bar`` below) and ``S_CODE`` (CODE_ELASTIC, CODE_PLASTIC on the cone, CODE_APEX).
-
-Law (de Souza Neto, Peric & Owen 2008, *Computational Methods for Plasticity*, sec. 8.3)
--------------------------------------------------------------------------------------------------
-::
-
-    Phi = sqrt(J2(s)) + eta p - xi c(eps_bar)             yield function
-    Psi = sqrt(J2(s)) + eta_bar p                         flow potential (eta_bar = eta: associated)
-    eps_p_dot = gamma_dot dPsi/dsigma = gamma_dot (s / (2 sqrt(J2)) + eta_bar/3 1)
-    eps_bar_dot = xi gamma_dot                            (de Souza Neto et al. sec. 8.3)
-    c(eps_bar) = max(c0 + H eps_bar, c_r)
-    rate independent: Kuhn-Tucker conditions; Perzyna: gamma_dot = <Phi> / eta_v
-
-Matching Mohr-Coulomb (c, phi, psi) (de Souza Neto et al. sec. 8.3; for the outer and inner
-cones eta_bar is the formula of eta with psi in place of phi), ``match`` of
-:func:`drucker_prager_coefficients`. Each match is exact only on its own stress paths (the
-meridian, or plane-strain collapse); elsewhere the cone and the Mohr-Coulomb pyramid differ::
-
-    "outer" (cone through the compressive meridian, triaxial compression):
-        eta = 6 sin(phi) / (sqrt(3) (3 - sin(phi))),  xi = 6 cos(phi) / (sqrt(3) (3 - sin(phi)))
-    "inner" (cone through the tensile meridian, triaxial extension):
-        eta = 6 sin(phi) / (sqrt(3) (3 + sin(phi))),  xi = 6 cos(phi) / (sqrt(3) (3 + sin(phi)))
-    "plane_strain" (same limit load as Mohr-Coulomb in plane strain; the default):
-        associated (psi = phi), de Souza Neto et al.:
-            eta = 3 tan(phi) / sqrt(9 + 12 tan^2(phi)),   xi = 3 / sqrt(9 + 12 tan^2(phi))
-        any 0 <= psi <= phi (derived here, reduces to the above for psi = phi): at plane-strain
-        collapse the stress is steady and eps_zz = 0, so eps_p_zz_dot = 0 gives
-        s_zz = -2/3 eta_bar sqrt(J2), hence sqrt(J2) = t / sqrt(1 - eta_bar^2/3) and
-        p = sigma_m - eta_bar sqrt(J2) / 3 with t = sqrt(((sxx - syy)/2)^2 + sxy^2) and
-        sigma_m = (sxx + syy)/2. Phi = 0 then reads
-        t (1 - eta eta_bar/3) / sqrt(1 - eta_bar^2/3) + eta sigma_m = xi c, which is Mohr-Coulomb in
-        plane strain, t + sigma_m sin(phi) = c cos(phi), and the in-plane dilatancy
-        eps_v_dot / (eps_1_dot - eps_3_dot) = sin(psi), when
-            eta_bar = sqrt(3) sin(psi) / sqrt(3 + sin^2(psi)),
-            eta = sqrt(3) sin(phi) sqrt(3 + sin^2(psi)) / (3 + sin(phi) sin(psi)),
-            xi  = sqrt(3) cos(phi) sqrt(3 + sin^2(psi)) / (3 + sin(phi) sin(psi)).
-        (psi = 0 gives eta = sin(phi), xi = cos(phi).)
-
-Return mapping (de Souza Neto et al. box 8.8/8.9: cone and apex returns)
-------------------------------------------------------------------------------------
-::
-
-    trial: s_tr = 2G dev(eps - eps_p_n), p_tr = K tr(eps - eps_p_n), Phi_tr = sqrt(J2_tr) + eta p_tr - xi c_n
-    Phi_tr <= 0 (or eta_v > 0 and dt = 0): elastic
-    cone:  Phi_tr - (G + K eta eta_bar + eta_v/dt) dgamma - xi (c(eps_bar_n + xi dgamma) - c_n) = 0
-           (linear, closed form: dgamma = Phi_tr / (G + K eta eta_bar + xi^2 H + eta_v/dt))
-           valid if sqrt(J2_tr) - G dgamma >= 0; then
-           s = (1 - G dgamma / sqrt(J2_tr)) s_tr,  p = p_tr - K eta_bar dgamma,  eps_bar += xi dgamma
-    apex (cone return not valid): s = 0, p = p_tr - K deps_v,  with the plastic volumetric strain
-           deps_v from  eta p - xi c(eps_bar_n + alpha deps_v) = (eta_v/dt) deps_v / eta_bar,
-           alpha = xi / eta_bar; rate independent: p - beta c = 0 with beta = xi / eta, i.e.
-           deps_v = (p_tr - beta c_n) / (K + alpha beta H)   (de Souza Neto et al. sec. 8.3)
-
-``eta_bar = 0`` (psi = 0) has no apex return in de Souza Neto et al. (alpha = xi / eta_bar is
-infinite: the non-dilatant potential cannot take a volumetric plastic strain). Here the apex then
-takes the plastic volumetric strain as a tension cut-off with the cone's own volumetric gradient:
-``dgamma = sqrt(J2_tr)/G + deps_v/eta`` (the cone multiplier at the cone/apex boundary, plus the
-volumetric part), so the update is continuous across the boundary. In general the apex multiplier
-is ``dgamma = g0 + deps_v / eta_a`` with ``eta_a = eta_bar`` (``g0 = 0``: de Souza Neto et al.
-exactly) or, for ``eta_bar = 0``, ``eta_a = eta`` and ``g0 = sqrt(J2_tr)/G``; then
-``eps_bar += xi dgamma`` and ``eta p - xi c = (eta_v/dt) dgamma``.
-Softening past the residual cohesion continues with ``H = 0`` (piecewise linear, closed form:
-:func:`masonrydam.materials.plasticity.piecewise_root`). Because every relation is linear (linear
-overstress, linear hardening, linear cone) the scalar consistency equations of both the rate-
-independent and the Perzyna updates are solved exactly in closed form: the scalar Newton of
-de Souza Neto et al. sec. 11.5 would converge in one iteration.
-
-Admissible hardening: ``G + K eta eta_bar + xi^2 H > 0`` (cone) and, for eta > 0,
-``K eta eta_a + xi^2 H > 0`` (apex); with these the returns are unique.
-
-Consistent tangent (de Souza Neto et al. sec. 8.3, derived again here with the viscous term;
-``a = G + K eta eta_bar + xi^2 H + eta_v/dt`` with the H active in the step, ``n = s_tr / |s_tr|``)::
-
-    cone: D = 2G (1 - G dgamma / sqrt(J2_tr)) I_dev + 2G^2 (dgamma / sqrt(J2_tr) - 1/a) n(x)n
-              - sqrt(2) G K / a (eta n(x)1 + eta_bar 1(x)n) + K (1 - K eta eta_bar / a) 1(x)1
-    apex: D = K 1(x)1 - K/b (eta K 1(x)1 - (xi^2 H + eta_v/dt) sqrt(2) (1 - eta_bar/eta_a) 1(x)n),
-          b = eta K + (xi^2 H + eta_v/dt) / eta_a
-          (eta_bar > 0: D = K (1 - K / (K + alpha beta H + eta_v/(dt eta eta_bar))) 1(x)1)
-
-non-symmetric on the cone when ``eta_bar != eta`` and at the apex when ``eta_bar = 0`` with hardening
-or viscosity (the ``1(x)n`` term).
+Theory: docs/continuum_nonlinearity.md, section "Drucker-Prager" (under "The plastic laws in equations").
 """
 from __future__ import annotations
 

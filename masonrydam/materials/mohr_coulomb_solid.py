@@ -6,112 +6,14 @@ law of rock, concrete and masonry treated as a continuum. Point-level numba kern
 :func:`mohr_coulomb_solid_point` (one integration point; what an element kernel calls, with the
 signature of :func:`masonrydam.materials.von_mises.von_mises_point`),
 :func:`mohr_coulomb_solid_update` (a batch) and the Python wrapper :func:`mohr_coulomb_solid_evaluate`.
-Voigt order, tensor conventions and the shared state columns: :mod:`masonrydam.materials.plasticity`;
-the principal-space machinery (eigen-decomposition, tangent assembly):
-:mod:`masonrydam.materials.principal_return`. Stresses are positive in tension; the principal
-stresses are ordered ``sigma_1 >= sigma_2 >= sigma_3`` (sigma_3 the most compressive).
+Parameter row: float64, ``N_MC_PARAMS`` columns in SI units, built by :func:`mohr_coulomb_solid_params`
+(angles in degrees); state row: float64, ``N_MC_STATE`` columns, the shared ones of
+:mod:`masonrydam.materials.plasticity` (codes CODE_ELASTIC, CODE_PLASTIC, CODE_APEX, CODE_EDGE_RIGHT,
+CODE_EDGE_LEFT). Returns to the main plane, the two edges and the apex in principal stresses, in closed form
+(de Souza Neto, Peric & Owen 2008, sec. 6.4.3 and 8.2; Chen & Han 1988), with the machinery of
+:mod:`masonrydam.materials.principal_return`.
 
-Parameter row (float64, ``N_MC_PARAMS`` columns; build it with :func:`mohr_coulomb_solid_params`,
-which takes the angles in degrees)::
-
-    P_E                     E        Young's modulus (Pa), > 0
-    P_NU                    nu       Poisson's ratio, -1 < nu < 0.5
-    P_VISCOSITY             eta      Perzyna viscosity (Pa s), >= 0; 0 = rate independent
-    P_COHESION              c0       initial cohesion (Pa), >= 0 (> 0 when phi = 0)
-    P_COHESION_HARDENING    H        slope of the cohesion against eps_bar (Pa); < 0 is softening
-    P_RESIDUAL_COHESION     c_r      residual cohesion (Pa), 0 <= c_r <= c0: softening stops there
-    P_SIN_PHI               sin(phi) friction angle phi, 0 <= phi < 90 deg
-    P_COS_PHI               cos(phi) (sin^2 + cos^2 = 1 to 1e-12)
-    P_SIN_PSI               sin(psi) dilation angle psi, 0 <= psi <= phi
-
-State row (float64, ``N_MC_STATE`` columns, zeros is the virgin state): the shared columns
-``S_STRESS`` (6), ``S_PLASTIC_STRAIN`` (6), ``S_EQ_PLASTIC_STRAIN`` (the hardening variable
-``eps_bar`` below) and ``S_CODE``::
-
-    CODE_ELASTIC      0  elastic step
-    CODE_PLASTIC      1  return to the main plane (sigma_1 > sigma_2 > sigma_3 after the return)
-    CODE_APEX         2  return to the apex (hydrostatic stress c cot(phi))
-    CODE_EDGE_RIGHT   3  return to the edge sigma_2 = sigma_3 (triaxial-extension meridian)
-    CODE_EDGE_LEFT    4  return to the edge sigma_1 = sigma_2 (triaxial-compression meridian)
-
-Law (de Souza Neto, Peric & Owen 2008, *Computational Methods for Plasticity*, sec. 6.4.3 and
-8.2; Chen & Han 1988, *Plasticity for Structural Engineers*, ch. 2)
----------------------------------------------------------------------------------------------------
-Six planes ``Phi_ij``, ``i != j``, of which three matter for ordered principal stresses::
-
-    Phi_ij = (1 + sin phi) sigma_i - (1 - sin phi) sigma_j - 2 c(eps_bar) cos phi
-           = sigma_i - sigma_j + (sigma_i + sigma_j) sin phi - 2 c cos phi
-    main plane  Phi_13 (the Mohr-Coulomb function Phi: the largest of the six),
-    right edge  Phi_13 = Phi_12 = 0 (sigma_2 = sigma_3),  left edge  Phi_13 = Phi_23 = 0 (sigma_1 = sigma_2)
-    flow potential Psi_ij: the same with psi in place of phi (psi = phi: associated);
-    flow vector of plane ij in principal space N_ij = (1 + sin psi) e_i - (1 - sin psi) e_j,
-    eps_p_dot = sum gamma_dot_ij N_ij (Koiter's rule at the edges), gamma_dot = sum gamma_dot_ij
-    eps_bar_dot = 2 cos(phi) gamma_dot   (de Souza Neto et al. sec. 8.2: the variable conjugate to c,
-                 c eps_bar_dot = sigma : eps_p_dot on the surface for associated flow)
-    c(eps_bar) = max(c0 + H eps_bar, c_r)
-
-Closed forms (tension positive, Chen & Han 1988): uniaxial compressive strength
-``f_c = 2 c cos(phi) / (1 - sin(phi))``, tensile strength ``f_t = 2 c cos(phi) / (1 + sin(phi))``,
-triaxial compression at confinement p0: ``|sigma_3| = p0 (1 + sin phi) / (1 - sin phi) + f_c``,
-plane strain / pure shear with sigma_2 = sigma_zz the intermediate stress:
-``t + sigma_m sin(phi) = c cos(phi)`` with ``t`` and ``sigma_m`` the radius and centre of the in-plane
-Mohr circle (so ``tau = c cos(phi)`` at ``sigma_m = 0``).
-
-Perzyna viscosity, with the meaning of the other laws (gamma_dot = <Phi> / eta; Simo & Hughes 1998,
-*Computational Inelasticity*, sec. 2.7; de Souza Neto et al. sec. 11.5): here ``Phi`` is the
-Mohr-Coulomb function (the largest plane) and at the edges and the apex the total multiplier
-``gamma_dot = sum gamma_dot_ij`` obeys it, with the flow in the cone of the active flow vectors
-(Koiter). Backward Euler over ``dt``: ``Phi_(n+1) = (eta / dt) dgamma`` on every active plane, i.e.
-the rate-independent return to the surface lifted by the overstress ``(eta / dt) dgamma``. So the
-returns below are those of de Souza Neto et al. with ``eta/dt`` added where ``Phi`` meets the
-multiplier; the update is continuous across the region boundaries and tends to the rate-independent
-one as ``eta/dt -> 0``. At constant strain on the main plane the overstress relaxes as
-``Phi0 exp(-(a + 4 cos^2(phi) H) t / eta)`` (``a`` below), on an edge with ``a_edge`` in place of ``a``.
-
-Return mapping in principal stresses (de Souza Neto et al. sec. 8.2.2, boxes 8.4-8.5)
-------------------------------------------------------------------------------------
-Trial ``sigma_tr = C : (eps - eps_p_n)``, principal values ``t_1 >= t_2 >= t_3``; eigenvectors kept.
-``h = 4 cos^2(phi) H`` (the H active in the step; 0 past the residual), ``v = eta / dt``::
-
-    Phi_tr = Phi_13(t, c_n) <= 0 (or eta > 0 and dt = 0): elastic
-    main plane: dgamma = Phi_tr / (a + h + v),  a = n_13 . De N_13
-                = 4G (1 + sin(phi) sin(psi) / 3) + 4K sin(phi) sin(psi)
-                sigma = t - dgamma De N_13; valid if sigma_1 >= sigma_2 >= sigma_3
-    edge (right when (1 - sin psi) t_1 - 2 t_2 + (1 + sin psi) t_3 > 0, else left; planes 13 and
-          b = 12 or 23): A x + (c-term + v s) 1 = Phi_tr with A_ij = n_i . De N_j (2x2),
-          x = (dgamma_13, dgamma_b), s = x_1 + x_2; closed form through the scalar
-          s (1/w + h + v) = 1^T A^-1 Phi_tr / w,  w = 1^T A^-1 1  (a_edge = 1/w:
-          (a + b_right) / 2 or (a + b_left) / 2 with b = n_13 . De N_b of de Souza Neto et al.)
-          sigma = t - De (x_1 N_13 + x_2 N_b); valid if sigma_1 >= sigma_2 >= sigma_3 (always for phi = 0)
-    apex: sigma = p 1, p = p_tr - K deps_v, with 2 sin(phi) p - 2 cos(phi) c = v dgamma,
-          dgamma = g0 + deps_v / (2 s_a), eps_bar += 2 cos(phi) dgamma.
-          psi > 0: s_a = sin(psi), g0 = 0, which is de Souza Neto et al. exactly
-          (eps_bar += alpha deps_v, alpha = cos(phi) / sin(psi));
-          rate independent deps_v = (p_tr - c_n cot phi) / (K + cos^2(phi) H / (sin(phi) sin(psi))).
-          psi = 0: the non-dilatant potential has no volumetric flow, so (as the Drucker-Prager apex
-          of :mod:`.drucker_prager`) the apex takes the plastic volumetric strain as a tension
-          cut-off with the yield function's own volumetric gradient: s_a = sin(phi) and
-          g0 = max(t_1 - p_tr, p_tr - t_3) / (2G), the multiplier of the selected edge return that
-          just reaches the hydrostatic axis, so the update is continuous.
-
-Every relation is linear (linear planes, linear hardening, linear overstress), so each return is
-solved exactly in closed form, with the kink at the residual cohesion handled by
-:func:`masonrydam.materials.plasticity.piecewise_root` (the scalar Newton of de Souza Neto et al.
-would converge in one iteration). Admissible softening (unique returns, no snap-back): for each return
-``a_R + 4 cos^2(phi) H > 0`` (R = main, right and left edges; the left edge is the binding one) and,
-for phi > 0, ``2 sin(phi) K + 2 cos^2(phi) H / s_a > 0`` (apex).
-
-Consistent tangent: in principal space ``Dsig = d sigma / d t`` of the active return (derived from the
-closed forms above; de Souza Neto et al. sec. 8.2 for the rate-independent case)::
-
-    main:  Dsig = I - r_13 n_13^T / (a + h + v),               r = De N
-    edge:  Dsig = I - R (A + (h + v) 1 1^T)^-1 N^T,            R = [r_13, r_b], N = [n_13, n_b]
-    apex:  Dsig[i, :] = 1/3 1^T - K/b (2 sin(phi)/3 1^T - (h + v) d g0 / d t),
-           b = 2 sin(phi) K + (h + v) / (2 s_a)
-
-assembled into the 6x6 tangent with the eigenprojection derivatives by
-:func:`masonrydam.materials.principal_return.principal_tangent` (repeated principal stresses
-included). The tangent is non-symmetric for psi != phi; elastic steps return the elastic matrix.
+Theory: docs/continuum_nonlinearity.md, section "Mohr-Coulomb" (under "The plastic laws in equations").
 """
 from __future__ import annotations
 

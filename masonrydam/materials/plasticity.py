@@ -1,52 +1,20 @@
 """Shared pieces of the continuum plasticity laws (:mod:`.von_mises`, :mod:`.drucker_prager`, :mod:`.tresca`,
-:mod:`.mohr_coulomb_solid`).
+:mod:`.mohr_coulomb_solid`): conventions, the shared columns and the parts around a law's return mapping.
 
-Small strains, isotropic linear elasticity, Voigt vectors with engineering shear strains
-(docs/architecture.md): 2D plane strain ``[exx, eyy, gxy]`` (``ezz = gyz = gzx = 0``) and 3D
-``[exx, eyy, ezz, gxy, gyz, gzx]``; stresses ``[sxx, syy, (szz,) sxy, (syz, szx)]``, tension
-positive. The laws work on the full 3D stress internally; a plane-strain point embeds its strain in
-3D, returns the in-plane stress ``[sxx, syy, sxy]`` and the 3x3 block (rows and columns xx, yy, xy)
-of the 6x6 tangent, and keeps ``szz`` in its state.
+Small strains, plane strain and 3D; Voigt strains with engineering shear, stresses in Pa, tension positive.
+Rows are float64, one per integration point: a state row starts with the ``N_COMMON_STATE`` shared columns
+(``S_STRESS`` 6, ``S_PLASTIC_STRAIN`` 6, ``S_EQ_PLASTIC_STRAIN``, ``S_CODE``), a parameter row with ``P_E`` (Pa),
+``P_NU`` and ``P_VISCOSITY`` (Pa s) (Simo & Hughes 1998; de Souza Neto, Peric & Owen 2008).
 
-Tensor conventions used by the kernels (Simo & Hughes 1998, *Computational Inelasticity*, ch. 3;
-de Souza Neto, Peric & Owen 2008, *Computational Methods for Plasticity*, ch. 7):
-stress-like Voigt vectors (stress, back stress, deviatoric unit normals) hold tensor components;
-strain-like vectors (total and plastic strain) hold engineering shear components (twice the
-tensor component). With these, ``a : b = sum_i a_i b_i`` for a stress-like ``a`` and a strain-like
-``b``, and a 4th-order tensor ``C`` acting on a strain is the Voigt matrix ``D[i, j] = C_(i)(j)``
-(``D[i, j] = d sigma_i / d eps_j`` with engineering ``eps_j``): the identity on symmetric tensors is
-``diag(1, 1, 1, 1/2, 1/2, 1/2)``, ``1 (x) 1`` has ones in the normal block, and ``n (x) m`` is
-``n_i m_j`` with the tensor components of both.
+A law module keeps its own columns, the admissibility of its parameters and its return mapping. Here: the
+input checks and final stores of a point kernel (:func:`point_inputs_status`, :func:`point_trial`,
+:func:`finish_point`), the batch loop (:func:`batch_update`, inlined into each law's ``*_update``), and on the
+Python side the parameter-table check (:func:`check_param_table`), the parameter row (:func:`real_parameters`,
+:func:`param_row`), the virgin state (:func:`initial_state`) and the evaluate wrapper (:func:`evaluate`), each
+told the law's tables by a :class:`PlasticLaw`.
 
-State columns shared by both laws (float64 rows, one per integration point; the laws append their
-own columns after ``N_COMMON_STATE``)::
-
-    S_STRESS              6 columns: stress [sxx, syy, szz, sxy, syz, szx] (Pa), the full 3D stress
-                          also in plane strain (szz is kept there)
-    S_PLASTIC_STRAIN      6 columns: plastic strain [exx, eyy, ezz, gxy, gyz, gzx] (engineering shear)
-    S_EQ_PLASTIC_STRAIN   the hardening variable of the law (see each law), >= 0
-    S_CODE                what the last update did: CODE_ELASTIC, CODE_PLASTIC, CODE_APEX (Drucker-Prager,
-                          Mohr-Coulomb), CODE_EDGE_RIGHT / CODE_EDGE_LEFT (Tresca, Mohr-Coulomb)
-
-Parameter columns shared by both laws (the laws append theirs after ``N_COMMON_PARAMS``)::
-
-    P_E           Young's modulus E (Pa), > 0
-    P_NU          Poisson's ratio nu, -1 < nu < 0.5
-    P_VISCOSITY   Perzyna viscosity eta (Pa s), >= 0; 0 is rate independent (see each law)
-
-Trial / commit / revert (docs/architecture.md): a kernel reads ``state_committed`` (never writes
-it) and writes ``state_trial``; the solver copies trial to committed when a step converges. The
-update is in total form, ``sigma = C : (eps - eps_p_committed)`` for the trial, so repeated
-evaluations within a step never drift.
-
-What a law module keeps is its own: the parameter and state columns past the shared ones, the
-admissibility of its parameters and the return mapping of its point kernel. The parts around them
-are here: the input checks and the final stores of a point kernel (:func:`point_inputs_status`,
-:func:`point_trial`, :func:`finish_point`), the batch loop (:func:`batch_update`, inlined into each
-law's ``*_update``), and on the Python side the parameter-table check (:func:`check_param_table`),
-the parameter row (:func:`real_parameters`, :func:`param_row`), the virgin state
-(:func:`initial_state`) and the evaluate wrapper (:func:`evaluate`), each told the law's tables by
-a :class:`PlasticLaw`.
+Theory: docs/continuum_nonlinearity.md, section "Conventions and shared columns" (under "The plastic laws in
+equations").
 """
 from __future__ import annotations
 

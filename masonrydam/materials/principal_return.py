@@ -1,12 +1,5 @@
 """Shared pieces of the plasticity laws whose return mapping is done in principal stresses
-(:mod:`.mohr_coulomb_solid`, :mod:`.tresca`).
-
-For an isotropic law with isotropic linear elasticity the elastic trial stress and the returned
-stress share their eigenvectors (de Souza Neto, Peric & Owen 2008, *Computational Methods for
-Plasticity*, sec. 8.1): the return is a function of the three principal trial stresses only,
-``sigma = sum_a sigma_a(sigma_tr_1, sigma_tr_2, sigma_tr_3) E_a`` with the eigenprojections
-``E_a = v_a (x) v_a`` of the trial. This module holds what such a law needs around its principal
-return:
+(:mod:`.mohr_coulomb_solid`, :mod:`.tresca`; de Souza Neto, Peric & Owen 2008, sec. 8.1 and appendix A):
 
 - :func:`sym_eig3`: eigenvalues and orthonormal eigenvectors of a symmetric 3x3 matrix (cyclic
   Jacobi rotations; exact orthogonality, repeated eigenvalues need no special case, no allocation,
@@ -16,40 +9,11 @@ return:
 - :func:`principal_stress_out`, :func:`principal_plastic_strain`: back to Voigt vectors (the stress,
   and the plastic strain increment ``-C^-1 : (sigma - sigma_tr)``);
 - :func:`principal_tangent`: the consistent tangent of the isotropic tensor function from the
-  principal-space tangent (box A.6 and eqs. A.46-A.48 of de Souza Neto et al., appendix A;
-  Carlson & Hoger 1986; Miehe 1993), including repeated eigenvalues;
+  principal-space tangent (Carlson & Hoger 1986; Miehe 1993), including repeated eigenvalues;
 - Voigt <-> tensor conversions in the conventions of :mod:`masonrydam.materials.plasticity`.
 
-Tangent of an isotropic tensor function (de Souza Neto et al. appendix A; the same result as
-first-order perturbation of the eigenvectors). With ``X`` the trial elastic strain (eigenvalues
-``x_a``), ``Y = sigma`` (eigenvalues ``y_a``) and the principal tangent ``Dp[a, b] = d y_a / d x_b``::
-
-    dY/dX = sum_(a,b) Dp[a, b] E_a (x) E_b + sum_(a<b) 2 theta_ab S_ab (x) S_ab
-    S_ab  = (v_a (x) v_b + v_b (x) v_a) / 2
-    theta_ab = (y_a - y_b) / (x_a - x_b)                         distinct x_a, x_b     (eq. A.46)
-    theta_ab = (Dp[a,a] - Dp[a,b] + Dp[b,b] - Dp[b,a]) / 2       x_a = x_b             (eqs. A.47-A.48)
-
-(the second form is the limit of the first for a symmetric isotropic function, ``y_a(x_a, x_b, x_c) =
-y(x_a; x_b, x_c)``; it is used when ``|x_a - x_b|`` is below ``REPEATED_TOL`` times the largest
-principal trial stress over 2G, where the quotient would lose its digits). Here
-``x_a - x_b = (sigma_tr_a - sigma_tr_b) / 2G`` and ``Dp = Dsig . De``, with
-``Dsig[a, b] = d sigma_a / d sigma_tr_b`` what the law's return supplies and
-``De = K 1(x)1 + 2G (I - 1/3 1(x)1)`` the elastic matrix in principal space. The 4th-order tensors
-become Voigt matrices as in plasticity.py (``D[I, J] = C_(I)(J)`` with tensor components of the
-stress-like factors, engineering strain columns); ``E_a`` and ``S_ab`` are written with tensor
-components, so the elastic law gives back ``K 1(x)1 + 2G I_dev`` with ``I = diag(1, 1, 1, 1/2, 1/2, 1/2)``.
-
-Scratch layout in ``work`` (float64, ``WORK_SIZE`` of plasticity.py). After
-:func:`masonrydam.materials.plasticity.point_trial` the strain slot ``W_EPS`` is free; the trial
-deviator in ``W_SIG`` is free once :func:`principal_trial` has decomposed it; ``W_D`` is scratch
-until the tangent is written::
-
-    W_PR_TRIAL   3: principal trial stresses sigma_tr_1 >= sigma_tr_2 >= sigma_tr_3 (Pa)  (in W_EPS)
-    W_PR_NEW     3: returned principal stresses (Pa), same order                           (in W_EPS)
-    W_PR_DSIG    9: d sigma_a / d sigma_tr_b, row-major (overwrites the trial deviator in W_SIG
-                    and W_N; replaced by Dp in :func:`principal_tangent`)
-    W_PR_VEC     9: eigenvectors, V[i, a] = work[W_PR_VEC + 3 i + a], column a for sigma_a (W_SCRATCH)
-    W_PR_JAC     9: Jacobi matrix (inside W_D, only during :func:`principal_trial`)
+Scratch slots ``W_PR_*`` in the float64 ``work`` array of plasticity.py. Theory and the scratch layout:
+docs/continuum_nonlinearity.md, section "Returns in principal stresses" (under "The plastic laws in equations").
 """
 from __future__ import annotations
 

@@ -3,73 +3,14 @@ small strains, plane strain and 3D (issue 17, continuum plasticity).
 
 Point-level numba kernels: :func:`tresca_point` (one integration point; what an element kernel
 calls, with the signature of :func:`masonrydam.materials.von_mises.von_mises_point`),
-:func:`tresca_update` (a batch) and the Python wrapper :func:`tresca_evaluate`. Voigt order, tensor
-conventions and the shared state columns: :mod:`masonrydam.materials.plasticity`. The return mapping
-is the principal-space return of :mod:`masonrydam.materials.mohr_coulomb_solid` with
-``phi = psi = 0`` and ``2c = sigma_y`` (de Souza Neto, Peric & Owen 2008, *Computational Methods
-for Plasticity*, sec. 8.1: the Tresca return is that of Mohr-Coulomb without friction); principal
-stresses ``sigma_1 >= sigma_2 >= sigma_3``, tension positive.
+:func:`tresca_update` (a batch) and the Python wrapper :func:`tresca_evaluate`. Parameter row: float64,
+``N_TRESCA_PARAMS`` columns in SI units, built by :func:`tresca_params`; state row: float64,
+``N_TRESCA_STATE`` columns, the shared ones of :mod:`masonrydam.materials.plasticity` (codes CODE_ELASTIC,
+CODE_PLASTIC, CODE_EDGE_RIGHT, CODE_EDGE_LEFT). The return mapping is the principal-space return of
+:mod:`masonrydam.materials.mohr_coulomb_solid` with ``phi = psi = 0`` and ``2c = sigma_y`` (de Souza Neto,
+Peric & Owen 2008, sec. 8.1; Chen & Han 1988).
 
-Parameter row (float64, ``N_TRESCA_PARAMS`` columns; build it with :func:`tresca_params`)::
-
-    P_E              E        Young's modulus (Pa), > 0
-    P_NU             nu       Poisson's ratio, -1 < nu < 0.5
-    P_VISCOSITY      eta      Perzyna viscosity (Pa s), >= 0; 0 = rate independent
-    P_SIGMA_Y        sigma_y0 initial uniaxial yield stress (Pa), > 0 (shear yield stress sigma_y0 / 2)
-    P_H_ISO          H        linear isotropic hardening modulus (Pa); < 0 is softening, 3G + H > 0
-    P_SIGMA_Y_RES    sigma_r  residual yield stress (Pa), 0 <= sigma_r <= sigma_y0: softening stops there
-
-``H`` is the slope of the uniaxial stress against the uniaxial plastic strain (as the isotropic
-modulus of :mod:`.von_mises`): a monotonic uniaxial test has the elastoplastic modulus
-``E H / (E + H)``.
-
-State row (float64, ``N_TRESCA_STATE`` columns; zeros is the virgin state): the shared columns
-``S_STRESS`` (6), ``S_PLASTIC_STRAIN`` (6, trace zero: Tresca flow is isochoric),
-``S_EQ_PLASTIC_STRAIN`` (``kappa`` below) and ``S_CODE``::
-
-    CODE_ELASTIC      0  elastic step
-    CODE_PLASTIC      1  return to the main plane sigma_1 - sigma_3 = sigma_y (sigma_2 strictly between)
-    CODE_EDGE_RIGHT   3  return to the edge sigma_2 = sigma_3 (e.g. uniaxial tension)
-    CODE_EDGE_LEFT    4  return to the edge sigma_1 = sigma_2 (e.g. uniaxial compression)
-
-(no apex: the Tresca prism is open along the hydrostatic axis; CODE_APEX never occurs).
-
-Law (de Souza Neto et al. sec. 6.4.1 and 8.1; Chen & Han 1988, *Plasticity for Structural
-Engineers*, ch. 2; Perzyna: Simo & Hughes 1998, *Computational Inelasticity*, sec. 2.7)
-------------------------------------------------------------------------------------------------------
-::
-
-    Phi_ij = sigma_i - sigma_j - sigma_y(kappa)        (the largest is Phi_13 = sigma_1 - sigma_3 - sigma_y)
-    sigma_y(kappa) = max(sigma_y0 + H kappa, sigma_r)
-    associated flow, principal components N_ij = e_i - e_j, eps_p_dot = sum gamma_dot_ij N_ij (Koiter
-    at the edges), kappa_dot = gamma_dot = sum gamma_dot_ij
-    rate independent: Kuhn-Tucker conditions; Perzyna: gamma_dot = <Phi> / eta
-
-``kappa`` is work conjugate to the yield stress, ``sigma : eps_p_dot = sigma_y kappa_dot`` on the
-surface, and equals the largest principal plastic strain in monotonic uniaxial tension or
-compression (``eps_p = kappa (1, -1/2, -1/2)``) and the maximum principal plastic strain in pure shear.
-Closed forms: uniaxial yield ``|sigma| = sigma_y``, pure shear ``tau = sigma_y / 2``, triaxial
-``sigma_1 - sigma_3 = sigma_y`` whatever the confinement.
-
-Return mapping (de Souza Neto et al. sec. 8.1: main plane, right and left edges; the
-closed forms of :mod:`.mohr_coulomb_solid` with phi = psi = 0, ``a = 4G``, ``a_edge = 3G``)::
-
-    trial t_1 >= t_2 >= t_3;  Phi_tr = t_1 - t_3 - sigma_y(kappa_n) <= 0 (or eta > 0, dt = 0): elastic
-    main: dgamma = Phi_tr / (4G + H + eta/dt); sigma_1 = t_1 - 2G dgamma, sigma_3 = t_3 + 2G dgamma,
-          sigma_2 = t_2; valid if sigma_1 >= sigma_2 >= sigma_3
-    right (t_1 + t_3 - 2 t_2 > 0) / left edge: the two active planes, total multiplier
-          s = (Phi_13,tr + Phi_b,tr) / (2 (3G + H + eta/dt))
-
-The Perzyna update is backward Euler on ``gamma_dot = Phi / eta`` with the total multiplier (see
-:mod:`.mohr_coulomb_solid`): ``Phi_(n+1) = (eta / dt) dgamma``. At constant strain the overstress
-relaxes as ``Phi0 exp(-(4G + H) t / eta)`` on the main plane and ``Phi0 exp(-(3G + H) t / eta)`` on an
-edge. Softening past the residual continues with ``H = 0`` (closed form,
-:func:`masonrydam.materials.plasticity.piecewise_root`). Admissible: ``3G + H > 0`` (the edge
-returns; the main plane needs ``4G + H > 0``).
-
-Consistent tangent: :func:`masonrydam.materials.mohr_coulomb_solid.mohr_coulomb_return` (principal
-tangent of each return, assembled with the eigenprojection derivatives of
-:func:`masonrydam.materials.principal_return.principal_tangent`); symmetric (associated flow).
+Theory: docs/continuum_nonlinearity.md, section "Tresca" (under "The plastic laws in equations").
 """
 from __future__ import annotations
 

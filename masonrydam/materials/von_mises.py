@@ -3,73 +3,13 @@ viscosity, small strains, plane strain and 3D (issue 17, continuum plasticity).
 
 Point-level numba kernels: :func:`von_mises_point` evaluates one integration point (the function an
 element kernel calls per point), :func:`von_mises_update` a batch of points, and
-:func:`von_mises_evaluate` is the Python wrapper (shape and parameter checks, exceptions). Voigt
-order, tensor conventions and the shared state columns: :mod:`masonrydam.materials.plasticity`.
+:func:`von_mises_evaluate` is the Python wrapper (shape and parameter checks, exceptions). Parameter
+row: float64, ``N_VM_PARAMS`` columns in SI units, built by :func:`von_mises_params`; state row: float64,
+``N_VM_STATE`` columns (the shared ones of :mod:`masonrydam.materials.plasticity`, then the back stress
+``S_BACK_STRESS``, 6, Pa), zeros the virgin state. Radial return in closed form with its consistent tangent
+(de Souza Neto, Peric & Owen 2008, ch. 6-7; Simo & Hughes 1998, box 3.2; Simo & Taylor 1985).
 
-Parameter row (float64, ``N_VM_PARAMS`` columns; build it with :func:`von_mises_params`)::
-
-    P_E              E        Young's modulus (Pa), > 0
-    P_NU             nu       Poisson's ratio, -1 < nu < 0.5
-    P_VISCOSITY      eta      Perzyna viscosity (Pa s), >= 0; 0 = rate independent
-    P_SIGMA_Y        sigma_y0 initial uniaxial yield stress (Pa), > 0
-    P_H_ISO          H_iso    linear isotropic hardening modulus (Pa); < 0 is softening
-    P_H_KIN          H_kin    linear kinematic (Prager) hardening modulus (Pa), >= 0
-    P_SIGMA_Y_RES    sigma_r  residual yield stress (Pa), 0 <= sigma_r <= sigma_y0: softening stops there
-
-``H_iso`` and ``H_kin`` are the slopes of the uniaxial stress against the uniaxial plastic strain,
-so a monotonic uniaxial test has the elastoplastic modulus ``E H / (E + H)``, ``H = H_iso + H_kin``.
-Admissible: ``3G + H_iso + H_kin > 0`` (the return mapping is unique and the local
-stress-strain curve in shear has no snap-back; G the shear modulus).
-
-State row (float64, ``N_VM_STATE`` columns; zeros is the virgin state)::
-
-    S_STRESS              6: stress [sxx, syy, szz, sxy, syz, szx] (Pa), szz kept in plane strain
-    S_PLASTIC_STRAIN      6: plastic strain (engineering shear), trace zero (plastic incompressibility)
-    S_EQ_PLASTIC_STRAIN   accumulated equivalent plastic strain alpha = int sqrt(2/3 eps_p_dot : eps_p_dot) dt
-    S_CODE                CODE_ELASTIC or CODE_PLASTIC (what the last update did)
-    S_BACK_STRESS         6: back stress beta (Pa, deviatoric, tensor components)
-
-Law (de Souza Neto, Peric & Owen 2008, *Computational Methods for Plasticity*, ch. 6-7;
-Simo & Hughes 1998, *Computational Inelasticity*, box 3.2 and sec. 3.3)
------------------------------------------------------------------------------------------
-::
-
-    sigma = K tr(eps_e) 1 + 2G dev(eps_e),   eps_e = eps - eps_p
-    f     = q(xi) - sigma_y(alpha),   xi = s - beta,   q(xi) = sqrt(3/2) |xi|
-    sigma_y(alpha) = max(sigma_y0 + H_iso alpha, sigma_r)
-    eps_p_dot = gamma_dot sqrt(3/2) n,   n = xi / |xi|,   alpha_dot = gamma_dot
-    beta_dot  = 2/3 H_kin eps_p_dot = sqrt(2/3) H_kin gamma_dot n          (Prager's rule)
-    rate independent: gamma_dot >= 0, f <= 0, gamma_dot f = 0
-    Perzyna:          gamma_dot = <f> / eta                                (linear overstress)
-
-Return mapping (radial return, closed form for linear hardening; de Souza Neto et al. ch. 7,
-with the kinematic term of Simo & Hughes box 3.2)::
-
-    trial:  s_tr = 2G dev(eps - eps_p_n),  p_tr = K tr(eps - eps_p_n),  xi_tr = s_tr - beta_n
-            f_tr = sqrt(3/2) |xi_tr| - sigma_y(alpha_n)
-    f_tr <= 0 (or eta > 0 and dt = 0): elastic, sigma = s_tr + p_tr 1
-    else    n = xi_tr / |xi_tr| (unchanged by the return),
-            f_(n+1) = f_tr - (3G + H_kin + H_iso) dgamma = (eta / dt) dgamma    (eta = 0: f_(n+1) = 0)
-            dgamma = f_tr / (3G + H_iso + H_kin + eta/dt)
-            sigma  = sigma_tr - 2G sqrt(3/2) dgamma n
-            eps_p += sqrt(3/2) dgamma n,  beta += sqrt(2/3) H_kin dgamma n,  alpha += dgamma
-
-The Perzyna update is the backward-Euler integration of ``gamma_dot = f/eta`` (Simo & Hughes sec.
-2.7, de Souza Neto et al. sec. 11.5): ``f_(n+1) = eta dgamma / dt`` adds ``eta/dt`` to the
-denominator, so it tends to the rate-independent return as ``eta/dt -> 0`` and to the elastic
-trial as ``eta/dt -> inf``. At constant strain it relaxes the overstress as
-``f(t) = f(0) exp(-(3G + H) t / eta)`` (``d q / dt = -(3G + H_kin) gamma_dot``,
-``d sigma_y / dt = H_iso gamma_dot``, ``gamma_dot = f / eta``).
-Softening past the residual yield stress (``alpha`` beyond ``(sigma_r - sigma_y0) / H_iso``) continues
-with ``H_iso = 0``; the consistency condition is then piecewise linear in dgamma and still solved in
-closed form (:func:`masonrydam.materials.plasticity.piecewise_root`).
-
-Consistent (algorithmic) tangent (Simo & Taylor 1985, CMAME 48:101-118; Simo & Hughes box 3.2;
-de Souza Neto et al. ch. 7), with ``H`` the hardening active in the step::
-
-    D = K 1(x)1 + 2G (1 - 3G dgamma / q_tr) I_dev + 6G^2 (dgamma / q_tr - 1/(3G + H + eta/dt)) n(x)n
-
-symmetric; elastic steps return the elastic matrix.
+Theory: docs/continuum_nonlinearity.md, section "von Mises" (under "The plastic laws in equations").
 """
 from __future__ import annotations
 

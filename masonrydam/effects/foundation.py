@@ -1,97 +1,14 @@
 """The foundation rock with mass for earthquake analysis of dams: viscous absorbing boundaries and the
 ground motion entered as free-field effective forces.
 
-Scene::
+Scene: ``[foundation]`` with ``mass``, ``group``, ``absorbing = { bottom, sides }`` (facet sets) and ``motion``
+(``"outcrop"`` or ``"within"``). :func:`build` returns a :class:`Foundation` (None for massless rock): its
+dashpots (n_dof, n_dof) CSR, N s/m, the released DOFs (n_dof,) bool and the effective force
+:meth:`Foundation.effective_force` (n_dof,), N, at a time in s, from records of acceleration (m/s2) per
+component. References: Lysmer & Kuhlemeyer (1969) for the dashpots; Kramer (1996) and Wolf (1985) for the 1D
+free field; Joyner & Chen (1975), Nielsen (2006) and Løkke & Chopra (2018) for the effective forces.
 
-    [foundation]
-    mass = true                    # default false: massless rock (today's behaviour, nothing else matters)
-    group = "foundation"           # the element group of the rock
-    absorbing = { bottom = "foundation_bottom", sides = "foundation_sides" }   # facet sets (the defaults)
-    motion = "outcrop"             # or "within"; required when mass = true
-
-``mass = false`` (the default) gives the massless rock of a classic dam analysis: :func:`build` returns
-None and the run leaves the group out of the mass matrix whatever its density (a massless block on
-fixed supports under uniform base excitation; without a ``[foundation]`` section the rock keeps the
-mass of its density). ``absorbing = false`` is
-allowed only then. With ``mass = true`` the rock truncated at its bottom and sides is made to behave
-as a part of a uniform half-space (horizontal layer of height ``H_f = z_top - z_b`` over rock of the
-same properties, or over a rigid base):
-
-Absorbing boundaries (Lysmer & Kuhlemeyer 1969, "Finite dynamic model for infinite media", J. Eng.
-Mech. Div. ASCE 95(EM4) 859-877): on every absorbing facet the traction ``t = -rho (c_p n n^T + c_s
-(I - n n^T)) v`` with ``n`` the outward unit normal and ``v`` the velocity, integrated with the facet's
-shape functions and lumped on its nodes (row sums; the diagonal scaling of Hinton, Rock & Zienkiewicz
-1976, EESD 4 245-249, for quad8 / tri6 faces, whose row sums are negative or zero at the corners):
-a block ``(dim, dim)`` per node, N s/m, in :attr:`Foundation.dashpots`. Wave speeds from the rock's
-``E``, ``nu``, ``rho``: ``c_s = sqrt(G / rho)``, ``c_p = sqrt(M / rho)`` with the constrained modulus
-``M = lambda + 2 G`` (plane strain and 3D: ``lambda = E nu / ((1 + nu)(1 - 2 nu))``; plane stress, a
-thin plate: ``lambda* = E nu / (1 - nu^2)``, ``M = E / (1 - nu^2)``, the moduli of the plane stress
-elements, so that the boundary matches the model's own waves).
-
-Free field (1D, vertical propagation; Kramer, *Geotechnical Earthquake Engineering*, 1996, sec. 7.2;
-Wolf, *Dynamic Soil-Structure Interaction*, 1985, ch. 2): horizontal components travel as S waves
-(speed ``c_s``), the vertical component as a P wave (``c_p``), in the rock column between the base
-``z_b`` and the free surface ``z_top`` (both on the vertical axis; the rock's top is taken flat). With
-``u_I(t)`` the upgoing wave at the base, the free-surface reflection (traction free: ``du/dz = 0`` at
-``z_top``) gives the d'Alembert solution
-
-    u_ff(z, t) = u_I(t - (z - z_b)/c) + u_I(t - (2 z_top - z_b - z)/c),
-    v_ff = du_ff/dt,  du_ff/dz = [-v_I(t - (z - z_b)/c) + v_I(t - (2 z_top - z_b - z)/c)] / c,
-
-and the free-field stress ``sigma_hz = G du_h/dz`` (horizontal h), ``sigma_zz = M du_z/dz``,
-``sigma_hh = lambda du_z/dz`` (laterally confined column), all other components zero.
-
-- ``motion = "outcrop"`` (a record at a rock outcrop, or deconvolved to one): the free surface of a
-  half-space doubles the incident wave, so ``u_I = o / 2`` (Joyner & Chen 1975, BSSA 65 1315-1336;
-  Mejia & Dawson 2006, "Earthquake deconvolution for FLAC", 4th Int. FLAC Symposium):
-  ``u_ff(z, t) = 1/2 [o(t - (z - z_b)/c) + o(t - (2 z_top - z_b - z)/c)]`` with the time measured so
-  that the incident wave leaves the base at ``t = 0``; the surface then moves as ``o(t - H_f/c)``.
-  The base is compliant: the bottom and side nodes are released (:attr:`Foundation.released_dofs`),
-  dashpots on both, and the motion enters as forces only (NOT as ``-M iota a_g``): the solver works
-  in total (absolute) dynamic displacements.
-- ``motion = "within"`` (a record of the motion inside the rock at the base elevation): the base is
-  rigid and carries it as today's uniform support excitation ``-M iota a_g`` (relative formulation);
-  the free field is that of the layer on a rigid base, ``u_ff(z_b, t) = w(t)``, i.e.
-  ``u_I(t) + u_I(t - 2 H_f/c) = w(t)``, solved exactly as the alternating series
-  ``u_I(t) = sum_k (-1)^k w(t - 2 k H_f / c)`` (finitely many terms: ``w = 0`` for ``t < 0``); only
-  the side nodes are released, the dashpots act on the sides, and the side forces use the relative
-  free-field velocity ``v_ff - v_g`` (the stress is the same).
-
-Effective forces (Nielsen 2006, "Absorbing boundary conditions for seismic analysis in ABAQUS",
-ABAQUS Users' Conference; Løkke & Chopra 2018, EESD 47 1159-1178, effective earthquake forces from
-the free field): the exterior that the mesh leaves out is the free field plus outgoing scattered
-waves, which the dashpots absorb: ``t = sigma_ff n + D(n) (v_ff - v)`` with ``D(n) = rho (c_p n n^T +
-c_s (I - n n^T))``. The ``- D v`` part is :attr:`Foundation.dashpots`, the rest is the time-dependent
-force ``f(t) = int N^T sigma_ff n dA + C_dashpot v_ff(nodes)`` (:meth:`Foundation.effective_force`).
-The velocity part uses the same lumped matrix as the dashpots, so that a model moving as the free
-field feels no dashpot force at all; the stress part is integrated with the facet shape functions
-(Gauss 3 points on edges, 3 x 3 on quadrilateral faces, 6 on triangles). At a horizontal base this
-is ``rho c A_node v_outcrop(t)`` per node and component (``sigma_ff n + D v_ff`` at ``z_b`` =
-``2 rho c v_I``; Joyner & Chen 1975); on a vertical side with outward normal ``n_h`` it is
-``lambda du_z/dz n_h + rho c_p v_h`` normal and ``G du_h/dz n_h + rho c_s v_z`` tangential. A model
-that is itself a uniform column then follows the free field exactly (up to its discretisation:
-measured in tests/test_foundation.py).
-
-Records: per component the acceleration samples (m/s2) at a step ``dt``, taken as given (no baseline
-correction here), integrated to velocity and displacement with the trapezoidal rule from rest; between
-samples linear, after the record the acceleration is zero (constant velocity). For ``within`` the
-series ``v_I`` is evaluated exactly on the record's time grid and interpolated linearly between
-grid points (an error of the order of the record's own interpolation).
-
-Checked (tests/test_foundation.py, quad4 columns and blocks with lumped mass, element size 1/20 to 1/25
-of the shortest significant wavelength, Newmark average acceleration): the surface of a 1D column
-moves as the outcrop motion delayed by ``H/c`` to 0.1 % (S) / 0.02 % (P) in peak, 1 % / 0.2 % of the
-peak at every instant; after the pulse has left, 0.1 % / 0.03 % of the incident amplitude remains
-(energy 2e-6 / 4e-11 of the incident); a block 4 elements wide with absorbing sides follows the 1D
-free field to 0.15 % of the peak (S, P, within), a 3D hex8 block with three components to 1.4 %.
-
-Limits: uniform rock (one E, nu, rho; the free field is undamped, so Rayleigh damping of the rock
-is not in the side forces); vertical incidence only; a flat free surface at ``z_top`` (the highest
-node of the rock) and a flat base at ``z_b`` (a 3D valley with banks is not a 1D column: the side
-forces there are approximate); the dashpots absorb exactly only waves at normal incidence, so the
-waves the dam scatters reach them obliquely and partly reflect: keep the boundaries away from the
-dam; ``within`` has a rigid base, which reflects everything that goes down (no radiation damping
-through the base; use ``outcrop`` for that).
+Theory: docs/dam_reservoir_foundation.md, section "The foundation rock with mass".
 """
 from __future__ import annotations
 

@@ -2,97 +2,14 @@
 of the water and the matrices of the coupled problem (a pure module: no scene, no solver; the time
 integration assembles the coupled system from what :func:`acoustic_matrices` returns).
 
-Physics (SI units: m, s, kg, Pa). ``p`` is the hydrodynamic pressure, Pa, positive in compression (it
-adds to the hydrostatic pressure of :mod:`masonrydam.effects.reservoir.hydrostatics`). In the water (linear,
-inviscid, irrotational, small motion) it obeys the wave equation ``(1 / c^2) p_tt = lap p`` with ``c``
-the speed of sound (about 1440 m/s); on a wall of outward normal ``n`` (the fluid's) the momentum
-balance gives ``dp/dn = -rho a_n`` with ``a_n = a . n`` the wall's total acceleration along ``n``.
-Galerkin weighting with the pressure shape functions ``N`` gives the semi-discrete equations
-(Zienkiewicz & Bettess 1978; Chopra & Chakrabarti 1981; Fenves & Chopra 1984)::
+:func:`build_fluid_mesh` extrudes the wetted face upstream into quad4 (2D) / hex8 (3D) pressure elements
+(:class:`FluidMesh`); :func:`acoustic_matrices` gives :class:`AcousticMatrices` on the free pressure
+unknowns: ``G`` (s2/m2), ``H``, ``L`` (s/m) (n_free, n_free), the coupling ``Q`` (n_dof, n_free) and the
+ground-motion load ``B`` (n_free, dim), for ``G p'' + L p' + H p = -rho (Q^T u''_rel + B a_g)``; SI units
+(m, s, kg, Pa), pressure positive in compression, 2D matrices per the out-of-plane thickness. References:
+Zienkiewicz & Bettess (1978), Chopra & Chakrabarti (1981), Fenves & Chopra (1984), Westergaard (1933).
 
-    G p'' + L p' + H p = -rho (Q^T u''_rel + B a_g)
-
-- ``G = (1 / c^2) int N^T N dV`` (s^2/m^2 * m^dim), ``H = int grad N^T grad N dV``;
-- ``L = L_far + L_bottom``: the Sommerfeld radiation condition ``dp/dn = -(1 / c) p_t`` on the
-  upstream truncation plane, ``L_far = (1 / c) int N^T N dS`` (Zienkiewicz & Bettess 1978; exact for
-  plane waves travelling upstream, the propagating modes far from the dam; the evanescent modes are
-  reflected, which the far plane at a few heights makes harmless below the first resonance), and the
-  absorbing reservoir bottom and banks ``dp/dn = -rho a_n - q p_t`` with ``q = (1 - alpha) / ((1 + alpha) c)``
-  (Fenves & Chopra 1984: ``alpha`` the wave reflection coefficient, 1 rigid, 0 fully absorbing, -1 < alpha <= 1),
-  ``L_bottom = q int N^T N dS``;
-- free surface ``p = 0`` (surface waves neglected): the nodes at the water level are not unknowns;
-- ``Q`` (n_dof x n_free) ``= int_face N_u^T n_f N_p dS``, ``n_f`` the FLUID's outward normal (it points
-  into the dam): the water's force on the dam is ``+Q p`` (a full structural DOF vector, DOF index
-  ``node * dim + component``) and the structure's relative acceleration loads the water through
-  ``-rho Q^T u''_rel``;
-- ``B`` (n_free x dim): column ``c`` is ``Q^T iota_c + int_bottom N_p (n_f . e_c) dS``: the rigid
-  translation of the dam face (``iota_c`` the unit translation of every structural DOF along ``c``) and
-  of the reservoir bottom and banks with the ground acceleration ``a_g`` (dim,), m/s^2, along the global
-  axes. A ground acceleration TOWARD the reservoir (along ``upstream``) compresses the water: ``p > 0``
-  on the face, and ``Q p`` pushes the dam downstream.
-
-In 2D every integral is per the out-of-plane ``thickness`` (multiplied by it). With ``c = inf``
-(``sound_speed=None``, incompressible water) ``G = 0`` and ``L = 0`` (``q -> 0``); the water is then
-an added mass ``rho Q H^-1 Q^T`` on the face (:meth:`AcousticMatrices.added_mass`), which for a rigid
-vertical face is Westergaard's (1933) exact series.
-
-The mesh (:func:`build_fluid_mesh`). The wetted part of the face (below ``level``) is extruded
-horizontally along ``upstream`` to the far plane ``{x : (x - x_u) . upstream = length}``, ``x_u`` the most
-upstream wetted point of the face: quad4 elements in 2D, hex8 in 3D, one layer of elements per step of
-the extrusion, graded geometrically (ratio 1.2) from ``element_size`` at the face to
-``max_element_size`` (never larger than these: see :func:`build_fluid_mesh`). Fluid nodes on the
-face: the corner nodes of the wetted facets (line3: all three nodes, the facet seen as a chain of two
-straight segments; quad8 / quad9 / tri6: the corners only) and the points where the water line
-crosses a facet edge; coincident nodes (the two faces of a joint) share one fluid node, so the water
-is continuous across the joints of the dam. A partly wetted facet
-is clipped at the level in its reference coordinates: its wet part is the polygon of the wet corners
-and of the crossing points (the crossings placed on the straight line between the corners; a curved
-line3 edge is cut at the exact root of its quadratic elevation), cut into quadrilaterals and
-collapsed quadrilaterals (triangles, hex8 elements with a repeated node pair: degenerate elements
-whose Jacobian vanishes only on the collapsed edge, never at a Gauss point). Bottom and banks: the
-extrusion of the wetted face's boundary edges that are not on the water line; far boundary: the last
-layer. Every fluid node at the level is a free-surface node (p = 0).
-
-Coupling integration: on each wet piece of a structural facet, 4 Gauss points per direction of the
-piece's own coordinates, mapped linearly (2D) / bilinearly (3D) to the facet's reference coordinates
-(where the structural ``N_u`` and the area normal of :func:`masonrydam.elements.shapes.facet_area_normal`
-are evaluated, times the Jacobian of the piece's map) and identically to the fluid face element (whose
-``N_p`` is linear / bilinear in the same coordinates): exact for ``N_u N_p`` on affine facets (degree
-<= 6 per variable; quad8 / quad9 / line3 included), so ``sum Q^T iota_c`` is the wet area times the
-normal component to round-off whenever the water line is straight in the reference coordinates
-(line2, line3; planar parallelogram quad4, tri3 and straight-sided quadratic faces).
-
-Why plain numpy (no numba): the fluid mesh and its matrices are built once per run (the solver then
-works with the sparse matrices); every element loop here is a vectorised einsum over all elements;
-Python loops run only over the edges of a 2D face (a few hundred) and over the partly wetted faces of
-a 3D face (one row along the water line).
-
-Limitations: the face must be a graph over the plane normal to ``upstream`` (every facet's outward
-normal has a component along ``upstream``: no overhangs, no stepped faces with horizontal treads, which
-the extrusion would fold or flatten); the reservoir is a prism of constant section in the direction
-``upstream`` (the real valley and the bottom slope are not followed); the level must not overtop the
-face; a curved face (line3 / quad8 / quad9 / tri6 with curved edges, warped quad4) is approximated in
-the fluid by its corner chords / bilinear patches (the coupling integral stays on the curved facet),
-and a partly wetted warped quad4 is clipped along a straight line in its reference coordinates; the
-Sommerfeld far boundary is exact only for plane waves travelling upstream: near the first cut-off
-frequency it reflects (the peak of a rigid-bottom reservoir moves up by 4.6 % with the far plane at 3
-depths, 1.9 % at 5, 0.5 % at 10; tests/test_acoustic.py), and under VERTICAL ground motion it also damps
-the one-dimensional vertical response of the water column, which in a channel of infinite length is
-uniform along the channel and radiates nothing (a far boundary applied to the pressure minus that
-free-field solution would remove this; not done here). The far plane takes no ground-motion term.
-
-References
-----------
-- O. C. Zienkiewicz, P. Bettess, "Fluid-structure dynamic interaction and wave forces. An introduction
-  to numerical treatment", Int. J. Numer. Methods Eng. 13 (1978) 1-16.
-- A. K. Chopra, P. Chakrabarti, "Earthquake analysis of concrete gravity dams including
-  dam-water-foundation rock interaction", Earthquake Eng. Struct. Dyn. 9 (1981) 363-383.
-- G. Fenves, A. K. Chopra, "Earthquake analysis of concrete gravity dams including reservoir bottom
-  absorption and dam-water-foundation rock interaction", Earthquake Eng. Struct. Dyn. 12 (1984) 663-680.
-- H. M. Westergaard, "Water pressures on dams during earthquakes", Trans. ASCE 98 (1933) 418-433.
-- Gauss-Legendre rules: Abramowitz & Stegun 25.4.29; isoparametric and collapsed (degenerate)
-  elements: Zienkiewicz, Taylor & Zhu, *The Finite Element Method: Its Basis and Fundamentals*, 7th ed.
-  2013, ch. 6.
+Theory: docs/dam_reservoir_foundation.md, section "The acoustic reservoir".
 """
 from __future__ import annotations
 

@@ -1,35 +1,12 @@
 """Westergaard's added mass of the reservoir on the dam face (``[reservoir] dynamic = "westergaard"``).
 
-Westergaard (1933, Trans. ASCE 98:418-433) found that a rigid vertical dam face accelerating
-horizontally with ``a`` in an incompressible reservoir of depth ``H`` feels, at depth ``z`` below the
-surface, about the pressure ``p = 7/8 rho_w a sqrt(H z)``: the water acts as a mass
-``m_a(z) = 7/8 rho_w sqrt(H z)`` (kg/m2) attached to the face. On inclined or curved faces the
-pressure acts along the face normal ``n`` and is driven by the normal component of the face's total
-acceleration, so the added mass of a piece of face ``dS`` is the tensor ``m_a n n^T dS`` (the
-generalised Westergaard formulation of Kuo, 1982, Report UCB/EERC-82/10; USACE EM 1110-2-6051, 2003,
-sec. 3-7). Written as a matrix this needs no sign convention: ``n n^T`` is the same for both normals.
+:func:`westergaard_mass` gives the added-mass matrix (n_dof, n_dof) CSR, kg, DOF index ``node * dim + component``,
+of the wetted part of a face: ``m_a(z) = 7/8 rho_w sqrt(H z)`` (kg/m2) on the face normal, ``m_a n n^T`` per unit
+area, consistent or HRZ-lumped; coordinates and levels in m, density in kg/m3. It enters the mass matrix of the
+dynamic and modal stages (:class:`masonrydam.assembly.mass.MassMatrix`). References: Westergaard (1933), Kuo
+(1982), USACE EM 1110-2-6051 (2003), Hinton, Rock & Zienkiewicz (1976).
 
-Matrices (full DOF, kg; DOF index ``node * dim + component``):
-
-- consistent: ``M_a = sum_facets int N^T N m_a(z) n n^T dS`` (``N`` the facet's shape functions);
-- lumped: the diagonal blocks of the consistent matrix scaled per facet so that they keep the facet's
-  total added mass (Hinton, Rock & Zienkiewicz 1976, EESD 4:245-249, "HRZ" lumping: positive for
-  quadratic facets, where row sums would give negative corner masses). A node's block is still
-  ``dim x dim`` (``n n^T``): diagonal only on faces normal to a coordinate axis.
-
-The added mass enters the mass matrix of the dynamic stages and of the modal stage
-(:class:`masonrydam.assembly.mass.MassMatrix`): it multiplies the relative acceleration in the
-inertia and the ground acceleration in the effective earthquake forces ``-M iota a_g``, which is
-Westergaard's ``-m_a n n^T (u'' + a_g)`` on the face. The hydrodynamic force on the dam
-(``hydrodynamic_force`` in the results) is ``-M_a a_abs`` summed over the face nodes, and the face
-pressure at a node ``m_a(z) n . a_abs`` with ``n`` the dam's outward normal (compression when the face
-accelerates into the water).
-
-Quadrature: ``m_a`` has a square root at the surface, which no polynomial rule integrates exactly;
-fully wet facets use 8 Gauss points per direction and partly wet ones the rule of their wetted part
-(:func:`.hydrostatics.region_points`, exact for the polynomials of the hydrostatic loads). On a rigid
-vertical face the resultant is within 3e-4 of ``7/12 rho_w a H^2`` (1e-5 when a node sits at the
-water line; tests/test_added_mass.py).
+Theory: docs/dam_reservoir_foundation.md, section "Westergaard's added mass".
 """
 from __future__ import annotations
 

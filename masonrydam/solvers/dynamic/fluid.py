@@ -1,48 +1,14 @@
 """The acoustic reservoir in the implicit step, condensed on the wetted face (the dam's fast path kept).
 
-Coupled equations (pressure formulation; Zienkiewicz & Bettess 1978, IJNME 13:1-16; Chopra &
-Chakrabarti 1981, EESD 9:363-383), on the free DOFs of the dam and the free pressure unknowns of the
-water (:mod:`masonrydam.effects.reservoir.acoustic` builds the matrices):
+:class:`AcousticStep` takes the matrices of :mod:`masonrydam.effects.reservoir.acoustic` (``G``, ``H``, ``L``
+(n_p, n_p), ``Q`` (n_dof, n_p), ``B`` (n_p, dim), density kg/m3), binds them to a stage's free DOFs and
+integrator, and per step eliminates the water's pressures: the dam's step gets the water force and the dense
+block ``M_w(h) = (1 - af) beta h^2 rho Q A^-1 Q^T`` on the wetted DOFs, and after the dam's step converged
+:meth:`AcousticStep.finish` advances the water (:class:`FluidState`: pressures (n_p,) Pa and their two time
+derivatives). Pressure formulation of Zienkiewicz & Bettess (1978) and Chopra & Chakrabarti (1981), integrated
+with the dam's generalized-alpha scheme.
 
-    M u'' + C u' + f_int(u) = f + Q p - M iota a_g
-    G p'' + L p' + H p      = -rho (Q^T u'' + B a_g)
-
-``Q`` (n_dof, n_p) couples the face (the water pushes on the dam with ``Q p``, the dam's normal
-acceleration drives the water), ``B`` (n_p, dim) is the rigid translation of face and reservoir
-bottom with the ground. The generalized-alpha family (the dam's integrator, :mod:`.dynamic`) applied
-to the coupled first-order-in-time system: inertia terms (``M u''``, ``G p''`` and ``rho Q^T u''``)
-weighted with ``am``, the others with ``af``, Newmark's updates for ``p`` with the dam's beta and
-gamma. The water is linear, so one step's pressures are an affine function of the dam's new
-acceleration ``a1``:
-
-    A p''_{n+1} = r_n - (1 - am) rho Q^T a1,   A = (1 - am) G + (1 - af) (gamma h L + beta h^2 H)
-    r_n = -am (G p''_n + rho Q^T a_n) - (1 - af) (L pd~ + H p~) - af (L p'_n + H p_n)
-          - rho B ((1 - af) a_g,n+1 + af a_g,n)
-
-(``p~``, ``pd~``: Newmark predictors). Eliminating ``p`` (static condensation of the linear water on
-the wetted DOFs) leaves the dam's step with
-
-- the water force at the end of the step ``Q p_{n+1} = g - (1 - am)/(1 - af) M_w a1``, where
-  ``g = Q (p~ + beta h^2 A^-1 r_n)`` (one sparse substitution with ``A`` per step) and
-- the symmetric, positive semi-definite matrix ``M_w(h) = (1 - af) beta h^2 rho Q A^-1 Q^T`` (dense on the
-  ``n_w`` wetted DOFs, ``n_w`` substitutions once per step size), which enters the step's inertia
-  term like a mass and the effective matrix as ``c_m M_w``.
-
-So the all-stick effective matrix stays symmetric positive definite and is factorized once (its
-pattern holds the wetted block: :meth:`masonrydam.assembly.model.Model.add_coupling`), the joint-space
-condensation of :mod:`.joint_space` applies unchanged, and a step costs one more substitution with
-the water's ``A`` plus two dense products of size ``n_p x n_w``. After the dam's step has converged the
-water is advanced with the same ``a1`` (:meth:`AcousticStep.finish`). For incompressible water
-(``G = L = 0``) ``M_w = rho Q H^-1 Q^T`` does not depend on ``h``: that case is a constant added mass and
-the run puts it in the mass matrix instead
-(:meth:`masonrydam.effects.reservoir.acoustic.AcousticMatrices.added_mass`).
-
-Why written here: the condensation needs the integrator's coefficients and the dam's DOF numbering.
-``A`` (symmetric positive definite, a 2D or 3D Laplacian-like matrix) gets the L D L^T with numba
-substitutions of :class:`~masonrydam.solvers.linear.direct.SymmetricFactorization` (SuperLU's own solve as
-the fallback): on the Koyna reservoir (4 212 unknowns) the water's part of a step fell from 0.86 to
-about 0.5 ms with it and the right-hand side from three precomputed matrices
-(benchmarks/bench_koyna_reservoir.py).
+Theory: docs/dam_reservoir_foundation.md, section "The water in the implicit step".
 """
 from __future__ import annotations
 

@@ -90,7 +90,7 @@ def test_energy_balance_names_the_numerical_dissipation():
     """The sliding block under HHT (alpha = -0.1): with the integrator's numerical dissipation and the
     friction work as named terms, the balance input + external = kinetic + strain + damping + joint
     stored + friction + bond breaks + contact + numerical closes to round-off (Hughes 2000, sec. 9.1.4,
-    with the generalized-alpha terms of DynamicSolver._record_energy). The friction work equals the
+    with the generalized-alpha terms of EnergyBalance.record). The friction work equals the
     work of the friction force mu m g on the permanent slip (Newmark 1965) within 0.5 %, the numerical
     dissipation is positive for HHT and zero (to round-off) for the trapezoidal rule."""
     slip, ds = sliding_slip(dt=2e-3)

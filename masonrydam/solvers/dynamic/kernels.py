@@ -69,8 +69,8 @@ def step_works(free, u0, u1, pg0, pg1, fs, cv0, cv1, f0, f1, kc0, kc1, v1, mass_
         out[8] = du . (cv1 - cv0)
         out[9] = du . (pg1 - pg0)
 
-    out[5:] are the terms of the integrator's numerical dissipation (see ``_record_energy``). One pass
-    instead of a few dozen indexed copies."""
+    out[5:] are the terms of the integrator's numerical dissipation (see :meth:`~.energy.EnergyBalance.record`).
+    One pass instead of a few dozen indexed copies."""
     n = free.shape[0]
     w_in = 0.0
     w_ext = 0.0

@@ -1,64 +1,16 @@
 """Consistent nodal forces of hydrostatic water pressure and of a geostatic silt load on boundary
 facets (edges in 2D, faces in 3D), integrated over the wetted part of every facet.
 
-Loads (SI units: coordinates in m, unit weights in N/m3, forces in N):
+:func:`facet_pressure_forces` takes the node coordinates (n_nodes, dim) m, the facets (n, nfn) of one facet
+type with a point inside the owner of each (n, dim) m, the surface level (m), the unit weight (N/m3) and, for
+silt, the lateral coefficient ``K``, and returns the nodal forces (n_nodes * dim,) N, DOF index
+``node * dim + component`` (2D: times the thickness).
+:func:`region_points` gives the quadrature points of the part of each facet below a threshold (also used by
+the added mass and the uplift). Exact Gauss and collapsed (Duffy) rules on the wet part; warped and curved
+faces subdivided with Bernstein bounds. References: White (2011), USACE EM 1110-2-2200 (1995), Farin (2002),
+Stroud (1971), Karniadakis & Sherwin (2005).
 
-- water (``lateral_coefficient=None``): the pressure ``p = gamma d`` with the depth
-  ``d(x) = max(surface_level - x . e_v, 0)`` acts along the inward normal, i.e. the traction on the
-  body is ``t = -gamma d n`` with ``n`` the outward unit normal (hydrostatic law ``dp/dz = -gamma``,
-  e.g. F. M. White, *Fluid Mechanics*, 7th ed. 2011, ch. 2, secs. 2.3-2.5; the horizontal force on a
-  face is the force on its vertical projection, the vertical force is the weight of the water above it);
-- silt or any cohesionless deposit (``lateral_coefficient=K``): the geostatic stress of a layer whose
-  surface is at ``surface_level``, ``sigma = -gamma d (K (I - e_v e_v^T) + e_v e_v^T)`` (compression
-  negative), so ``t = sigma n = -gamma d (K n_h + (n . e_v) e_v)`` with ``n_h`` the horizontal part of
-  ``n``: a horizontal pressure ``K gamma d`` on a vertical face and, on an inclined face, the weight of
-  the silt above it (USACE EM 1110-2-2200, *Gravity Dam Design*, 1995, sec. 3-5 "Silt pressure":
-  horizontal as an equivalent fluid of unit weight ``K gamma'``, vertical as the submerged weight of the
-  silt above the face; ``gamma'`` the submerged unit weight is what the caller passes as ``unit_weight``).
-
-Integration. With ``A`` the unnormalised normal (2D: the tangent ``dX/dxi`` turned by -90 degrees,
-3D: ``dX/dxi x dX/deta``) the nodal force is ``f_a = int N_a t |A| dxi = -gamma int N_a d A' dxi``
-(``A' = A`` for water, ``K A_h + (A . e_v) e_v`` for silt): on the wet part of a facet the integrand is
-a polynomial in the reference coordinates (no square root), so Gauss rules of the right degree are
-exact:
-
-- entirely wet facets: one vectorised pass with line Gauss 2 points (line2: degree 2) / 3 points (line3:
-  degree 5), the collapsed (Duffy) Gauss rule of total degree 2 (tri3) / 6 (tri6), tensor Gauss 2x2
-  (quad4: degree 3 in each variable) / 4x4 (quad8, quad9: degree 7 in each variable);
-- entirely dry facets: nothing;
-- partly wet edges (2D): ``x_v(xi)`` is linear (line2) or quadratic (line3); its roots in (-1, 1) are
-  found in closed form (at most two on a curved line3 edge) and every wet sub-interval is integrated
-  with the Gauss rule above mapped onto it: EXACT;
-- partly wet faces (3D): the reference face is cut into triangles (a triangle face: itself; a
-  quadrilateral: the two halves of the reference square along the diagonal 0-2). Where ``x_v`` is
-  linear on such a triangle (tri3 always; quad4 with a zero bilinear term of ``x_v``, e.g.
-  parallelograms and faces with horizontal or vertical edges; straight-sided quadratic faces with
-  ``x_v`` linear) the water line is straight: the triangle is clipped by it, the wet polygon is
-  triangulated and every piece integrated with a collapsed Gauss rule of the integrand's total
-  degree: EXACT. Where ``x_v`` is not linear (warped quad4, curved tri6 / quad8 / quad9) the triangle is
-  subdivided recursively into four children; a child is integrated whole (exact rule) when the
-  Bernstein bounds of ``x_v`` on it show it entirely wet, dropped when they show it entirely dry, and a
-  straddling child is clipped with the linear interpolant ``x_lin`` of ``x_v`` at its vertices (the depth
-  itself still evaluated exactly, clipped at zero) as soon as the error this can make is small enough:
-  with ``delta`` the Bernstein bound of ``|x_v - x_lin|`` on the child, ``g = |grad x_lin|``, ``h`` its
-  longest edge and ``a`` its area (reference coordinates), the misplaced water line changes
-  ``int d`` by at most ``delta * min(a, h delta / g)``, accepted when below
-  ``subdivision_tol * spread * area_ref * h / diam_ref`` (``spread`` the range of ``x_v`` over the facet),
-  so that the error of the whole facet stays below about ``subdivision_tol`` times the force of the
-  facet under a depth ``spread``; at most ``max_subdivision`` levels. This case is accurate to the
-  subdivision, NOT exact: the error falls like ``h**4`` (16 times per level); at the default
-  ``subdivision_tol = 1e-8`` it is 4e-10 to 1e-9 of the facet's largest nodal force for a strongly
-  warped quad4 and a curved quad8 (1.6e-8 for a barely wetted one), measured in
-  tests/test_hydrostatics.py against an iterated-integral reference.
-
-Entirely wet / dry / straddling facets are told apart with the Bernstein form of ``x_v`` (its
-control values bound it on the facet: Farin, *Curves and Surfaces for CAGD*, 5th ed. 2002, ch. 10).
-Rules (:func:`masonrydam.elements.shapes.facet_rule`, points and normals from
-:func:`masonrydam.elements.shapes.facet_quadrature`): Gauss-Legendre (Abramowitz & Stegun 25.4.29);
-collapsed rule on the triangle (:func:`masonrydam.elements.quadrature.collapsed_triangle_rule`)
-``(xi, eta) = (u, v (1 - u))`` with weight ``(1 - u)`` from tensor Gauss on ``[0, 1]^2``, exact for total
-degree ``2 n - 2`` (Stroud, *Approximate Calculation of Multiple Integrals*, 1971; Karniadakis &
-Sherwin, *Spectral/hp Element Methods*, 2nd ed. 2005, sec. 4.1.1 for the Duffy collapse).
+Theory: docs/water.md, section "Hydrostatic and silt loads on facets".
 """
 from __future__ import annotations
 

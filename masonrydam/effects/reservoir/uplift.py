@@ -1,37 +1,13 @@
 """Uplift: the pore pressure of the reservoir water inside the joints of a dam.
 
-The scene asks for it in ``[reservoir]``::
+The scene asks for it in ``[reservoir] uplift = { joints, drains = { distance, efficiency }, cracked }``.
+:class:`Uplift` computes the pore pressure (Pa) at the integration points of the named joint sets from a
+piezometric head (m) linear along each joint line (heel, drain line, toe; full head in a crack open from the
+heel with ``cracked = "full_head"``) and adds its forces, ``+-N_a p n w`` on the two faces (N), to the external
+forces; the unit weight ``rho_w g`` is in N/m3. References: USBR, Design of Small Dams (1987), sec. 5.7; USACE
+EM 1110-2-2200 (1995), secs. 3-3 and 4-4; FERC Engineering Guidelines ch. 3 (2016).
 
-    uplift = { joints = ["base_joint", "lift_joints"], drains = { distance = 5.0, efficiency = 0.67 },
-               cracked = "full_head" }
-
-Pore pressure p (Pa) acts inside the joint: the joint law works on the effective normal traction
-(what the interface kernel computes from the relative displacement), and the total traction on the
-faces is the effective one minus p along the normal. The pore pressure therefore pushes the two faces
-apart: at an integration point with weight w and unit normal n (bottom to top), the top face gets
-``+N_a p n w`` and the bottom face ``-N_a p n w``, added to the external forces (a matrix built once,
-one sparse product per evaluation).
-
-Profile along each line of a joint set (:class:`~masonrydam.assembly.joint_lines.JointLines`), with
-the piezometric head h (m) interpolated linearly in the distance s from the upstream end and
-``p = rho_w g max(h - z, 0)`` at the point's elevation z:
-
-- no drains: h from the reservoir level at the heel to the tailwater level at the toe (the toe's own
-  elevation where there is no tailwater above it): the linear uplift of USBR, Design of Small Dams
-  (1987), sec. 5.7, and USACE EM 1110-2-2200 Gravity Dam Design (1995), fig. 3-3;
-- drains at ``distance`` from the upstream end with ``efficiency`` E: h at the drain line
-  ``= h_tail + (1 - E) (h_reservoir - h_tail)``, linear between heel, drain line and toe (USBR 1987,
-  sec. 5.7; USACE EM 1110-2-2200, sec. 3-3; FERC Engineering Guidelines ch. 3, 2016, sec. 3-3.4);
-- cracked parts (the run of open points that starts at the heel of a strip, updated at every
-  Newton iteration as the crack grows): ``cracked = "full_head"`` puts the full reservoir head in the
-  crack, and the profile over the rest of the line runs from full head at the crack tip to the
-  tailwater at the toe (through the drain line if the crack has not reached it; drains past the crack
-  tip are taken as ineffective, EM 1110-2-2200 sec. 4-4, FERC sec. 3-3.5); ``"unchanged"`` keeps the
-  profile of the intact joint; ``"none"`` takes no pressure in the crack (drained) and keeps the
-  profile elsewhere.
-
-The tangent does not see the pore pressure (it changes with the joint state, not smoothly with the
-displacement): the Newton iterations of a step with a growing crack converge as a fixed point.
+Theory: docs/water.md, section "Uplift in the joints".
 """
 from __future__ import annotations
 

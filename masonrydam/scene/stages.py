@@ -78,7 +78,7 @@ def build_stages(scene: dict, mesh: Mesh, model: Model, base_dir: Path | None = 
                                      "this model has no composite or Mohr-Coulomb joint set")
                                  + " (use \"arc_length\")")
         stages.append(StaticStage(st["name"], st["steps"], loads.force, loads.prescribed, loads.increment,
-                                  supports.copy(), water=loads.varying,
+                                  supports.copy(), varying=loads.varying,
                                   until_failure=st.get("until_failure", False), duration=st.get("duration", 0.0),
                                   control=st.get("control", "load")))
         held = loads.prescribed.copy()

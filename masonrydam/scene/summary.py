@@ -31,8 +31,7 @@ def stats_attrs(solver, t_start, dyn_solvers=()):
     if solver.limit is not None:
         out["limit_state"] = _limit_text(solver)
         out["limit_load_factor"] = float(solver.limit["load_factor"])
-        if "water_level" in solver.limit:
-            out["limit_reservoir_level"] = float(solver.limit["water_level"])
+        out.update(solver.limit.get("attrs", {}))
     if dyn_solvers:
         d = [x.stats for x in dyn_solvers]
         steps = sum(x.steps for x in d)
@@ -87,8 +86,8 @@ def _limit_text(solver) -> str:
     lim = solver.limit
     text = (f"stage '{lim['stage']}': no equilibrium beyond load factor {lim['load_factor']:.6g} "
             f"(tried {lim['failed_at']:.6g}): {lim['reason']}")
-    if "water_level" in lim:
-        text += f"; reservoir level reached {lim['water_level']:.6g} m (tried {lim['water_level_tried']:.6g} m)"
+    if lim.get("text"):
+        text += "; " + lim["text"]
     return text
 
 

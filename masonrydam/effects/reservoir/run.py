@@ -12,6 +12,7 @@ from ...results.variables import ResultDimension, ResultVariable
 from ...solvers.dynamic import coupled_modal_analysis
 from ..base import EffectRun
 from .moving import DynamicWater
+from .water import StageWater
 
 
 def activate(context):
@@ -42,8 +43,8 @@ class ReservoirRun(EffectRun):
 
     def __init__(self, context):
         model, static_stages, jgroups = context.model, context.static_stages, context.recorded_joint_groups
-        self.stages = [st for st in static_stages if st.water is not None]
-        self.reservoir = self.stages[0].water.reservoir if self.stages else None
+        self.stages = [st for st in static_stages if isinstance(st.varying, StageWater)]
+        self.reservoir = self.stages[0].varying.reservoir if self.stages else None
         self.uplift = None if self.reservoir is None else self.reservoir.uplift
         self.last = None  # (stage, load factor) of the last static step with water
         self.assessment = None
@@ -59,7 +60,7 @@ class ReservoirRun(EffectRun):
         #: the reservoir moving with the dam, or None
         self.moving = None
         if context.has_dynamics and spec["dynamic"] != "none":
-            level = self.stages[-1].water.levels(1.0)[0]
+            level = self.stages[-1].varying.levels(1.0)[0]
             self.moving = DynamicWater(spec, self.reservoir, model, level, context.scene["model"]["thickness"],
                                        context.mesh)
         self.model = model
@@ -155,7 +156,7 @@ class ReservoirRun(EffectRun):
         stage), or None (``"static"``: the static pore forces stay as they were)."""
         if self.uplift is None:
             return None
-        level, tail, _ = self.stages[-1].water.levels(1.0)
+        level, tail, _ = self.stages[-1].varying.levels(1.0)
         pore = self.uplift.earthquake_force(level, tail)
         if pore is None:
             return None
@@ -179,12 +180,12 @@ class ReservoirRun(EffectRun):
         step, which keeps the water of the last static step)."""
         if self.reservoir is None:
             return {}
-        if st is not None and st.water is not None:
+        if st is not None and isinstance(st.varying, StageWater):
             self.last = (st, lam)
         if self.last is None:  # a static stage before the water (the water persists once applied)
             return self._values((self.reservoir.face.bottom, None, None))
         stage, lam = self.last
-        return self._values(stage.water.levels(lam))
+        return self._values(stage.varying.levels(lam))
 
     def _values(self, levels) -> dict:
         out = {"reservoir_level": levels[0], "tailwater_level": np.nan if levels[1] is None else levels[1]}
@@ -216,7 +217,7 @@ class ReservoirRun(EffectRun):
         k, j = int(np.argmin(sf)), int(np.argmax(cr))
         text = (f"at the last converged step the lowest sliding factor is {sf[k]:.3g} ('{names[k]}') and the "
                 f"largest cracked length {100 * cr[j]:.0f} % ('{names[j]}')")
-        failed = [st.water.last_failure for st in self.stages if st.water.last_failure is not None]
+        failed = [st.varying.last_failure for st in self.stages if st.varying.last_failure is not None]
         grow = failed[-1] if failed else None
         if sf[k] < 1.05:
             return "sliding", text + f": '{names[k]}' slides"
@@ -237,4 +238,4 @@ class ReservoirRun(EffectRun):
         """The water and pore forces (n_dof,) N at the end of the static stages (committed joint states)."""
         if not self.stages:
             return 0.0
-        return self.stages[-1].water.total(1.0, trial=False)
+        return self.stages[-1].varying.total(1.0, trial=False)

@@ -301,6 +301,17 @@ class StageWater:
     def total(self, lam: float, trial: bool = True) -> np.ndarray:
         return self.external(lam) + self.pore(lam, trial)
 
+    def state_load(self, lam: float) -> np.ndarray:
+        """The loads that follow the joints' trial states: the pore forces (n_dof,) N at ``lam``."""
+        return self.pore(lam)
+
+    def limit(self, lam: float, target: float) -> tuple[dict, str]:
+        """A stage limit at ``lam`` (``target`` tried): the result attribute ``limit_reservoir_level`` (m) and
+        the words for the limit state."""
+        reached, tried = self.levels(lam)[0], self.levels(target)[0]
+        return ({"limit_reservoir_level": float(reached)},
+                f"reservoir level reached {reached:.6g} m (tried {tried:.6g} m)")
+
 
 def describe(scene, model) -> list[str]:
     r = scene.get("reservoir")

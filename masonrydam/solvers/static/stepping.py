@@ -81,9 +81,11 @@ class StaticStage:
     prescribed: (n_dof,) bool DOFs driven in this stage; increment: (n_dof,) m displacement increment
     of those DOFs over the stage; supports: (n_dof,) bool DOFs held at zero.
 
-    water: loads that are not proportional to the load factor (:class:`~masonrydam.effects.reservoir.StageWater`:
-    ``external(lam)``, the total face forces at ``lam``, computed once per increment; ``pore(lam)``, pore
-    forces that follow the joints' trial states, computed at every iteration where ``state_dependent``);
+    varying: loads that are not proportional to the load factor, made by an effect (e.g. rising water,
+    :class:`~masonrydam.effects.reservoir.StageWater`), or None: ``external(lam)`` (n_dof,) N, computed once
+    per increment; ``state_load(lam)`` (n_dof,) N, forces that follow the joints' trial states, computed at
+    every iteration where ``state_dependent``; ``failure_hint()`` words on a failed step; ``limit(lam, target)``
+    the result attributes and words of a stage limit at ``lam`` (``target`` tried);
     until_failure: a step that finds no equilibrium ends the stage and the analysis (the load factor
     reached is the limit, :attr:`StaticSolver.limit`) instead of failing it.
     """
@@ -94,7 +96,7 @@ class StaticStage:
     prescribed: np.ndarray
     increment: np.ndarray
     supports: np.ndarray
-    water: object = None
+    varying: object = None
     until_failure: bool = False
     #: physical time of the stage (s): a load step of load-factor increment d_lambda lasts
     #: ``duration * d_lambda``, the time step of rate-dependent (Perzyna) blocks; 0: no time (instantaneous)
@@ -643,10 +645,10 @@ class StaticSolver:
                 trial[st.prescribed] = u_start[st.prescribed] + target * st.increment[st.prescribed]
                 f_ext = f_base + target * st.force
                 state_load = None
-                if st.water is not None:  # not proportional to the load factor: recomputed per increment
-                    f_ext = f_ext + st.water.external(target)
-                    if st.water.state_dependent:
-                        state_load = (lambda target=target: st.water.pore(target))
+                if st.varying is not None:  # not proportional to the load factor: recomputed per increment
+                    f_ext = f_ext + st.varying.external(target)
+                    if st.varying.state_dependent:
+                        state_load = (lambda target=target: st.varying.state_load(target))
                 singular = None
                 try:
                     # a step that can still be cut is cut where its joint-space iteration fails
@@ -681,8 +683,8 @@ class StaticSolver:
                 # otherwise the joints that gave way in that attempt name the mechanism and the part
                 hint = "" if parts or not final else "".join(f"; in the last attempt {t}"
                                                              for t in joint_mechanisms(m))
-                if final and st.water is not None:
-                    hint += st.water.failure_hint()
+                if final and st.varying is not None:
+                    hint += st.varying.failure_hint()
                 if final and self._law_failure:
                     hint += f"; in an attempt the joint or block law gave up: {self._law_failure}"
                 m.revert()
@@ -690,13 +692,12 @@ class StaticSolver:
                     what = ("a part lost every support" if parts else "singular stiffness" if singular is not None
                             else "no convergence") + hint
                     self.limit = {"stage": st.name, "load_factor": lam, "failed_at": target, "reason": what}
-                    if st.water is not None:  # the water level reached and the one tried
-                        self.limit["water_level"] = st.water.levels(lam)[0]
-                        self.limit["water_level_tried"] = st.water.levels(target)[0]
+                    if st.varying is not None:  # e.g. the water level reached and the one tried
+                        self.limit["attrs"], self.limit["text"] = st.varying.limit(lam, target)
                     self.stats.per_stage.append(dict(stage_stats, iterations=self.stats.iterations
                                                      + self.stats.joint_space_iterations - it_before))
                     return u
-                if final and not parts and st.water is None and last_du is not None \
+                if final and not parts and st.varying is None and last_du is not None \
                         and float(np.linalg.norm(last_du)) > 0:
                     # load control stalled (a limit point, a snap): the rest of the stage under arc-length
                     # control from the last converged state, with the arc of its last increment

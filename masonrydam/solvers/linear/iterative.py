@@ -1,98 +1,15 @@
 """Algebraic multigrid preconditioned Krylov solver with the interface of :class:`Factorization`.
 
-Method
-------
-Smoothed aggregation AMG (Vanek, Mandel & Brezina 1996, Computing 56:179-196), as implemented by
-pyamg (``smoothed_aggregation_solver``), is the preconditioner (one V-cycle) of a Krylov method:
+:class:`AMGSolver` takes a sparse (n, n) matrix ``K``, the near-nullspace (n, k) (the rigid-body modes of
+:func:`rigid_body_modes`) and optionally the node position (n, dim) m and node of every row, and solves
+``K x = b`` to ``||K x - b|| <= 1e-10 ||b||`` or raises ``SingularMatrix``: smoothed-aggregation AMG (pyamg;
+Vanek, Mandel & Brezina 1996) preconditioning conjugate gradients (symmetric ``K``) or flexible GMRES (Saad
+1993), with an extra first level that collapses tied interface node pairs (:func:`tied_groups`, block
+Gauss-Seidel) so that stiff penalty joints do not slow it down, and joint springs that are not tied left out of
+the first aggregation graph. Stopping at the rounding floor: Arioli, Duff & Ruiz (1992).
 
-* conjugate gradients (Hestenes & Stiefel 1952; Saad 2003, Iterative Methods for Sparse Linear
-  Systems, 2nd ed., alg. 9.1) when K is symmetric: a linear elastic model, or a jointed model
-  whose joints stick or are open;
-* flexible GMRES (Saad 1993, SIAM J. Sci. Comput. 14:461-469; right preconditioning, so that the
-  tolerance is on the true residual) when K is not symmetric: a joint that slides with friction
-  makes the tangent non-symmetric.
-
-Aggregation needs the near-nullspace of the operator: for elasticity the rigid-body modes (2D:
-two translations and one rotation; 3D: three translations and three rotations), which smoothed
-aggregation reproduces exactly on every level (Vanek et al. 1996, sec. 3; Vanek, Brezina & Mandel
-2001, Numer. Math. 88:559-579). :func:`rigid_body_modes` builds them from the node coordinates.
-
-Penalty interfaces
-------------------
-A jointed model is blocks joined only by zero-thickness interfaces, i.e. stiff springs between
-coincident node pairs (nodal integration). With a normal stiffness ``kn`` large against the
-blocks' ``E / h``, plain smoothed aggregation degrades: on the 3D benchmark the CG iterations
-grow from 14 (``kn h / E = 1``) to 33, 104 and 333 for ``kn h / E = 10, 100, 1000``, and at 1e4 the
-iteration does not converge (docs/performance.md). The cause is the classical one of penalty methods: every displacement
-field in which the two nodes of each pair move together has an energy ``kn`` times smaller than
-the diagonal of those rows, so a point smoother does not reduce it, and aggregates that split a
-pair cannot represent it either.
-
-The remedy here is an extra first level that removes the penalty exactly ("tied-node
-collapse"). DOFs of coincident nodes (same position, same component, given by ``dof_coords``)
-whose coupling is strong, ``|k_ij| >= tie_threshold * sqrt(k_ii k_jj)``, are grouped (connected
-components); Q is the n x n_groups 0/1 matrix of the groups. Then
-
-* the coarse operator ``K_c = Q^T K Q`` is the stiffness of the glued continuum: the springs of
-  every tied pair cancel, and so does the penalty;
-* the smoother of the fine level is block Gauss-Seidel with one block per group (the pair /
-  edge / corner springs are inverted exactly; Vanek et al. 2001 use the same kind of block
-  smoother), so the relative (jump) displacements of the pairs, which carry the penalty energy,
-  are reduced at every sweep;
-* ``K_c`` is solved approximately by one smoothed-aggregation V-cycle, with the near-nullspace of
-  the groups.
-
-The preconditioner is the symmetric two-level cycle ``forward block GS -> Q V(K_c) Q^T ->
-backward block GS``. It converges in 12-15 CG iterations for ``kn h / E`` from 0.1 to 1e4 on the
-benchmark.
-
-Joints that are soft, open (1e-6 of kn in the tangent) or sliding (shear stiffness zero, friction
-coupling) are not tied, and for them the opposite holds: the two blocks can move almost freely
-against each other, so each block's rigid-body modes are near-nullspace vectors. The strength graph
-of the first aggregation level therefore leaves out every spring between the two nodes of a pair
-(any components; ``dof_nodes`` tells the nodes apart) that was not tied, so that no aggregate
-spans a joint, and the coarse levels use a strength threshold ``coarse_theta = 0.1`` (pyamg
-"symmetric", Vanek et al. 1996 eq. 3.2) so that blocks joined only by weak couplings are not
-aggregated together further down. On 66 tangents sampled from a nonlinear 2D wall run (the
-default scene: soft joints, sliding and opening; 2 of them singular for PARDISO too) the iterations
-per solve were: plain smoothed aggregation median 200, 90th percentile 444, 28 solves failed;
-joint springs left out, coarse_theta = 0: 42 / 115 / 16 failed; both (the default): 28 / 50 / 4
-failed (docs/performance.md). On the 3D penalty sweep it gives 14 iterations against 19 for plain
-smoothed aggregation at ``kn h / E = 0.1``. A threshold on the first level instead costs much more
-in 3D, where the continuum couplings themselves are weak by that measure (a trial while choosing,
-theta = 0.1 on all levels: 38 instead of 13 iterations and 45 s instead of 1 s of setup on the
-52 000-equation box).
-Without ``dof_coords`` (or without a near-nullspace) nothing is tied or left out and plain smoothed
-aggregation is used.
-
-pyamg settings: symmetric strength of connection with theta = 0, standard aggregation, Jacobi
-prolongation smoothing, symmetric Gauss-Seidel smoothing (pyamg's defaults); no "improve_candidates"
-relaxation of the near-nullspace (the rigid-body modes are exact, and on the 3D benchmark the
-relaxation cost 1-2.5 s of setup at 170 000-250 000 equations for the same iteration counts);
-coarsening down to ``max_coarse`` aggregates, whose matrix is factorized by SuperLU (empty
-aggregates removed).
-
-Accuracy and failures
----------------------
-The Newton loop of the static solver needs solves as accurate as a direct solver's, so the default
-relative tolerance is 1e-10 (``||K x - b|| <= 1e-10 ||b||``, on the true residual, which is
-recomputed at the end; the Krylov method is restarted from its last iterate if the recursively
-updated residual drifted). A nearly singular system (a block held only by open joints, whose
-tangent keeps 1e-6 of their stiffness) may not reach 1e-10: the iteration stops at its rounding
-floor, a residual that no longer halves over ``stagnation_window`` iterations or a normwise backward
-error ``||r|| / (||K|| ||x|| + ||b||)`` below 1e-17 (Arioli, Duff & Ruiz 1992, SIAM J. Matrix Anal.
-Appl. 13:138-144), returns the best iterate seen (past that floor CG iterates can diverge), and the
-solution is accepted when its relative residual passes ``residual_check``, the acceptance test of
-the direct solvers. Raised as :class:`~masonrydam.solvers.linear.direct.SingularMatrix`, with the
-iteration count and the residual: no convergence within ``maxiter``, a residual above
-``residual_check`` when the iteration stops or breaks down, NaN/inf, and a singular coarsest
-level (a floating block: its rigid-body modes are in the near-nullspace, which the prolongators
-reproduce, so the coarsest matrix inherits the singularity; checked once at construction, by the
-pivots of an LU of that matrix, as a direct solver does).
-
-Figures (setup and solve time, iterations, peak memory against PARDISO and SuperLU on 3D models up
-to ~470 000 DOFs) and the crossover are in docs/performance.md, "Linear solvers in 3D: direct vs
-AMG" (``benchmarks/bench_solvers_3d.py``).
+Theory and measured figures: docs/performance.md, section "How the AMG solver works" (under "Linear solvers in
+3D: direct vs AMG").
 """
 from __future__ import annotations
 

@@ -1,50 +1,15 @@
 """Joint-space Newton: the implicit step condensed on the relative displacements of the nonlinear joints.
 
-Why. In a jointed model whose blocks are linear elastic the only nonlinearity of a time step sits in
-the joint law, at the ``P`` integration points of the nonlinear joint sets. With the reference
-effective matrix ``K_ref = K_continuum + B^T W D0 B + c_m M + c_c C`` (every joint point sticking, the
-matrix the dynamic solver factorizes once per step size) the internal forces of the joints are
+:class:`JointSpace` holds, for one step size, the joint operator ``B`` (m, n_dof) with ``m`` = points x dim of
+the nonlinear joint sets (:func:`joint_operator`, :func:`joint_space_size`), the tributary areas (m2) and the
+flexibility ``S = B K_ref^-1 B^T`` (m, m), m/N, of the all-stick effective matrix (dense up to
+:data:`JOINT_SPACE_MAX` unknowns, else :class:`FlexibilityColumns` computed as steps need them), and solves a
+step's joint equations ``F(delta) = delta - delta_y + S (q(delta) - q_n) = 0`` (relative displacements in m)
+with small dense LU factorizations of the active components, then recovers the displacements (n_dof,) m. The
+flexibility formulation of contact problems: Francavilla & Zienkiewicz (1975); the joint law and ``B``:
+Tzamtzis & Asteris (seed eqs. 1-6, 10, 11).
 
-    f_joint = B^T W t(delta) = B^T W D0 B u + B^T q(delta),   q = W (t(delta) - D0 delta),
-
-with ``delta = B u`` the local relative displacements (seed eqs. 1-6 and 10; ``B`` (m, n_dof),
-``m = P dim``), ``W`` the tributary areas and ``D0 = diag(ks, [ks,] kn)`` (seed eq. 11). ``q`` vanishes
-for an elastic point and is constant while a point sticks (``-w ks s_p``). The step residual is then
-affine in ``u`` apart from ``q``, and eliminating ``u`` (static condensation of the linear part on the
-joint unknowns, the flexibility formulation of contact problems of Francavilla & Zienkiewicz 1975,
-IJNME 9:913-924) leaves
-
-    F(delta) = delta - delta_y + S (q(delta) - q_n) = 0,     S = B K_ref^-1 B^T  (m x m, m/N),
-
-with ``y = u_n - K_ref^-1 R(u_n)`` (one substitution: the elastic predictor), ``delta_y = B y`` and
-``q_n = q(delta_n)`` from the committed state. Newton on ``F`` needs no sparse factorization and no
-substitution: with ``Qt = dq/d delta`` (block diagonal, zero at sticking points) and ``z = Qt D`` on
-the ``na`` components where ``Qt`` has a nonzero row (two per open point, one per point sliding
-without hardening in 2D), the correction is ``D = -F - S_:a z`` with ``(I + Qt_a S_:a) z = -Qt_a F``:
-one dense LU of size ``na``, kept while the active rows and their values repeat and updated by
-Sherman-Morrison-Woodbury while only a few of them change. When ``delta`` has
-converged the displacements are ``u = y - X (q - q_n)`` with ``X = K_ref^-1 B_f^T``: from the stored
-columns of ``X`` for the few nonzero entries of ``q - q_n`` (the points that left their elastic
-state), else by a second substitution; nothing when ``q = q_n``. A step whose joints all stick
-therefore costs one substitution, like a linear step; a step with sliding or opening points costs
-one substitution, the dense work, whatever the number of iterations, and the recovery.
-
-Cost of the set-up: ``m`` substitutions for ``S`` (done in blocks of columns), ``8 m^2`` bytes, and
-``8 n_eq m`` bytes for ``X`` where that is at most :data:`RECOVERY_MEMORY_MAX`.
-:func:`joint_space_size` counts ``m``; the dynamic solver uses this path for a scene whose nonlinear
-joints have at most :data:`JOINT_SPACE_MAX` components (``joint_space = "auto"``), at the nominal
-step size and at the halved sizes of sub-steps (one system per size, set up when first needed).
-
-Iteration control (the joint law is non-smooth; see :meth:`JointSpace.solve_step`): Newton with a
-backtracking line search; points whose state keeps changing are held sticking until the others have
-converged, then the true law decides (and a point it disagrees with is let go for the rest of the
-step); a pattern that comes back gives every open point its initial stiffness in the iteration
-matrix and latches broken bonds (the general path's remedy); after
-:data:`MAX_JOINT_SPACE_ITERATIONS` Newton iterations, initial-stiffness iterations. Each step starts
-from the joint forces extrapolated from the last step (if that is closer than the elastic
-predictor). A step not converged within these limits is halved by the caller, or at the last halving
-goes on in the general Newton path from the last iterate. Every result is checked by the caller
-against the full residual of the step.
+Theory: docs/dynamics.md, section "The joint-space step in equations" (under "Fast path").
 """
 from __future__ import annotations
 

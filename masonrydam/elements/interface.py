@@ -44,7 +44,7 @@ from ..errors import STATUS_BAD_GEOMETRY, STATUS_NAN, STATUS_OK
 from ..materials.mohr_coulomb import (P_COHESION, P_KN, P_KS, P_KS_RESIDUAL, P_OPEN_TANGENT, P_TAN_PHI,
                                       P_TENSILE_STRENGTH, S_BACK_STRESS, S_BOND_BROKEN, S_CODE, S_PLASTIC_SLIP,
                                       mohr_coulomb_point, write_tangent, write_trial)
-from ..materials.composite_interface import composite_point
+from ..materials.composite import composite_point
 from .quadrature import QUADRATURE_SCHEMES, line_rule, tensor_rule, triangle_rule
 from .shapes import ELEMENT_TYPES, reference_nodes, shape_functions
 
@@ -236,7 +236,7 @@ def _frame(xm, dN, g, dim, R, size):
 # the joint law of the fused kernels (argument ``law``) is the descriptor's ``JointLaw.kernel_id``
 # (masonrydam.materials.joint_laws.FUSED_KERNELS): None, the seed's Mohr-Coulomb (and the linear joint, a
 # Mohr-Coulomb joint that cannot break), or 1, the composite masonry law of
-# masonrydam.materials.composite_interface (see joint_law_at for why None)
+# masonrydam.materials.composite (see joint_law_at for why None)
 
 
 @njit(cache=True, inline="always")

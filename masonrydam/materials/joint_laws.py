@@ -15,7 +15,7 @@ Built-in laws (registered here, in this order):
   :mod:`masonrydam.materials.mohr_coulomb`);
 - ``linear``: the same kernel with a bond that cannot break and no friction limit (an elastic joint);
 - ``composite``: the masonry interface of Lourenco & Rots (1997, J. Eng. Mech. 123(7):660-668;
-  :mod:`masonrydam.materials.composite_interface`).
+  :mod:`masonrydam.materials.composite`).
 
 Their point laws are compiled into the interface kernels (:mod:`masonrydam.elements.interface`): the
 *fused* path, one kernel for kinematics, law and assembly, selected by :attr:`JointLaw.kernel_id`.
@@ -59,7 +59,7 @@ import numpy as np
 from ..checks import number, seconds
 from ..errors import SceneError
 from ..units import SI_UNIT, quantity
-from . import composite_interface as ci
+from . import composite as ci
 from . import mohr_coulomb as mc
 
 # ---- the result's joint states (``joint_state`` of the result file)
@@ -350,14 +350,14 @@ def _linear_parameters(spec: dict) -> np.ndarray:
                            friction_angle_deg=0.0, tensile_strength=UNBREAKABLE)
 
 
-#: the composite law's keys that :func:`~masonrydam.materials.composite_interface.composite_params` takes by name
+#: the composite law's keys that :func:`~masonrydam.materials.composite.composite_params` takes by name
 _COMPOSITE_OPTIONS = ("dilatancy_confinement", "dilatancy_decay", "compressive_strength", "cap_shear_factor",
                       "cap_fracture_energy", "cap_peak_plastic_strain", "shear_stiffness_2", "residual_friction_angle",
                       "dilatancy_angle", "relaxation_time")
 
 
 def _composite_parameters(spec: dict) -> np.ndarray:
-    """The composite row (:func:`~masonrydam.materials.composite_interface.composite_params`), refused where the
+    """The composite row (:func:`~masonrydam.materials.composite.composite_params`), refused where the
     joint alone would snap back (the longest elastic bar in series without a snap-back is 0; its sign does not
     depend on the bar's moduli, so unit moduli serve)."""
     row = ci.composite_params(spec["normal_stiffness"], spec["shear_stiffness"], spec["tensile_strength"],
@@ -425,7 +425,7 @@ COMPOSITE = JointLaw(
     summary="composite masonry joints (Lourenco & Rots 1997): tension cut-off with exponential softening (GfI), "
             "Coulomb friction with cohesion softening (GfII) and dilatancy, compression cap where given",
     reference="Lourenco & Rots (1997), J. Eng. Mech. 123(7):660-668, eqs. 1-9; Lourenco (1996), PhD thesis, ch. 4 "
-              "(masonrydam.materials.composite_interface)",
+              "(masonrydam.materials.composite)",
     parameters=_composite_parameters, read_keys=_read_composite, state_size=ci.N_COMPOSITE_STATE,
     keys=(LawKey("tensile_strength", "stress", _TENSILE, REQUIRED),
           LawKey("mode_I_fracture_energy", "fracture_energy", "fracture energy in tension", REQUIRED),

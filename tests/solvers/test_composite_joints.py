@@ -1,5 +1,5 @@
 """Composite (masonry) joints in scenes (issue 18 sec. 1-2): ``[joints.<set>] law = "composite"`` (the
-Lourenco-Rots interface law of masonrydam/materials/composite_interface.py, tested at point level in
+Lourenco-Rots interface law of masonrydam/materials/composite/, tested at point level in
 tests/test_composite_interface.py) in the interface elements, and the snap-back a softening joint
 gives in series with a long elastic bar, followed by indirect displacement control.
 

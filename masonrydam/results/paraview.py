@@ -1,85 +1,16 @@
 """A result file (netCDF) as a ParaView time series (``masonrydam export-results OUT.nc -o OUT.xdmf``).
 
-Two formats, chosen by the suffix of the output:
+:func:`export_results` writes a result dataset to ``.xdmf`` (XDMF 3 with the arrays in ``OUT.h5``, meshio's
+``TimeSeriesWriter``) or ``.pvd`` (a ParaView collection and one ``OUT_<step>.vtu`` per exported step), with
+``OUT.units.json`` beside it (units, long names, components and the names of the integer fields). The geometry
+is the undeformed recorded nodes (three coordinates, z = 0 in 2D, m) with block cells (corner nodes) and one
+interface cell per interface element (``joints``: ``"deformed"``, ``"shrunk"`` to :data:`SHRINK_FACTOR` or
+``"both"``); point data are the nodal vectors (``displacement`` m, ``reaction`` N, velocities and
+accelerations), cell data the element stress (Pa) and the means of the joint points' variables. ``every``,
+``steps`` and ``time`` select the steps and their time values; :class:`ExportSummary` says what was written and
+left out.
 
-- ``.xdmf``: XDMF 3 with the arrays in an HDF5 file beside it (``OUT.h5`` for ``OUT.xdmf``), written
-  with :class:`meshio.xdmf.TimeSeriesWriter`: one mesh (points and cells) and, per exported step, a
-  time value and the point and cell data. Open the ``.xdmf`` in ParaView ("Xdmf3 Reader S" or
-  "XDMF Reader");
-- ``.pvd``: a ParaView collection file (a small XML file listing ``<DataSet timestep="t"
-  file="OUT_0003.vtu"/>``) and one ``.vtu`` per exported step beside it, ``OUT_<step>.vtu`` with the
-  step number (the result's ``step`` coordinate) zero-padded to 4 digits, written by :func:`meshio.write`.
-  Open the ``.pvd``. A new export replaces the files of the steps it writes; ``.vtu`` files of an earlier
-  export with other steps are left alone (the ``.pvd`` lists only the new ones).
-
-Beside either output goes ``OUT.units.json`` (:func:`units_path`): for every field its association
-(point or cell), unit, long name and components, and the group, joint set, joint state and part names
-of the integer fields; XDMF and VTU array names cannot carry units.
-
-Geometry. The points are the recorded nodes (the ``node`` coordinate, undeformed, always with three
-coordinates: z = 0 in 2D), in the order of ``node``, so the same points serve every step (XDMF keeps
-the geometry fixed over time, and the ``.vtu`` files do the same). To see the deformed shape apply
-ParaView's *Warp By Vector* with ``displacement`` (three components, z = 0 in 2D), with a scale factor
-for small displacements. The cells:
-
-- the block cells: every continuum element (``block_cell_nodes``, its corner nodes) as a meshio
-  ``quad`` / ``triangle`` (2D) or ``hexahedron`` / ``tetra`` (3D); quadratic elements (quad8, tri6,
-  hex20, tet10) by their corners. Cells with a corner node that the result does not record (``[output]
-  nodes``) are left out (:attr:`ExportSummary.left_out`); within one cell type they keep the order of
-  ``block_cell`` (which is the order of ``element`` where stress is recorded);
-- the interface cells, one per interface element (the joint points grouped by ``joint_set`` and
-  ``joint_element``, from ``joint_point_nodes``): in 2D a ``quad`` [bottom0, bottom1, top1, top0] of the
-  face end nodes, in 3D a ``hexahedron`` of the bottom and top corner quads (quad4 / quad8 faces) or a
-  ``wedge`` of the corner triangles (tri3 faces). Zero-thickness joints are flat in the undeformed
-  geometry; after *Warp By Vector* their thickness is the joint's opening (times the scale) and their
-  skew its slip. Elements with a face node that is not recorded are left out;
-- the recorded nodes that are in none of these cells (a result that records some nodes only) as meshio
-  ``vertex`` cells, so that they show; in an XDMF output that has other cells they stay points without a
-  cell (:func:`xdmf_cells`; :attr:`ExportSummary.left_out` ``nodes_without_cell``): export to ``.pvd`` to
-  see them.
-
-``joints`` (``--joints``): ``"deformed"`` (default): the interface cells use the model's nodes, shared
-with the blocks, so that warped they show the gap and offset between the blocks; ``"shrunk"``: each
-interface cell has its own copy of its nodes, moved toward the cell's centroid to
-:data:`SHRINK_FACTOR` (0.8) of their distance from it (the copies carry the point data of the nodes they
-copy), so that neighbouring interface elements show as separate strips and the blocks stay intact;
-``"both"``: the two sets of interface cells. Cell data ``part`` tells them apart (0 block, 1 interface
-cell on the model's nodes, 2 shrunk interface cell, 3 vertex): select them with a *Threshold* on ``part``.
-
-Point data, per step: every nodal vector of the result on (step, node, component) as three components
-(z = 0 in 2D): ``displacement`` (m; relative to the ground in a dynamic result), ``reaction`` (N), and for
-dynamic results ``velocity`` (m/s), ``acceleration``, ``acceleration_absolute`` (m/s2), NaN on the static
-steps of a dynamic result; ``node``, the model node index (as the result's ``node`` coordinate).
-
-Cell data, per step; the fields that do not apply to a cell are NaN (floating-point fields) or -1
-(integer fields), since every field must have a value on every cell:
-
-- ``part`` (0 block, 1 interface, 2 shrunk interface, 3 vertex), ``group`` (the block's element group,
-  ``block_cell_group``; -1 on interface cells), ``element`` (the block's position along ``block_cell``,
-  i.e. the element number of ``element``; -1 on interface cells), ``joint_set`` and ``joint_element``
-  (the interface element's joint set and its index in the set; -1 on blocks);
-- the continuum stress where the result records it (``[output] stress = "element"``): ``stress_xx``,
-  ``stress_yy``, ``stress_xy`` (2D) or ``stress_xx`` ... ``stress_zx`` (3D) in Pa, tension positive, the mean
-  over the element's integration points; in 3D also ``stress``, the six components in the order of a VTK
-  symmetric tensor (xx, yy, zz, xy, yz, zx) for ParaView's tensor filters. Any other variable on
-  (step, element[, c]) goes the same way (``name`` or ``name_<c>``);
-- per interface element, the arithmetic mean over its joint points of ``joint_opening`` (m, opening
-  positive), ``joint_traction_normal`` (Pa, tension positive), ``joint_pore_pressure`` (Pa, where recorded),
-  the local shear components ``joint_slip_t``, ``joint_plastic_slip_t``, ``joint_traction_shear_t`` (2D;
-  ``_t1``, ``_t2`` in 3D; m, m, Pa, along the joint's shear axes ``joint_shear_axis``), and the magnitudes
-  ``joint_slip_magnitude``, ``joint_plastic_slip_magnitude`` (m), ``joint_traction_shear_magnitude`` (Pa)
-  (the mean of the points' magnitudes); and ``joint_state``, the most severe state of its points (the
-  largest: 0 stick, 1 slip, 2 open, 3 crush).
-
-Time values. A result without dynamic steps: the step number (the ``step`` coordinate: step k at
-"time" k), since the load factor restarts at each stage. A result with dynamic steps (``time`` finite on
-some steps), ``time="auto"`` (default): the time in s of the dynamic steps, and its static steps (time
-NaN) are left out (the first step of a dynamic stage, at its start time, holds the state the static
-stages left); ``time="step"`` keeps every step with the step number as its time value.
-
-``every`` (``--every K``) keeps every K-th of the selected steps, counted from the first, and the last
-selected step; ``steps`` (``--steps A:B``) selects the steps numbered A (included) to B (excluded), as a
-Python slice: either may be left out, negative numbers count from the end.
+Reference (what is written, in which units, and how to open it): docs/paraview.md.
 """
 from __future__ import annotations
 

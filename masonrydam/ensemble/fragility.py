@@ -1,39 +1,14 @@
 """Lognormal fragility curves fitted to an ensemble of analyses by maximum likelihood.
 
-A fragility curve gives the probability that a structure fails (collapses, or exceeds a limit state)
-under a ground motion of intensity ``IM``; the lognormal form is
+:func:`fit_lognormal_fragility` fits ``P(failure | IM) = Phi(ln(IM / theta) / beta)`` to failures among runs
+at intensity levels (IM in the ensemble's units, m/s2 or g) by the binomial likelihood of Baker (2015,
+Earthquake Spectra 31(1) 579-599, eq. 11), with profile-likelihood (default) or Wald intervals, and returns a
+:class:`FragilityFit` (median ``theta``, dispersion ``beta``, intervals, or the reason the data identify no
+curve; :class:`FragilityError` otherwise). :func:`failure_indicator` turns an ensemble dataset (dims
+``record``, ``intensity``, optional ``p_<name>`` and ``sample``) into failures: collapse or a demand over a
+limit; :func:`fragility_table` fits one curve per combination of the parameter dims.
 
-    P(failure | IM) = Phi( ln(IM / theta) / beta )
-
-with ``theta`` the median (the intensity at which half the records fail) and ``beta`` the dispersion
-(the standard deviation of ln IM at failure). :func:`fit_lognormal_fragility` fits both by maximising
-the binomial likelihood over the intensity levels (Baker 2015, "Efficient analytical fragility function
-fitting using dynamic structural analysis data", Earthquake Spectra 31(1) 579-599, eq. 11):
-
-    L(theta, beta) = prod_j  C(n_j, z_j) p_j^z_j (1 - p_j)^(n_j - z_j),   p_j = Phi(ln(x_j / theta) / beta)
-
-with ``z_j`` failures among ``n_j`` runs at intensity ``x_j``. In ``a = -ln(theta) / beta``,
-``b = 1 / beta`` this is a probit regression on ``ln IM``, whose log-likelihood is concave: the maximum is
-unique when it exists, and Newton's method with a line search finds it.
-
-Confidence intervals come from the **profile likelihood** (the default): the interval of ``theta`` holds
-the values whose profile log-likelihood (maximised over ``beta``) lies within ``chi2_1(level) / 2`` of the
-maximum, and likewise for ``beta``. Unlike the Wald interval it follows the skewed likelihood of small
-samples and never leaves the admissible range. An interval that does not close within the admissible
-range is reported open (``0`` or ``inf``): the data do not bound that side (for example when the
-failures do not rise significantly with intensity). ``ci="wald"`` gives the Wald intervals from the
-observed Fisher information on ``(ln theta, beta)`` instead.
-
-The MLE does not exist for degenerate data: no failures, only failures, a single intensity level, or
-data that are (quasi-)separated (every run at or above some intensity fails and every run at or below it
-survives: ``beta -> 0``; or failures only below the survivals). These raise :class:`FragilityError`, or,
-with ``on_degenerate="flag"``, return a :class:`FragilityFit` with ``identifiable=False``, the reason,
-and ``None`` for the estimates (never a number that is not one).
-
-:func:`failure_indicator` turns an ensemble dataset (dims ``record``, ``intensity``, optionally
-``p_<name>`` parameter dims and ``sample``) into failures: collapse (``status == 1``), or a demand over a
-limit; numerical failures (``status == 2``) are left out of the fits and counted. :func:`fragility_table`
-fits one curve per combination of the parameter dims.
+Theory: docs/ensembles.md, section "The fragility fit" (under "Report").
 """
 from __future__ import annotations
 

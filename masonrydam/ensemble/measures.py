@@ -1,38 +1,14 @@
 """Engineering demand parameters of one ensemble member, from its result dataset.
 
 :func:`member_measures` reduces the xarray Dataset that :func:`masonrydam.run` returns (or
-:func:`masonrydam.open_result` reads) to a few numbers. Every measure is taken over the *dynamic
-steps* (those with a finite ``time``) and, where it is a displacement, relative to the *reference
-state*: the state the first dynamic stage starts from, i.e. its record at ``time = 0`` (the first step
-with a finite time; where that step lies after ``time = 0``, the step before it). The measures and their
-units are listed in :data:`MEASURES`; :func:`measure_attrs` gives the ``units`` and ``long_name`` of a
-measure's name (``peak_slip_bed`` included).
+:func:`masonrydam.open_result` reads) to a few numbers, taken over the dynamic steps and, for displacements,
+relative to the state the first dynamic stage starts from: ``peak_displacement`` (m), ``peak_drift`` (1), per
+demand joint set ``peak_slip_S``, ``residual_slip_S``, ``peak_opening_S``, ``residual_opening_S`` (m) and
+``cracked_ratio_S`` (1), ``min_sliding_safety_factor`` (1) and ``energy_dissipated`` (J). The measures and
+their units are listed in :data:`MEASURES`; :func:`measure_attrs` gives the ``units`` and ``long_name`` of a
+measure's name.
 
-- ``peak_displacement`` (m): max over the written nodes and the dynamic steps of the Euclidean norm of
-  the change of ``displacement`` (relative to the ground, as written) from the reference state.
-- ``peak_drift`` (1): with ``z`` the vertical coordinate (``y`` in 2D, ``z`` in 3D) of the written nodes,
-  the *top* nodes those within ``1e-6 H`` of the highest ``z`` and the *bottom* nodes those within
-  ``1e-6 H`` of the lowest, ``H = z_top - z_bottom``:
-  ``max over dynamic steps t of |mean_top du_h(t) - mean_bottom du_h(t)| / H``, with ``du_h`` the change
-  of the horizontal displacement (``x`` in 2D; the ``(x, y)`` vector in 3D, its norm taken after the
-  difference) from the reference state. Absent where the written nodes lie on one level (a scene whose
-  output selects only the top nodes): write the bottom nodes too (``output.nodes``).
-- for each demand joint set ``S`` (its points: ``joint_set`` equal to the index of ``S`` in the attribute
-  ``set_names``), over the set's points:
-  ``peak_slip_S`` (m): max over points and dynamic steps of the norm (over the shear directions) of the
-  change of ``joint_slip``; ``residual_slip_S`` (m): the same at the last step only;
-  ``peak_opening_S`` (m): max over points and dynamic steps of the change of ``joint_opening`` (opening
-  positive; 0 where the set only closed); ``residual_opening_S`` (m): the same at the last step;
-  ``cracked_ratio_S`` (1): sum of ``joint_weight`` (area) of the set's points that are open
-  (``joint_state`` 2) at the last step over the sum of the set's ``joint_weight``.
-  NaN where the set has no written points.
-- ``min_sliding_safety_factor`` (1): min over the dynamic steps and the sections of
-  ``sliding_safety_factor`` (NaNs ignored); absent where the result has none (no reservoir assessment).
-- ``energy_dissipated`` (J): the energy dissipated from the reference state to the last step:
-  ``energy_joint_dissipated`` (the joints' work minus their stored elastic energy: friction, bond
-  breaking and contact losses; ``energy_joint - energy_joint_stored`` where the first is missing)
-  + ``energy_damping`` (viscous Rayleigh damping) + ``energy_numerical`` (the integrator's numerical
-  dissipation), each the change from the reference state; a term the result does not have counts 0.
+Definitions: docs/ensembles.md, section "The measures" (under "The dataset").
 """
 from __future__ import annotations
 

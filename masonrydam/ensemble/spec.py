@@ -1,51 +1,15 @@
 """The ensemble file: a base scene and the axes swept over it, read and checked into an :class:`EnsembleSpec`.
 
-An ensemble file is TOML::
+:func:`load_ensemble` (a TOML file) and :func:`parse_ensemble` (a dictionary) read ``[ensemble]`` (the base
+scene, its dynamic stage and ground-motion component, the demand joint sets), ``[axes.records]``,
+``[axes.intensity]`` (``scale_to_pga`` in g or m/s2, or ``scale_to_sa`` with period s and damping),
+``[[axes.parameters]]`` (scene keys over values, or sampled from a distribution with one Latin hypercube:
+:func:`latin_hypercube`, :func:`transform`), ``[axes.sampling]`` and ``[execution]``. Every error is a
+:class:`~masonrydam.errors.SceneError` whose key is the ensemble key, raised before any run;
+:meth:`EnsembleSpec.member_scene` writes a member's record and intensity into the base stage's ground motion.
 
-    [ensemble]
-    name = "block_ida"                  # default: the file's stem
-    scene = "sliding_block.toml"        # the base scene, relative to this file (required)
-    stage = 1                           # the dynamic stage (index in [[stages]]) that gets the records;
-                                        # default: the first dynamic stage
-    component = "x"                     # the ground-motion component the records go to; default: the base
-                                        # stage's only component, else "x"
-    history = false                     # keep each member's full result file (default: measures only)
-    demand_sets = ["joints"]            # joint sets whose slip and opening are measured; default: every
-                                        # joint set whose law is nonlinear (not "linear")
-
-    [axes.records]                      # required: at least one record from names, files and folder
-    names = ["elcentro_1940_ns_peknold"]        # bundled records (`masonrydam records list`)
-    files = ["my_records/a.AT2", { file = "b.txt", units = "g", dt = 0.01, column = 0, name = "b" }]
-    folder = "my_records"               # every record file in it (suffixes RECORD_SUFFIXES), sorted by name
-    units = "g"                         # optional defaults for files and folder records: units, format, dt
-
-    [axes.intensity]                    # required: one of
-    scale_to_pga = ["0.1 g", "0.2 g", 3.0]       # accelerations ("0.3 g", or m/s2 numbers)
-    # scale_to_sa = { values = ["0.2 g", ...], period = 0.3, damping = 0.05 }
-
-    [[axes.parameters]]                 # optional, any number: a scene key over a list of values ...
-    key = "joints.joints.friction_angle"
-    values = [30, 35]
-    [[axes.parameters]]                 # ... or sampled from a distribution (one Latin hypercube for all)
-    key = "joints.joints.cohesion"
-    distribution = { type = "lognormal", median = "0.1 MPa", dispersion = 0.3 }
-    # normal: { mean, std }; uniform: { low, high }
-    [axes.sampling]                     # required with sampled parameters
-    samples = 8
-    seed = 1                            # default 0 (the samples are always reproducible)
-
-    [execution]
-    workers = 2                         # LocalCluster workers (default: the CPU count)
-    scheduler = "tcp://host:8786"       # a running dask scheduler instead of a LocalCluster
-
-Every error is a :class:`~masonrydam.errors.SceneError` whose key is the ensemble key
-(``axes.parameters[1].key``, ``axes.records.folder``, ``ensemble.scene``), raised before any run.
-
-A member's ground motion (:meth:`EnsembleSpec.member_scene`) is the base stage's ground-motion table
-of ``component`` with its source keys (:data:`SOURCE_KEYS`) replaced by the member's record and its
-scaling keys (:data:`SCALING_KEYS`) by the member's intensity (``scale_to_pga``, or ``scale_to_sa`` with
-the axis' period and damping, in SI); its other keys (``processing``) are kept. Record files are
-written into member scenes with absolute paths.
+Every key with its default, and how a member's ground motion is made: docs/ensembles.md, section "Every key"
+(under "The ensemble file").
 """
 from __future__ import annotations
 

@@ -1,47 +1,13 @@
 """The deformed shape and crack pattern of one step (``masonrydam plot OUT.nc --deformed``).
 
-A result file holds the connectivity needed to draw it (:class:`masonrydam.results.writer.ResultWriter`):
-``block_cell_nodes`` (block_cell, block_cell_node), the corner nodes of each continuum element as model
-node indices (the values of the ``node`` coordinate, -1 padding), and for each joint integration point
-the faces of its interface element, ``joint_point_nodes`` (joint_point, joint_side, joint_face_node),
-with the face shape functions at the point, ``joint_point_shape`` (joint_point, joint_face_node).
+:func:`deformed_data` turns a result dataset (its ``block_cell_nodes``, ``joint_point_nodes`` and
+``joint_point_shape`` connectivity, written by :class:`masonrydam.results.writer.ResultWriter`) and a step into
+what is drawn, in m: a :class:`DeformedShape` (2D: the blocks as polygons at ``x + scale * u``, each joint
+point as a polyline on the deformed mid-surface with its state 0-3 and opening) or a :class:`DeformedSlice`
+(3D: the cells and joint points cut by the plane ``--slice AXIS=VALUE``, in its two axes).
+:func:`deformed_figure` draws it with matplotlib's object API on the Agg canvas.
 
-:func:`deformed_data` computes what is drawn (2D results; m unless stated):
-
-- the recorded nodes at ``x + scale * u`` (``u`` the displacement at the step), and the blocks as the
-  polygons of their corner nodes (elements with a corner node that is not recorded are left out);
-- each joint point as a polyline of three points on the deformed mid-surface of its interface element
-  (the mean of the deformed bottom and top faces): from half way to the previous point of the element (or
-  the element's first end) through the point to half way to the next one (or the element's other end),
-  so that the points of a joint line tile it. Its state (0 stick, 1 slip, 2 open, 3 crush) and opening are those
-  of ``joint_state`` and ``joint_opening`` at the step.
-
-The gap of an open joint appears in the blocks themselves (the faces of a joint are distinct nodes,
-drawn with the same exaggeration). :func:`deformed_figure` draws the data with matplotlib's object API
-on the Agg canvas (the global backend is left alone).
-
-3D results are drawn as a slice (:class:`DeformedSlice`, ``--slice AXIS=VALUE``; default: the mid-plane across
-the model's thinnest extent), in the plane's two axes (x and z for a y-slice):
-
-- every block cell cut by the plane in its undeformed position: the plane meets the cell's corner-to-corner
-  edges (12 of a hexahedron, 6 of a tetrahedron; corners on the plane are points themselves), the points are
-  ordered around their centroid, and each is drawn at the linear interpolation along its edge of the two end
-  nodes' deformed positions ``x + scale * u`` (projected onto the plane's axes); cells that the plane does
-  not cut (or only touches at an edge or a corner) are left out;
-- the joint points whose tributary patch the plane passes through: a square of side ``sqrt(joint_weight)``
-  centred on the point (Gauss rules) or, for a point on a face node (the lumped rule, ``joint_point_shape``
-  one there), half way between the node and the centroid of its face (the patch is the node's corner of the
-  face); the point is drawn when the joint's trace in the plane (the line where the joint plane meets it)
-  passes within half the patch's side of its centre, measured in the joint plane: for a joint across the
-  plane, when the patch centre lies within half its side of the plane; for a joint inclined to it, within
-  that times the sine of the angle between them. A plane half way between two nodal layers (e.g. the
-  mid-plane of a wall one element thick) draws both layers, on top of one another. Each point is a segment
-  of length ``sqrt(joint_weight)`` along the trace (direction: joint normal x plane normal), centred on the
-  point of the trace nearest to the patch centre, moved by the point's displacement (the mean of its bottom
-  and top faces' displacements, times the scale) and projected onto the plane's axes: for a Gauss point of a
-  joint across the plane, its deformed position; for nodal points, the segments of a joint line tile it (a
-  rectangular face's corner patches) instead of sticking out at its ends. Joints parallel to the plane have
-  no trace and are not drawn.
+What is drawn and how a 3D result is sliced: docs/plots.md.
 """
 from __future__ import annotations
 

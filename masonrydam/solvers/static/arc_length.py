@@ -1,45 +1,16 @@
 """Arc-length control of a static stage (issue 18): following a load-displacement path past limit points,
 snap-throughs and snap-backs, where load or displacement control stalls.
 
-The stage's loading is one parameter ``lambda``: external forces ``f_base + lambda F`` and prescribed
-displacements ``u_p = u_start,p + lambda Delta_p`` (a displacement-controlled stage: the pushed top of a
-wall). The unknowns are the free displacements ``u_f`` and ``lambda``; equilibrium
-``r(u_f, lambda) = f_ext(lambda) - f_int(u) = 0`` on the free DOFs is closed by Crisfield's cylindrical
-arc-length constraint ``|Delta u_f|^2 = Delta l^2`` on the increment of the step (Crisfield 1981,
-Comput. Struct. 13:55-62; Crisfield, *Non-linear Finite Element Analysis of Solids and Structures*,
-vol. 1, 1991, sec. 9.3):
+:class:`ArcLengthStage` runs a static stage whose loading is one parameter ``lambda`` (forces ``f_base +
+lambda F`` in N, prescribed displacements ``u_start,p + lambda Delta_p`` in m) with the free displacements
+(n_free,) m and ``lambda`` as unknowns, closed by one of three constraints (``mode``): Crisfield's cylindrical
+arc length ``|Delta u_f| = Delta l`` (Crisfield 1981; Crisfield 1991, vol. 1, sec. 9.3), the opening of the
+softening joints (``"opening"``, de Borst 1987), or the energy the joints dissipate per step
+(``"dissipation"``, :mod:`.dissipation`; Gutierrez 2004; Verhoosel, Remmers & Gutierrez 2009). It ends at
+``lambda = 1``, below 0, or after :data:`MAX_STEPS_PER_NOMINAL` times the stage's steps.
 
-- every iteration solves ``K du_r = r`` and ``K du_q = q`` with one factorization, ``q = dr/dlambda
-  = F_f - K_fp Delta_p`` (the prescribed part through the element tangents, :meth:`Model.tangent_product`);
-- the predictor takes ``dlambda = +- Delta l / |du_q|``, its sign following the previous step
-  (``Delta u_prev . du_q``; the first step loads);
-- a corrector ``du = du_r + dlambda du_q`` puts the increment back on the cylinder: the root of
-  ``a dlambda^2 + b dlambda + c = 0`` whose increment makes the smallest angle with the one before
-  (Crisfield's root choice); no real root halves ``Delta l``;
-- ``Delta l`` follows the iterations (``sqrt(target / iterations)``, within [1/2, 2]; :data:`TARGET_ITERATIONS`) between the stage's
-  first increment (``Delta l_0``) / 2^max_step_cuts and ``DL_MAX_FACTOR Delta l_0``.
-
-With ``mode = "opening"`` the constraint is indirect displacement control instead: the area-weighted
-opening of the joint points that crack, slip or are in tension grows by ``Delta l`` per step (a linear
-constraint, ``dlambda`` in closed form; de Borst 1987). Through a sharp snap-back, where the cylindrical
-constraint also admits the elastic unloading branch and Newton wavers between the two, the opening of
-the softening joints still grows monotonically.
-
-With ``mode = "dissipation"`` every step dissipates a chosen energy in the joints instead
-(:mod:`.dissipation`; Gutierrez 2004; Verhoosel, Remmers & Gutierrez 2009): the stage's own control runs
-while the joints dissipate little; from the first step whose joints dissipate more than
-:data:`DISSIPATION_SWITCH` of the work done on the model in it (or where the stage's own control finds no
-equilibrium) each step dissipates ``Delta tau``, first that step's dissipation, then growing or shrinking
-with the iterations like the arc, at most ``1/steps`` of the energy the model has taken in the stage. A
-dissipation step that would raise the load factor by more than one nominal step (little is dissipated: elastic
-reloading, a joint that stopped) is retried with a target smaller in proportion, and then taken under the
-stage's own control (:meth:`ArcLengthStage._run_dissipation` has the whole hand-over). The constraint is
-linear in the iteration's unknowns (``dlambda`` in closed form) and, unlike the cylindrical arc, has one root.
-
-The stage ends at ``lambda = 1`` (the last step is a load- or displacement-controlled one onto it), or
-when ``lambda`` has come back below 0 (the structure unloaded completely), or after
-``MAX_STEPS_PER_NOMINAL`` times the stage's steps (an error unless the stage runs ``until_failure``: then the
-descending branch is recorded and the peak is the limit). Joint states commit and revert as in load control.
+Theory: docs/masonry_softening.md, section "The arc-length stage in equations" (under "Following the path past
+the peak").
 """
 from __future__ import annotations
 

@@ -1,41 +1,17 @@
 """Isoparametric continuum (solid) element kernels: stiffness, internal force, body force, mass, stress.
 
-All kernels are dimension-generic: the spatial dimension is ``dim = coords.shape[1]`` (2 or 3) and
-must equal the reference dimension of the shape tables (``dN_ref.shape[1]``); 2D and 3D use the same
-code path. Element types enter only through the tables ``N_ref`` / ``dN_ref`` / ``weights`` built by
-:func:`element_tables` (``shapes.shape_functions`` at ``shapes.integration_rule`` points), so new types
-(tet4, hex8, ...) work by passing their tables.
+All kernels are dimension-generic (``dim = coords.shape[1]``, 2 or 3, equal to ``dN_ref.shape[1]``); element
+types enter only through the tables ``N_ref`` / ``dN_ref`` / ``weights`` of :func:`element_tables`. Units:
+coordinates m, displacements m, ``D`` Pa, thickness m, body force N/m^3, density kg/m^3; stiffness N/m,
+forces N, mass kg, stresses Pa; element DOFs node-major, global DOF ``n * dim + c``. Status codes
+(``masonrydam.errors``): a kernel stops at the first failing element (its index in ``info[0]``; outputs at
+and after it undefined) with ``STATUS_BAD_JACOBIAN`` (inverted or degenerate at an integration point) or
+``STATUS_NAN``. Preconditions, not checked by the kernels: float64 C-contiguous arrays, int64 ``conn`` /
+``material_index`` with valid indices, ``D_table`` symmetric. Formulation: Bathe (2014), Hughes (2000),
+Zienkiewicz, Taylor & Zhu (2013).
 
-Formulation (Bathe, *Finite Element Procedures*, 2nd ed. 2014, sec. 5.3; Hughes, *The Finite
-Element Method*, Dover 2000, sec. 3.7-3.10; Zienkiewicz, Taylor & Zhu, 7th ed. 2013, ch. 6):
-
-- Jacobian ``J[i, j] = d x_j / d xi_i = sum_a dN_a/dxi_i x_aj``, physical gradients
-  ``dN/dx = J^-1 dN/dxi``, volume element ``dV = det J w_g`` (times the thickness ``t`` in 2D).
-- Small strain, engineering shear (``docs/architecture.md``): 2D ``[exx, eyy, gxy]``,
-  3D ``[exx, eyy, ezz, gxy, gyz, gzx]``. The strain-displacement matrix is never formed: with the
-  Voigt map ``V(i, j)`` (``V(0,0)=0, V(1,1)=1, V(0,1)=2`` in 2D; ``V(2,2)=2, V(0,1)=3, V(1,2)=4,
-  V(2,0)=5`` in 3D) the tensor form ``K_ab[i, k] = int dN_a/dx_l D[V(i,l), V(k,j)] dN_b/dx_j dV``
-  is exactly ``int B_a^T D B_b dV`` and skips the zeros of ``B`` (index form, Hughes 2000, ch. 2).
-- Element dof order is node-major ``[u_x(n0), u_y(n0), (u_z(n0)), u_x(n1), ...]``; global dof of
-  node ``n``, component ``c`` is ``n * dim + c``.
-
-Units: coordinates m, displacements m, ``D`` Pa, thickness m, body force N/m^3, density kg/m^3;
-stiffness N/m, forces N, mass kg, stresses Pa.
-
-Status codes (``masonrydam.errors``); a kernel stops at the first failing element (lowest index,
-which goes into ``info[0]``); outputs of elements at and after it are then undefined:
-
-- ``STATUS_BAD_JACOBIAN``: at some integration point ``det J <= 1e-12 * h^dim``, where ``h`` is the
-  largest edge of the axis-aligned bounding box of the element's nodes. This flags inverted
-  elements (clockwise / mirrored node order, ``det J < 0``) and degenerate ones (collapsed to a line
-  or a point, ``det J ~ 0``). The test looks at the integration points of the tables passed in,
-  not at the nodes: a quadrilateral with two coincident corners (a triangle-shaped quad) or a
-  slightly re-entrant corner can still have ``det J > 0`` at all Gauss points and is accepted.
-- ``STATUS_NAN``: a NaN in ``det J`` or a NaN / infinity in the element's output block.
-
-Preconditions, not checked by the kernels (Python wrappers check shapes and dtypes once):
-float64 C-contiguous arrays, int64 ``conn`` / ``material_index`` with valid indices,
-``dN_ref.shape[1] == coords.shape[1]``, ``D_table`` symmetric.
+Theory: docs/elements.md, section "Formulation and the Jacobian check" (under "Continuum (linear elastic
+blocks)").
 """
 from __future__ import annotations
 
@@ -99,7 +75,7 @@ def element_tables(type_name: str, n_gauss: int | None = None) -> tuple[np.ndarr
 
 
 @numba.njit(cache=True)
-def _voigt_map(dim_tag):
+def voigt_map(dim_tag):
     """(dim, dim) int64 table V with V[i, j] = Voigt index of the strain component (i, j)."""
     dim = len(dim_tag)
     V = np.empty((dim, dim), dtype=np.int64)
@@ -122,7 +98,7 @@ def _voigt_map(dim_tag):
 
 
 @numba.njit(cache=True)
-def _gather_element(coords, conn, e, xe, dim_tag):
+def gather_element(coords, conn, e, xe, dim_tag):
     """Copy the node coordinates of element ``e`` into ``xe`` (nen, dim); return the size ``h``
     (largest edge of the bounding box)."""
     nen = xe.shape[0]
@@ -144,7 +120,7 @@ def _gather_element(coords, conn, e, xe, dim_tag):
 
 
 @numba.njit(cache=True)
-def _gather_displacements(u, conn, e, ue, dim_tag):
+def gather_displacements(u, conn, e, ue, dim_tag):
     """Copy the displacements of element ``e``'s nodes from ``u`` (n_dof,) into ``ue`` (nen, dim)."""
     dim = len(dim_tag)
     for a in range(ue.shape[0]):
@@ -154,7 +130,7 @@ def _gather_displacements(u, conn, e, ue, dim_tag):
 
 
 @numba.njit(cache=True)
-def _gradients(xe, dN_ref, g, tol, J, dNdx, dim_tag):
+def shape_gradients(xe, dN_ref, g, tol, J, dNdx, dim_tag):
     """Jacobian at point ``g`` and, if ``det J > tol``, the physical gradients ``dNdx`` (dim, nen).
 
     ``J[i, j] = sum_a dN_ref[g, i, a] xe[a, j]``; ``dNdx[j, a] = sum_i Jinv[j, i] dN_ref[g, i, a]``.
@@ -211,7 +187,7 @@ def _gradients(xe, dN_ref, g, tol, J, dNdx, dim_tag):
 
 
 @numba.njit(cache=True)
-def _bad_det_status(det, e, info):
+def bad_det_status(det, e, info):
     """Status for a rejected ``det J`` (NaN -> STATUS_NAN, else STATUS_BAD_JACOBIAN)."""
     info[0] = e
     if det != det:
@@ -241,7 +217,7 @@ def _strain_stress(ue, dNdx, V, D, mat, eps, sig, dim_tag):
 
 
 @numba.njit(cache=True)
-def _add_btsigma(B, sig, f, fe):
+def add_btsigma(B, sig, f, fe):
     """``fe[c] += f sum_s B[s, c] sig[s]``: a Gauss point's internal force, B (ns, nd), sig (ns,)."""
     for c in range(B.shape[1]):
         acc = 0.0
@@ -251,7 +227,7 @@ def _add_btsigma(B, sig, f, fe):
 
 
 @numba.njit(cache=True)
-def _add_btdb(B, D, f, DB, ke):
+def add_btdb(B, D, f, DB, ke):
     """``ke += f B^T D B`` with ``D`` (ns, ns) in full (non-symmetric tangents too); DB (ns, nd) scratch."""
     ns, nd = B.shape
     for s in range(ns):
@@ -269,7 +245,7 @@ def _add_btdb(B, D, f, DB, ke):
 
 
 @numba.njit(cache=True)
-def _block_finite(block):
+def block_finite(block):
     """True when every entry of the array ``block`` is finite (sum trick: inf - inf = nan, nan != 0)."""
     s = 0.0
     for v in block.flat:
@@ -287,7 +263,7 @@ def _block_finite(block):
 # ----------------------------------------------------------------------------------------------
 
 
-def _dim_tag(coords):
+def dimension_tag(coords):
     """``(0, 0)`` for 2D coordinates, ``(0, 0, 0)`` for 3D: the compile-time dimension of the kernels."""
     return (0, 0) if coords.shape[1] == 2 else (0, 0, 0)
 
@@ -299,14 +275,14 @@ def _stiffness_impl(coords, conn, dN_ref, weights, D_table, material_index, thic
     dim = len(dim_tag)
     n_gp = weights.shape[0]
     ndof = nen * dim
-    V = _voigt_map(dim_tag)
+    V = voigt_map(dim_tag)
     xe = np.empty((nen, dim))
     J = np.empty((dim, dim))
     dNdx = np.empty((dim, nen))
     C = np.empty((dim, dim, dim, dim))
     T = np.empty((dim, dim, nen, dim))
     for e in range(n_elem):
-        h = _gather_element(coords, conn, e, xe, dim_tag)
+        h = gather_element(coords, conn, e, xe, dim_tag)
         tol = DETJ_RTOL * h**dim
         mat = material_index[e]
         # C[i, l, k, j] = D[V(i, l), V(k, j)]: the elasticity tensor in index form
@@ -321,9 +297,9 @@ def _stiffness_impl(coords, conn, dN_ref, weights, D_table, material_index, thic
             for c in range(ndof):
                 ke[r, c] = 0.0
         for g in range(n_gp):
-            det = _gradients(xe, dN_ref, g, tol, J, dNdx, dim_tag)
+            det = shape_gradients(xe, dN_ref, g, tol, J, dNdx, dim_tag)
             if not (det > tol):
-                return _bad_det_status(det, e, info)
+                return bad_det_status(det, e, info)
             f = weights[g] * det * t_e
             # T[i, l, b, k] = f * sum_j C[i, l, k, j] dN_b/dx_j   (= f * D B_b in index form)
             for i in range(dim):
@@ -348,7 +324,7 @@ def _stiffness_impl(coords, conn, dN_ref, weights, D_table, material_index, thic
         for r in range(ndof):
             for c in range(r + 1, ndof):
                 ke[c, r] = ke[r, c]
-        if not _block_finite(ke):
+        if not block_finite(ke):
             info[0] = e
             return STATUS_NAN
     return STATUS_OK
@@ -384,7 +360,7 @@ def continuum_stiffness(coords, conn, dN_ref, weights, D_table, material_index, 
         ``STATUS_OK``, ``STATUS_BAD_JACOBIAN`` or ``STATUS_NAN`` (see module docstring).
     """
     return _stiffness_impl(
-        coords, conn, dN_ref, weights, D_table, material_index, thickness, ke_out, info, _dim_tag(coords)
+        coords, conn, dN_ref, weights, D_table, material_index, thickness, ke_out, info, dimension_tag(coords)
     )
 
 
@@ -395,7 +371,7 @@ def _internal_force_impl(coords, conn, dN_ref, weights, D_table, material_index,
     dim = len(dim_tag)
     n_gp = weights.shape[0]
     n_strain = D_table.shape[1]
-    V = _voigt_map(dim_tag)
+    V = voigt_map(dim_tag)
     xe = np.empty((nen, dim))
     ue = np.empty((nen, dim))
     J = np.empty((dim, dim))
@@ -403,18 +379,18 @@ def _internal_force_impl(coords, conn, dN_ref, weights, D_table, material_index,
     eps = np.empty(n_strain)
     sig = np.empty(n_strain)
     for e in range(n_elem):
-        h = _gather_element(coords, conn, e, xe, dim_tag)
+        h = gather_element(coords, conn, e, xe, dim_tag)
         tol = DETJ_RTOL * h**dim
-        _gather_displacements(u, conn, e, ue, dim_tag)
+        gather_displacements(u, conn, e, ue, dim_tag)
         mat = material_index[e]
         t_e = thickness[e] if dim == 2 else 1.0
         fe = fe_out[e]
         for r in range(nen * dim):
             fe[r] = 0.0
         for g in range(n_gp):
-            det = _gradients(xe, dN_ref, g, tol, J, dNdx, dim_tag)
+            det = shape_gradients(xe, dN_ref, g, tol, J, dNdx, dim_tag)
             if not (det > tol):
-                return _bad_det_status(det, e, info)
+                return bad_det_status(det, e, info)
             f = weights[g] * det * t_e
             _strain_stress(ue, dNdx, V, D_table, mat, eps, sig, dim_tag)
             # f_a[i] += f * sum_l dN_a/dx_l sigma[V(i, l)]   (= B_a^T sigma)
@@ -424,7 +400,7 @@ def _internal_force_impl(coords, conn, dN_ref, weights, D_table, material_index,
                     for l in range(dim):
                         s += dNdx[l, a] * sig[V[i, l]]
                     fe[a * dim + i] += f * s
-        if not _block_finite(fe):
+        if not block_finite(fe):
             info[0] = e
             return STATUS_NAN
     return STATUS_OK
@@ -444,7 +420,7 @@ def continuum_internal_force(coords, conn, dN_ref, weights, D_table, material_in
     Returns a status code (see module docstring).
     """
     return _internal_force_impl(
-        coords, conn, dN_ref, weights, D_table, material_index, thickness, u, fe_out, info, _dim_tag(coords)
+        coords, conn, dN_ref, weights, D_table, material_index, thickness, u, fe_out, info, dimension_tag(coords)
     )
 
 
@@ -458,22 +434,22 @@ def _body_force_impl(coords, conn, N_ref, dN_ref, weights, body_force, thickness
     J = np.empty((dim, dim))
     dNdx = np.empty((dim, nen))
     for e in range(n_elem):
-        h = _gather_element(coords, conn, e, xe, dim_tag)
+        h = gather_element(coords, conn, e, xe, dim_tag)
         tol = DETJ_RTOL * h**dim
         t_e = thickness[e] if dim == 2 else 1.0
         fe = fe_out[e]
         for r in range(nen * dim):
             fe[r] = 0.0
         for g in range(n_gp):
-            det = _gradients(xe, dN_ref, g, tol, J, dNdx, dim_tag)
+            det = shape_gradients(xe, dN_ref, g, tol, J, dNdx, dim_tag)
             if not (det > tol):
-                return _bad_det_status(det, e, info)
+                return bad_det_status(det, e, info)
             f = weights[g] * det * t_e
             for a in range(nen):
                 fN = f * N_ref[g, a]
                 for k in range(dim):
                     fe[a * dim + k] += fN * body_force[e, k]
-        if not _block_finite(fe):
+        if not block_finite(fe):
             info[0] = e
             return STATUS_NAN
     return STATUS_OK
@@ -495,7 +471,7 @@ def continuum_body_force(coords, conn, N_ref, dN_ref, weights, body_force, thick
     Returns a status code (see module docstring).
     """
     return _body_force_impl(
-        coords, conn, N_ref, dN_ref, weights, body_force, thickness, fe_out, info, _dim_tag(coords)
+        coords, conn, N_ref, dN_ref, weights, body_force, thickness, fe_out, info, dimension_tag(coords)
     )
 
 
@@ -511,7 +487,7 @@ def _mass_impl(coords, conn, N_ref, dN_ref, weights, density, thickness, lumped,
     dNdx = np.empty((dim, nen))
     m = np.empty((nen, nen))
     for e in range(n_elem):
-        h = _gather_element(coords, conn, e, xe, dim_tag)
+        h = gather_element(coords, conn, e, xe, dim_tag)
         tol = DETJ_RTOL * h**dim
         t_e = thickness[e] if dim == 2 else 1.0
         rho = density[e]
@@ -520,9 +496,9 @@ def _mass_impl(coords, conn, N_ref, dN_ref, weights, density, thickness, lumped,
                 m[a, b] = 0.0
         m_total = 0.0
         for g in range(n_gp):
-            det = _gradients(xe, dN_ref, g, tol, J, dNdx, dim_tag)
+            det = shape_gradients(xe, dN_ref, g, tol, J, dNdx, dim_tag)
             if not (det > tol):
-                return _bad_det_status(det, e, info)
+                return bad_det_status(det, e, info)
             f = weights[g] * det * t_e * rho
             m_total += f
             for a in range(nen):
@@ -550,7 +526,7 @@ def _mass_impl(coords, conn, N_ref, dN_ref, weights, density, thickness, lumped,
                     for k in range(dim):
                         me[a * dim + k, b * dim + k] = mab
                         me[b * dim + k, a * dim + k] = mab
-        if not _block_finite(me):
+        if not block_finite(me):
             info[0] = e
             return STATUS_NAN
     return STATUS_OK
@@ -580,7 +556,7 @@ def continuum_mass(coords, conn, N_ref, dN_ref, weights, density, thickness, lum
     Returns a status code (see module docstring).
     """
     return _mass_impl(
-        coords, conn, N_ref, dN_ref, weights, density, thickness, lumped, me_out, info, _dim_tag(coords)
+        coords, conn, N_ref, dN_ref, weights, density, thickness, lumped, me_out, info, dimension_tag(coords)
     )
 
 
@@ -591,7 +567,7 @@ def _stress_impl(coords, conn, dN_ref, D_table, material_index, u, stress_out, i
     dim = len(dim_tag)
     n_pt = dN_ref.shape[0]
     n_strain = D_table.shape[1]
-    V = _voigt_map(dim_tag)
+    V = voigt_map(dim_tag)
     xe = np.empty((nen, dim))
     ue = np.empty((nen, dim))
     J = np.empty((dim, dim))
@@ -599,18 +575,18 @@ def _stress_impl(coords, conn, dN_ref, D_table, material_index, u, stress_out, i
     eps = np.empty(n_strain)
     sig = np.empty(n_strain)
     for e in range(n_elem):
-        h = _gather_element(coords, conn, e, xe, dim_tag)
+        h = gather_element(coords, conn, e, xe, dim_tag)
         tol = DETJ_RTOL * h**dim
-        _gather_displacements(u, conn, e, ue, dim_tag)
+        gather_displacements(u, conn, e, ue, dim_tag)
         mat = material_index[e]
         for g in range(n_pt):
-            det = _gradients(xe, dN_ref, g, tol, J, dNdx, dim_tag)
+            det = shape_gradients(xe, dN_ref, g, tol, J, dNdx, dim_tag)
             if not (det > tol):
-                return _bad_det_status(det, e, info)
+                return bad_det_status(det, e, info)
             _strain_stress(ue, dNdx, V, D_table, mat, eps, sig, dim_tag)
             for s in range(n_strain):
                 stress_out[e, g, s] = sig[s]
-        if not _block_finite(stress_out[e]):
+        if not block_finite(stress_out[e]):
             info[0] = e
             return STATUS_NAN
     return STATUS_OK
@@ -630,4 +606,4 @@ def continuum_stress(coords, conn, dN_ref, D_table, material_index, u, stress_ou
 
     Returns a status code (see module docstring; the Jacobian test applies at the output points).
     """
-    return _stress_impl(coords, conn, dN_ref, D_table, material_index, u, stress_out, info, _dim_tag(coords))
+    return _stress_impl(coords, conn, dN_ref, D_table, material_index, u, stress_out, info, dimension_tag(coords))

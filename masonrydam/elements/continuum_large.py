@@ -19,7 +19,8 @@ sec. 4.9; the seed paper's total Lagrangian option, Tzamtzis & Asteris sec. 3)::
 ``F = Q``, ``E = 0``, ``S = 0``: no force for any rotation. The elastic energy
 ``sum_g (E . D E / 2) w det(J0) t`` is returned per element for the energy balance; the internal
 force is its exact gradient (hyperelastic), so the trapezoidal rule's energy error is that of the
-integrator alone (docs/large_displacements.md).
+integrator alone (docs/continuum_nonlinearity.md, section "Solvers"
+under "Large displacements").
 
 Mass and body forces stay those of the reference configuration (total Lagrangian: ``rho0 dV0``);
 loads given as pressures keep their reference direction (dead loads).
@@ -30,8 +31,8 @@ import numba
 import numpy as np
 
 from ..errors import STATUS_NAN, STATUS_OK
-from .continuum import (DETJ_RTOL, _add_btdb, _add_btsigma, _bad_det_status, _block_finite, _dim_tag,
-                        _gather_displacements, _gather_element, _gradients, _voigt_map)
+from .continuum import (DETJ_RTOL, add_btdb, add_btsigma, bad_det_status, block_finite, dimension_tag,
+                        gather_displacements, gather_element, shape_gradients, voigt_map)
 
 
 @numba.njit(cache=True)
@@ -85,7 +86,7 @@ def _large_impl(coords, conn, dN_ref, weights, D_table, material_index, thicknes
     n_gp = weights.shape[0]
     ns = 3 if dim == 2 else 6
     nd = nen * dim
-    V = _voigt_map(dim_tag)
+    V = voigt_map(dim_tag)
     xe = np.empty((nen, dim))
     ue = np.empty((nen, dim))
     J = np.empty((dim, dim))
@@ -97,9 +98,9 @@ def _large_impl(coords, conn, dN_ref, weights, D_table, material_index, thicknes
     Smat = np.empty((dim, dim))
     DB = np.empty((ns, nd))
     for e in range(n_elem):
-        h = _gather_element(coords, conn, e, xe, dim_tag)
+        h = gather_element(coords, conn, e, xe, dim_tag)
         tol = DETJ_RTOL * h**dim
-        _gather_displacements(u, conn, e, ue, dim_tag)
+        gather_displacements(u, conn, e, ue, dim_tag)
         t_e = thickness[e] if dim == 2 else 1.0
         D = D_table[material_index[e]]
         fe = fe_out[e]
@@ -112,9 +113,9 @@ def _large_impl(coords, conn, dN_ref, weights, D_table, material_index, thicknes
                     ke[r, c] = 0.0
         w_e = 0.0
         for g in range(n_gp):
-            det = _gradients(xe, dN_ref, g, tol, J, dNdx, dim_tag)
+            det = shape_gradients(xe, dN_ref, g, tol, J, dNdx, dim_tag)
             if not (det > tol):
-                return _bad_det_status(det, e, info)
+                return bad_det_status(det, e, info)
             f = weights[g] * det * t_e
             _svk_point(ue, dNdx, V, D, F, E, S)
             en = 0.0
@@ -131,9 +132,9 @@ def _large_impl(coords, conn, dN_ref, weights, D_table, material_index, thicknes
                         B[V[i, i], col] += F[k, i] * dNdx[i, a]
                         for j in range(i + 1, dim):
                             B[V[i, j], col] += F[k, i] * dNdx[j, a] + F[k, j] * dNdx[i, a]
-            _add_btsigma(B, S, f, fe)
+            add_btsigma(B, S, f, fe)
             if want_tangent:
-                _add_btdb(B, D, f, DB, ke)
+                add_btdb(B, D, f, DB, ke)
                 # initial-stress (geometric) part: delta_kl dN_a . S dN_b
                 for i in range(dim):
                     for j in range(dim):
@@ -148,7 +149,7 @@ def _large_impl(coords, conn, dN_ref, weights, D_table, material_index, thicknes
                         for k in range(dim):
                             ke[a * dim + k, b * dim + k] += acc
         energy_out[e] = w_e
-        if not _block_finite(fe):
+        if not block_finite(fe):
             info[0] = e
             return STATUS_NAN
     return STATUS_OK
@@ -165,7 +166,7 @@ def continuum_large_evaluate(coords, conn, dN_ref, weights, D_table, material_in
     inverted, STATUS_NAN for a non-finite force.
     """
     return _large_impl(coords, conn, dN_ref, weights, D_table, material_index, thickness, u, bool(want_tangent),
-                       fe_out, ke_out, energy_out, info, _dim_tag(coords))
+                       fe_out, ke_out, energy_out, info, dimension_tag(coords))
 
 
 @numba.njit(cache=True)
@@ -175,7 +176,7 @@ def _cauchy_impl(coords, conn, dN_ref, D_table, material_index, u, stress_out, i
     dim = len(dim_tag)
     n_gp = dN_ref.shape[0]
     ns = 3 if dim == 2 else 6
-    V = _voigt_map(dim_tag)
+    V = voigt_map(dim_tag)
     xe = np.empty((nen, dim))
     ue = np.empty((nen, dim))
     J = np.empty((dim, dim))
@@ -184,14 +185,14 @@ def _cauchy_impl(coords, conn, dN_ref, D_table, material_index, u, stress_out, i
     E = np.empty(ns)
     S = np.empty(ns)
     for e in range(n_elem):
-        h = _gather_element(coords, conn, e, xe, dim_tag)
+        h = gather_element(coords, conn, e, xe, dim_tag)
         tol = DETJ_RTOL * h**dim
-        _gather_displacements(u, conn, e, ue, dim_tag)
+        gather_displacements(u, conn, e, ue, dim_tag)
         D = D_table[material_index[e]]
         for g in range(n_gp):
-            det = _gradients(xe, dN_ref, g, tol, J, dNdx, dim_tag)
+            det = shape_gradients(xe, dN_ref, g, tol, J, dNdx, dim_tag)
             if not (det > tol):
-                return _bad_det_status(det, e, info)
+                return bad_det_status(det, e, info)
             _svk_point(ue, dNdx, V, D, F, E, S)
             if dim == 2:
                 detF = F[0, 0] * F[1, 1] - F[0, 1] * F[1, 0]
@@ -218,4 +219,4 @@ def continuum_cauchy_stress(coords, conn, dN_ref, D_table, material_index, u, st
     elements (Voigt order of the small-strain stress: [sxx, syy, sxy] / [sxx, syy, szz, sxy, syz, szx], in
     global axes of the current configuration). Status as :func:`continuum_large_evaluate`; an inverted
     deformation (det F <= 0) is STATUS_NAN."""
-    return _cauchy_impl(coords, conn, dN_ref, D_table, material_index, u, stress_out, info, _dim_tag(coords))
+    return _cauchy_impl(coords, conn, dN_ref, D_table, material_index, u, stress_out, info, dimension_tag(coords))

@@ -26,8 +26,8 @@ from ..materials.mohr_coulomb_solid import mohr_coulomb_solid_point
 from ..materials.plasticity import WORK_SIZE
 from ..materials.tresca import tresca_point
 from ..materials.von_mises import von_mises_point
-from .continuum import (DETJ_RTOL, element_tables, _add_btdb, _add_btsigma, _bad_det_status, _block_finite, _dim_tag,
-                        _gather_displacements, _gather_element, _gradients, _voigt_map)
+from .continuum import (DETJ_RTOL, element_tables, add_btdb, add_btsigma, bad_det_status, block_finite, dimension_tag,
+                        gather_displacements, gather_element, shape_gradients, voigt_map)
 
 #: law identifiers of :func:`continuum_plastic_evaluate` (the branches of ``_plastic_impl``): each plastic law's
 #: ``ContinuumLaw.kernel_id`` (:mod:`masonrydam.materials.continuum_laws`): 1 von Mises, 2 Drucker-Prager,
@@ -44,7 +44,7 @@ def _plastic_impl(coords, conn, dN_ref, weights, thickness, u, params, param_ind
     n_gp = weights.shape[0]
     ns = 3 if dim == 2 else 6
     nd = nen * dim
-    V = _voigt_map(dim_tag)
+    V = voigt_map(dim_tag)
     xe = np.empty((nen, dim))
     ue = np.empty((nen, dim))
     J = np.empty((dim, dim))
@@ -56,9 +56,9 @@ def _plastic_impl(coords, conn, dN_ref, weights, thickness, u, params, param_ind
     DB = np.empty((ns, nd))
     work = np.empty(WORK_SIZE)
     for e in range(n_elem):
-        h = _gather_element(coords, conn, e, xe, dim_tag)
+        h = gather_element(coords, conn, e, xe, dim_tag)
         tol = DETJ_RTOL * h**dim
-        _gather_displacements(u, conn, e, ue, dim_tag)
+        gather_displacements(u, conn, e, ue, dim_tag)
         t_e = thickness[e] if dim == 2 else 1.0
         fe = fe_out[e]
         for r in range(nd):
@@ -69,9 +69,9 @@ def _plastic_impl(coords, conn, dN_ref, weights, thickness, u, params, param_ind
                 for c in range(nd):
                     ke[r, c] = 0.0
         for g in range(n_gp):
-            det = _gradients(xe, dN_ref, g, tol, J, dNdx, dim_tag)
+            det = shape_gradients(xe, dN_ref, g, tol, J, dNdx, dim_tag)
             if not (det > tol):
-                return _bad_det_status(det, e, info)
+                return bad_det_status(det, e, info)
             f = weights[g] * det * t_e
             # B (ns, nd): eps[V(i, j)] = sum_a (u_ai dN_a/dx_j + u_aj dN_a/dx_i) for i < j, u_ai dN_a/dx_i on i = j
             for s in range(ns):
@@ -102,10 +102,10 @@ def _plastic_impl(coords, conn, dN_ref, weights, thickness, u, params, param_ind
             if st != STATUS_OK:
                 info[0] = e
                 return st
-            _add_btsigma(B, sig, f, fe)
+            add_btsigma(B, sig, f, fe)
             if want_tangent:
-                _add_btdb(B, D, f, DB, ke)
-        if not _block_finite(fe):
+                add_btdb(B, D, f, DB, ke)
+        if not block_finite(fe):
             info[0] = e
             return STATUS_NAN
     return STATUS_OK
@@ -122,7 +122,7 @@ def continuum_plastic_evaluate(coords, conn, dN_ref, weights, thickness, u, para
     status (the failing element in ``info[0]``; a law's own status, e.g. bad parameters, passes through).
     """
     return _plastic_impl(coords, conn, dN_ref, weights, thickness, u, params, param_index, state_committed,
-                         state_trial, float(dt), bool(want_tangent), int(law), fe_out, ke_out, info, _dim_tag(coords))
+                         state_trial, float(dt), bool(want_tangent), int(law), fe_out, ke_out, info, dimension_tag(coords))
 
 
 # -- the parameter table of a group ----------------------------------------------------------------------

@@ -4,34 +4,14 @@ An interface element joins a *bottom* face and a *top* face with coincident (or 
 nodes. Supported faces: ``line2`` / ``line3`` (2D, elements of 2+2 / 3+3 nodes) and ``quad4``,
 ``quad8``, ``tri3`` (3D, 4+4 / 8+8 / 3+3 nodes). Connectivity rows are
 ``[bottom_0 .. bottom_{ns-1}, top_0 .. top_{ns-1}]``, both faces in the face-type node order
-(masonrydam.elements.shapes).
+(masonrydam.elements.shapes). The local relative displacement ``delta = B q`` (m; shear, then opening
+positive) is taken in the frame of the reference mid-surface; ``fe = sum_ip B^T t j w h`` (N) and
+``ke = sum_ip B^T C B j w h`` (N/m) with the joint law's traction ``t`` (Pa) and tangent ``C`` (Pa/m), the
+surface Jacobian ``j``, the rule weight ``w`` and the 2D thickness ``h`` (m). Integration (``interface_rule``):
+``"lumped"`` (nodal) by default, after Schellekens & de Borst (1993).
 
-Kinematics (seed eqs. 1-6 and 10). At a point xi of the reference face the relative displacement
-in global axes is ``Du = sum_i N_i(xi) (u_top_i - u_bot_i)`` and in the local frame
-``delta = R Du`` with the rows of R the unit tangent(s) then the unit normal, i.e.
-``delta = B q`` with ``B = R [-N_1 I .. -N_ns I, N_1 I .. N_ns I]`` and q the element DOFs
-(node-major, bottom nodes first). The frame is taken from the reference (undeformed) mid-surface
-``x_mid,i = (x_bot,i + x_top,i) / 2`` (small-displacement formulation, so R does not depend on u):
-
-- 2D: ``e_t = (dx/dxi) / |dx/dxi|``, ``e_n`` = ``e_t`` rotated +90 deg (counter-clockwise),
-  ``j = |dx/dxi|`` (m per unit xi);
-- 3D: ``e_1 = (dx/dxi) / |dx/dxi|``, ``n = (dx/dxi x dx/deta) / |dx/dxi x dx/deta|``,
-  ``e_2 = n x e_1``, ``j = |dx/dxi x dx/deta|`` (m^2 per unit reference area).
-
-The top face lies on the ``+n`` side (an opening is a positive normal relative displacement).
-
-Internal force and stiffness (seed eqs. 7-10; the seed's local [K'] and the transformation [H]
-are folded into B):
-``fe = sum_ip B^T t j w h`` and ``ke = sum_ip B^T C B j w h`` with t and C = dt/d delta the traction
-and tangent of the joint law (masonrydam.materials.mohr_coulomb), w the rule weight and h the
-out-of-plane thickness (2D; pass ones in 3D).
-
-Integration (``interface_rule``). Schellekens & de Borst (1993, IJNME 36:43-66, "On the numerical
-integration of interface elements") showed that Gauss integration of stiff linear interfaces couples
-the nodes of an element and produces spurious oscillations of the tractions along a joint, while
-nodal integration (Newton-Cotes / Lobatto points on the nodes) gives an uncoupled set of node-pair
-springs and smooth tractions. The default scheme here is therefore ``"lumped"`` (nodal), which for
-line2, line3, quad4 and tri3 is identical to Newton-Cotes (trapezoid / Simpson / vertex rules).
+Theory: docs/elements.md, sections "Formulation (Tzamtzis & Asteris, eqs. 1–11)" and "Integration" (under
+"Zero-thickness interfaces (the seed's element)").
 """
 from __future__ import annotations
 
@@ -51,8 +31,8 @@ from .shapes import ELEMENT_TYPES, reference_nodes, shape_functions
 INTERFACE_FACE_TYPES = ("line2", "line3", "quad4", "quad8", "tri3")
 DEFAULT_INTERFACE_SCHEME = "lumped"
 
-# relative tolerance of the zero-length / zero-area check: j < _GEOM_TOL * (face size)^(dim-1)
-_GEOM_TOL = 1e-12
+# relative tolerance of the zero-length / zero-area check: j < GEOM_TOL * (face size)^(dim-1)
+GEOM_TOL = 1e-12
 
 # integral of each node's shape function over the reference face, in node order
 # (line: [-1, 1]; quad: [-1, 1]^2; triangle: unit simplex of area 1/2)
@@ -147,7 +127,7 @@ def interface_tables(face_type: str, scheme: str = DEFAULT_INTERFACE_SCHEME, n: 
 
 
 @njit(cache=True)
-def _mid_surface(coords, conn, e, ns, dim, xm):
+def mid_surface_derivatives(coords, conn, e, ns, dim, xm):
     """Reference mid-surface node coordinates of element e into xm (ns, dim); returns the face size
     (largest distance of a mid-surface node from the first one, m)."""
     for a in range(ns):
@@ -167,7 +147,7 @@ def _mid_surface(coords, conn, e, ns, dim, xm):
 
 
 @njit(cache=True)
-def _frame(xm, dN, g, dim, R, size):
+def local_frame(xm, dN, g, dim, R, size):
     """Local frame R (dim, dim) (rows: tangent(s), normal) and Jacobian j at integration point g.
 
     Returns j (> 0), 0.0 for a degenerate (zero length / area) point, or NaN for non-finite input.
@@ -182,7 +162,7 @@ def _frame(xm, dN, g, dim, R, size):
         j = math.sqrt(tx * tx + ty * ty)
         if not math.isfinite(j):
             return np.nan
-        if j <= _GEOM_TOL * size or j == 0.0:
+        if j <= GEOM_TOL * size or j == 0.0:
             return 0.0
         tx /= j
         ty /= j
@@ -212,7 +192,7 @@ def _frame(xm, dN, g, dim, R, size):
     l1 = math.sqrt(a1x * a1x + a1y * a1y + a1z * a1z)
     if not (math.isfinite(j) and math.isfinite(l1)):
         return np.nan
-    if j <= _GEOM_TOL * size * size or j == 0.0 or l1 == 0.0:
+    if j <= GEOM_TOL * size * size or j == 0.0 or l1 == 0.0:
         return 0.0
     nx /= j
     ny /= j
@@ -358,7 +338,7 @@ def interface_evaluate(
                 for c2 in range(2 * ndof_half):
                     ke_out[e, r, c2] = 0.0
 
-        size = _mid_surface(coords, conn, e, ns, dim, xm)
+        size = mid_surface_derivatives(coords, conn, e, ns, dim, xm)
         for a in range(ns):
             b = conn[e, a]
             t = conn[e, ns + a]
@@ -368,7 +348,7 @@ def interface_evaluate(
         pidx = param_index[e]
 
         for g in range(nip):
-            j = _frame(xm, dN, g, dim, R, size)
+            j = local_frame(xm, dN, g, dim, R, size)
             if not math.isfinite(j):
                 info[0] = e
                 return STATUS_NAN
@@ -646,9 +626,9 @@ def interface_geometry(coords, conn, N, dN, weights, points_out, frame_out, jw_o
     xm = np.empty((ns, dim))
     R = np.zeros((dim, dim))
     for e in range(n_elem):
-        size = _mid_surface(coords, conn, e, ns, dim, xm)
+        size = mid_surface_derivatives(coords, conn, e, ns, dim, xm)
         for g in range(nip):
-            j = _frame(xm, dN, g, dim, R, size)
+            j = local_frame(xm, dN, g, dim, R, size)
             if not math.isfinite(j):
                 info[0] = e
                 return STATUS_NAN

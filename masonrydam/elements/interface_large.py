@@ -3,43 +3,13 @@
 mid-surface of the *current* configuration, so that gap and slip are measured across the joint as it
 is now, at any rotation of the blocks it joins.
 
-Kinematics at a point xi of the reference face (``N_a``, ``dN_a`` the face's shape functions;
-bottom / top node ``a`` at reference ``X_b,a``, ``X_t,a`` with displacements ``u_b,a``, ``u_t,a``)::
+:func:`interface_large_evaluate` takes the node coordinates (m) and displacements (m), the face tables and the
+joint law's parameter and state rows, and returns the forces (N) and tangents (N/m) of each element, exact
+gradients of the joint's work (a co-rotational formulation: Crisfield 1991, ch. 7; Wriggers 2006, sec. 4.2);
+the frame surface is the mid-surface or, with ``[joints.<set>] frame = "bottom"``, the bottom face.
 
-    frame surface         x_m,a = x_b,a + w (x_t,a - x_b,a): the current mid-surface (w = 1/2, the seed's
-                          choice, default) or the bottom face (w = 0, ``[joints.<set>] frame = "bottom"``)
-    frame                 R(u): rows e_t, e_n (2D: e_t = a / |a|, a = sum_a dN_a x_m,a, e_n = e_t turned
-                          +90 deg); 3D: e_1 = a_1 / |a_1|, n = a_1 x a_2 / |a_1 x a_2|, e_2 = n x e_1
-    gap vector            d = sum_a N_a (x_t,a - x_b,a)           (global axes, current)
-    local displacement    delta = R(u) d - R(0) d(0)              [slip(s), opening]
-
-``delta`` is zero for any rigid motion of a closed joint (``R`` and ``d`` rotate together), and
-equals the small-displacement interface's ``R0 (u_t - u_b)`` to first order. The node pairs are those
-of the mesh: a side that slides farther than an element length still acts on its first partner. On the
-mid-surface frame such a pair, ``s`` apart, makes the normal force a couple ``t_n s`` on the joint (its
-frame turns with either side); on the bottom-face frame the frame depends on the bottom side alone, so a
-block sliding far over a supporting face feels no such couple (tests/test_large_kinematics.py). The law
-(:func:`~masonrydam.materials.mohr_coulomb.mohr_coulomb_point`) is unchanged. Forces are the exact
-gradient of the joint's work with ``delta(q)`` (a co-rotational formulation in the sense of Crisfield,
-*Non-linear Finite Element Analysis of Solids and Structures*, vol. 1, 1991, ch. 7; for interfaces
-e.g. Wriggers, *Computational Contact Mechanics*, 2006, sec. 4.2): with
-``B = d delta / dq`` (dim, n_q),
-
-    f_e = sum_g B^T t j0 w h,     k_e = sum_g (B^T C B + sum_r t_r d^2 delta_r / dq^2) j0 w h
-
-with ``j0`` the reference Jacobian (areas are those of the reference mid-surface, as the tractions are
-per reference area). In 2D the second derivatives are written out (below); in 3D they are a central
-difference of the exact ``B`` (step 1e-6 of the element size; the tangent is then exact to that
-difference, which Newton does not notice). An elastic joint is hyperelastic here, so its energy is
-conserved by a conserving integrator.
-
-2D derivatives (phi the frame angle, ``delta_phi = e_n . delta_a / |a|``; ``P = d phi / dq``,
-``A = e_t . (d a / dq) / |a|``, ``G_t = e_t . d d / dq``, ``G_n = e_n . d d / dq``, ``d_t = e_t . d``,
-``d_n = e_n . d``)::
-
-    B_s = G_t + d_n P,      B_n = G_n - d_t P
-    H_s = G_n P^T + P G_n^T - d_t P P^T - d_n (A P^T + P A^T)
-    H_n = -G_t P^T - P G_t^T - d_n P P^T + d_t (A P^T + P A^T)
+Theory: docs/elements.md, section "Large kinematics: a frame that turns with the joint" (under "Zero-thickness
+interfaces (the seed's element)").
 """
 from __future__ import annotations
 
@@ -49,7 +19,7 @@ import numpy as np
 from numba import njit
 
 from ..errors import STATUS_BAD_GEOMETRY, STATUS_NAN, STATUS_OK
-from .interface import _GEOM_TOL, _frame, _mid_surface, joint_law_at
+from .interface import GEOM_TOL, local_frame, mid_surface_derivatives, joint_law_at
 
 #: relative step of the central difference of B in 3D (times the element size)
 FD_STEP_3D = 1e-6
@@ -60,7 +30,7 @@ def _element_arrays(coords, conn, u, e, ns, dim, top_weight, xm0, xm, gap):
     """Reference mid-surface ``xm0`` (ns, dim), the current frame surface ``xm`` (the mid-surface for
     ``top_weight`` 0.5, the bottom face for 0: ``x_bot + w (x_top - x_bot)``) and current node-pair gaps
     ``gap`` (ns, dim) = x_top - x_bot of element e; returns the reference face size (m)."""
-    size = _mid_surface(coords, conn, e, ns, dim, xm0)
+    size = mid_surface_derivatives(coords, conn, e, ns, dim, xm0)
     for a in range(ns):
         b = conn[e, a]
         t = conn[e, ns + a]
@@ -245,9 +215,9 @@ def interface_large_evaluate(coords, conn, u, N, dN, weights, thickness, params_
         h = thickness[e]
         pidx = param_index[e]
         for g in range(nip):
-            j0 = _frame(xm0, dN, g, dim, R0, size)
+            j0 = local_frame(xm0, dN, g, dim, R0, size)
             if top_weight != 0.5:  # the frame at rest of a surface other than the mid-surface (areas stay)
-                _frame(xf0, dN, g, dim, R0, size)
+                local_frame(xf0, dN, g, dim, R0, size)
             if not math.isfinite(j0):
                 info[0] = e
                 return STATUS_NAN
@@ -272,7 +242,7 @@ def interface_large_evaluate(coords, conn, u, N, dN, weights, thickness, params_
             if not math.isfinite(jc):
                 info[0] = e
                 return STATUS_NAN
-            if not (jc > _GEOM_TOL * size ** (dim - 1)):
+            if not (jc > GEOM_TOL * size ** (dim - 1)):
                 info[0] = e
                 return STATUS_BAD_GEOMETRY
             for r in range(dim):

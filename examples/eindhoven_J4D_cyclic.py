@@ -4,7 +4,7 @@ The scene is examples/eindhoven_J4D.toml with the top beam free to rise (kept le
 stays 0.30 MPa) and the push replaced by reversed displacements of growing amplitude: +1, -1, +2, -2 mm and
 back to 0. Once the bed joint under the top course has lost its cohesion the wall slides on it and the
 loop is Coulomb's parallelogram (elastic branches between the plateaus), H = +/- tan(phi) N with N = 30.6 kN (precompression, top beam and top course):
-+/- 22.9 kN (tests/test_eindhoven_walls.py checks it).
++/- 22.9 kN (tests/system/test_eindhoven_walls.py checks it).
 
 Run:   python examples/eindhoven_J4D_cyclic.py            (writes j4d_cyclic.nc and j4d_cyclic.png; ~30 s)
 """

@@ -68,3 +68,17 @@ def test_no_law_column_is_read_outside_the_laws():
             if column.search(line):
                 found.append(f"{rel}:{k}: {line.strip()}")
     assert not found, "ask the law's descriptor or the joint group instead:\n" + "\n".join(found)
+
+
+def test_every_effect_names_its_module_and_test_files_that_exist():
+    """The registry is the map of the effects (docs/architecture.md): each entry's module imports and each of
+    its test files exists, so that a reader can go from a line of ``simulated_effects`` to the code and the
+    checks."""
+    import importlib
+
+    from masonrydam.effects import registry
+
+    for name, effect in registry().items():
+        importlib.import_module(effect.module)
+        for path in (p.strip() for p in effect.tests.split(",")):
+            assert (ROOT / path).is_file(), f"effect '{name}' names a missing test file {path!r}"

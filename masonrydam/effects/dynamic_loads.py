@@ -18,7 +18,7 @@ multiplied at the stage time ``t`` (s, from the stage's start):
 
 The load vector is assembled once per load (the consistent nodal forces of :mod:`.loads`) and scaled in
 time: :func:`load_history` gives the stage's ``force(t)`` (:class:`masonrydam.solvers.dynamic.DynamicTerms`),
-whose work the energy balance counts as ``input``. Closed forms that check it (tests/test_dynamic_loads.py):
+whose work the energy balance counts as ``input``. Closed forms that check it (tests/effects/test_dynamic_loads.py):
 an undamped oscillator under a suddenly applied constant force, ``u = F/k (1 - cos(omega t))``, and under a
 harmonic force, ``u = F/k / (1 - b^2) (sin(Omega t) - b sin(omega t))``, ``b = Omega/omega`` (Chopra,
 Dynamics of Structures, 4th ed., 2012, eqs. 4.3.2 and 3.1.6).
@@ -255,7 +255,7 @@ def _effects():
 
     return [Effect("dynamic_loads", "a dynamic stage's 'loads' with a 'time_function'", __name__,
                    "consistent nodal forces scaled in time; closed forms of Chopra (2012), Dynamics of Structures, "
-                   "eqs. 3.1.6 and 4.3.2", "tests/test_dynamic_loads.py", _describe, activate=_activate,
+                   "eqs. 3.1.6 and 4.3.2", "tests/effects/test_dynamic_loads.py", _describe, activate=_activate,
                    dynamic_stage=_add_loads_in_time, dynamic_loads=normalize_dynamic_load, scene_keys=(_TIME_LOADS,),
                    scene_keys_place="dynamic_stage")]
 

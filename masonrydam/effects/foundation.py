@@ -676,7 +676,7 @@ def _effects():
 
     return [Effect("foundation", "[foundation] with mass = true", __name__,
                    "Lysmer & Kuhlemeyer 1969 (ASCE J. Eng. Mech. Div. 95(EM4)); Joyner & Chen 1975 (BSSA 65); "
-                   "Nielsen 2006 (ABAQUS Users' Conf.); Lokke & Chopra 2018 (EESD 47)", "tests/test_foundation.py",
+                   "Nielsen 2006 (ABAQUS Users' Conf.); Lokke & Chopra 2018 (EESD 47)", "tests/effects/test_foundation.py",
                    describe, activate=activate, scene_keys=(_FOUNDATION,),
                    section_meanings={"foundation": "the rock under a dam: massless, or with mass and absorbing "
                                                    "boundaries"})]

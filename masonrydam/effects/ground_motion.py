@@ -179,18 +179,18 @@ def _effects():
 
     return [
         Effect("static", "static stages only", __name__, "load and displacement control (solvers/static/stepping.py)",
-               "tests/test_system.py", _static_only),
+               "tests/system/test_system.py", _static_only),
         Effect("inertia", "a stage with type = 'dynamic'", __name__,
-               "Newmark 1959; Hilber, Hughes & Taylor 1977; Chung & Hulbert 1993", "tests/test_dynamics.py",
+               "Newmark 1959; Hilber, Hughes & Taylor 1977; Chung & Hulbert 1993", "tests/solvers/test_dynamics.py",
                _inertia),
         Effect("modes", "a stage with type = 'modal'", __name__,
                "generalized eigenproblem K phi = omega^2 M phi (Chopra, Dynamics of Structures, ch. 10, 13)",
-               "tests/test_modal_stage.py", _modes),
+               "tests/solvers/test_modal_stage.py", _modes),
         Effect("damping", "stages.damping", __name__, "Rayleigh damping (Chopra, Dynamics of Structures, sec. 11.4)",
-               "tests/test_dynamics.py", _damping),
+               "tests/solvers/test_dynamics.py", _damping),
         Effect("ground_motion", "stages.ground_motion", __name__,
                "relative formulation, effective earthquake forces -M iota a_g (Chopra, sec. 9.4)",
-               "tests/test_dynamics.py, tests/test_records.py", _ground_motion, dynamic_stage=_add_ground_motion),
+               "tests/solvers/test_dynamics.py, tests/ground_motion/test_records.py", _ground_motion, dynamic_stage=_add_ground_motion),
     ]
 
 

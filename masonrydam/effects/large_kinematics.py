@@ -27,7 +27,7 @@ def _effects():
     return [Effect("large_kinematics", "[model] kinematics = \"large\"", __name__,
                    "total Lagrangian formulation (Bathe, Finite Element Procedures, 1996, sec. 6.2.3; Belytschko, Liu "
                    "& Moran 2000, sec. 4.9); co-rotational interface frame (Crisfield 1991, ch. 7)",
-                   "tests/test_large_kinematics.py", _describe)]
+                   "tests/elements/test_large_kinematics.py", _describe)]
 
 
 EFFECTS = _effects()

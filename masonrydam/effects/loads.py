@@ -200,7 +200,7 @@ def _effects():
     builders = {"displacement": {"displacement": _add_displacement}, "nodal": {"nodal": _add_force},
                 "pressure": {"pressure": _add_force}, "self_weight": {"self_weight": _add_self_weight},
                 "traction": {"traction": _add_force}}
-    return [Effect(name, asked, __name__, ref, "tests/test_system.py, tests/test_solid3d.py", _describe(name, text),
+    return [Effect(name, asked, __name__, ref, "tests/system/test_system.py, tests/elements/test_solid3d.py", _describe(name, text),
                    stage_loads=builders[name])
             for name, text, asked in rows]
 

@@ -36,8 +36,8 @@ def _effects():
                    "implicit return mapping and consistent tangent (Simo & Hughes 1998, Computational Inelasticity; "
                    "de Souza Neto, Peric & Owen 2008, Computational Methods for Plasticity, ch. 7-8, 11); crack-band "
                    "regularisation of softening (Bazant & Oh 1983)",
-                   "tests/test_continuum_plasticity.py, tests/test_plastic_structures.py, tests/test_von_mises.py, "
-                   "tests/test_tresca.py, tests/test_drucker_prager.py, tests/test_mohr_coulomb_solid.py", _describe)]
+                   "tests/elements/test_continuum_plasticity.py, tests/elements/test_plastic_structures.py, tests/materials/test_von_mises.py, "
+                   "tests/materials/test_tresca.py, tests/materials/test_drucker_prager.py, tests/materials/test_mohr_coulomb_solid.py", _describe)]
 
 
 EFFECTS = _effects()

@@ -132,7 +132,7 @@ def tetrahedron_rule(n_points: int) -> tuple[np.ndarray, np.ndarray]:
       (N. Walkington, "Quadrature on simplices of arbitrary dimension", CNA report, Carnegie Mellon
       Univ. 2000; A. Jaskowiec & N. Sukumar, "High-order cubature rules for tetrahedra", Int. J.
       Numer. Methods Eng. 121 (2020) 2418-2436). The digits below solve the six symmetric moment
-      equations of degree <= 5 to machine precision (checked in tests/test_solid3d.py against
+      equations of degree <= 5 to machine precision (checked in tests/elements/test_solid3d.py against
       ``int xi^a eta^b zeta^c = a! b! c! / (a + b + c + 3)!``). Exact for ``N_a N_b`` of tet10 (degree 4),
       so it is the rule for the consistent tet10 mass matrix.
 

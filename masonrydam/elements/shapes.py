@@ -1,50 +1,15 @@
 """Element types and their shape functions on the reference element.
 
-Node orderings follow meshio / VTK, so that meshes read through meshio need no reordering. For the
-types below gmsh uses the same order except for hex20 and tet10 (meshio permutes those on read; see
-:data:`GMSH_TO_MESHIO_ORDER` for meshes taken from the gmsh API directly):
+:data:`ELEMENT_TYPES` holds every type (line2/line3, tri3/tri6, quad4/quad8/quad9, hex8/hex20, tet4/tet10) with
+its nodes, ``edges`` and outward-ordered ``facets``; node orders are meshio's / VTK's
+(:data:`GMSH_TO_MESHIO_ORDER` for gmsh-API node lists). ``shape_functions(name, points)`` returns ``N`` of shape
+``(n_points, n_nodes)`` and ``dN`` of shape ``(n_points, dim_ref, n_nodes)`` (derivatives with respect to the
+natural coordinates), evaluated once in Python and passed to the numba kernels; :func:`integration_rule`,
+:func:`facet_rule` and :func:`facet_quadrature` give the rules and the facet points, normals and Jacobians
+(m, m2). Shape functions: Zienkiewicz, Taylor & Zhu (2013, ch. 6); Hughes (2000, sec. 3.5).
 
-- ``line2``: ends at xi = -1, +1;  ``line3``: ends, then the middle node (xi = 0);
-- ``tri3``: (0,0), (1,0), (0,1);  ``tri6``: corners then mid-edges 0-1, 1-2, 2-0;
-- ``quad4``: (-1,-1), (1,-1), (1,1), (-1,1) counter-clockwise;
-- ``quad8``: corners then mid-edges 0-1, 1-2, 2-3, 3-0 (serendipity);  ``quad9``: quad8 plus centre;
-- ``hex8`` (VTK_HEXAHEDRON, meshio ``hexahedron``): on [-1, 1]^3, bottom face zeta = -1
-  counter-clockwise seen from +zeta, then the top face: (-1,-1,-1), (1,-1,-1), (1,1,-1), (-1,1,-1),
-  (-1,-1,1), (1,-1,1), (1,1,1), (-1,1,1);
-- ``hex20`` (VTK_QUADRATIC_HEXAHEDRON, meshio ``hexahedron20``, serendipity): the 8 corners, then
-  the mid-edge nodes 8..19 of the edges 0-1, 1-2, 2-3, 3-0 (bottom), 4-5, 5-6, 6-7, 7-4 (top),
-  0-4, 1-5, 2-6, 3-7 (vertical);
-- ``tet4`` (VTK_TETRA, meshio ``tetra``): (0,0,0), (1,0,0), (0,1,0), (0,0,1) on the unit
-  tetrahedron (volume 1/6); the node order has positive volume (node 3 on the side of +normal of
-  the face 0-1-2 by the right-hand rule);
-- ``tet10`` (VTK_QUADRATIC_TETRA, meshio ``tetra10``): the 4 corners, then the mid-edge nodes
-  4..9 of the edges 0-1, 1-2, 2-0, 0-3, 1-3, 2-3.
-
-``edges``: local nodes of every element edge (line2 / line3 order: ends, then middle node); for the
-3D types in the orders listed above (edge ``k`` of hex20 / tet10 has mid-node ``8 + k`` / ``4 + k``).
-
-``facets``: ``(facet_type, local_nodes)`` of every facet (the element boundary: edges in 2D, faces in
-3D). 2D facets are the ``edges``, which run counter-clockwise around the element (outward normal on
-the right). 3D faces are ordered (VTK face order) so that the right-hand-rule normal points OUT of
-the element, corners first and, for quad8 / tri6 faces, the mid-edge nodes in quad8 / tri6 order:
-
-- hex8 ``quad4``: x-: (0,4,7,3), x+: (1,2,6,5), y-: (0,1,5,4), y+: (3,7,6,2), z-: (0,3,2,1),
-  z+: (4,5,6,7);  hex20 ``quad8``: the same corners plus (16,15,19,11), (9,18,13,17), (8,17,12,16),
-  (19,14,18,10), (11,10,9,8), (12,13,14,15);
-- tet4 ``tri3``: (0,1,3), (1,2,3), (2,0,3), (0,2,1);  tet10 ``tri6``: the same corners plus
-  (4,8,7), (5,9,8), (6,7,9), (6,5,4).
-
-``shape_functions(name, points)`` returns ``N`` of shape ``(n_points, n_nodes)`` and
-``dN`` of shape ``(n_points, dim_ref, n_nodes)`` (derivatives with respect to the natural coordinates).
-These tables are evaluated once in Python and passed to the numba kernels.
-
-Shape functions (Zienkiewicz, Taylor & Zhu, *The Finite Element Method: Its Basis and
-Fundamentals*, 7th ed. 2013, ch. 6; Hughes, *The Finite Element Method*, Dover 2000, sec. 3.5):
-trilinear hex8 ``N_a = (1 + xi xi_a)(1 + eta eta_a)(1 + zeta zeta_a) / 8``; serendipity hex20, corners
-``N_a = (1 + xi_0)(1 + eta_0)(1 + zeta_0)(xi_0 + eta_0 + zeta_0 - 2) / 8`` (``xi_0 = xi xi_a`` ...),
-mid-edge nodes with ``xi_a = 0``: ``N_a = (1 - xi^2)(1 + eta_0)(1 + zeta_0) / 4`` (and permutations);
-tetrahedra in volume coordinates ``L = (1 - xi - eta - zeta, xi, eta, zeta)``: tet4 ``N_a = L_a``,
-tet10 corners ``L_a (2 L_a - 1)``, mid-edge nodes ``4 L_i L_j``.
+Node orders, edge and face tables and the shape functions: docs/elements.md, section "Node orders, facets and
+shape functions".
 """
 from __future__ import annotations
 
@@ -137,7 +102,7 @@ CONTINUUM_TYPES_3D = ("hex8", "hex20", "tet4", "tet10")
 #: ``gmsh.model.mesh.getElementsByType``) to ours (= meshio / VTK): ``ours = gmsh_nodes[..., perm]``.
 #: Identity for all other types. Gmsh numbers the hex20 edges 0-1, 0-3, 0-4, 1-2, 1-5, 2-3, 2-6, 3-7,
 #: 4-5, 4-7, 5-6, 6-7 and the tet10 edges 0-1, 1-2, 2-0, 3-0, 3-2, 3-1 (gmsh reference manual,
-#: "Node ordering"); checked against the gmsh API in tests/test_solid3d.py.
+#: "Node ordering"); checked against the gmsh API in tests/elements/test_solid3d.py.
 GMSH_TO_MESHIO_ORDER: dict[str, list[int]] = {
     "line2": [0, 1],
     "line3": [0, 1, 2],
@@ -443,7 +408,7 @@ def facet_quadrature(facet_type: str, X: np.ndarray, points: np.ndarray, weights
 
     X: (n, nfn, dim) m, the node coordinates of every facet. Without ``owner`` the same points are used
     on every facet (arrays ``(n, q, ...)``); with ``owner`` (P,) int, point ``p`` lies on facet
-    ``owner[p]`` (arrays ``(P, ...)``, e.g. the points of :func:`masonrydam.effects.hydrostatics.region_points`
+    ``owner[p]`` (arrays ``(P, ...)``, e.g. the points of :func:`masonrydam.effects.reservoir.hydrostatics.region_points`
     on the wet part of each facet). See :class:`FacetQuadrature`.
     """
     N, dN = shape_functions(facet_type, points)

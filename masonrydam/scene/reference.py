@@ -4,7 +4,7 @@ Each :class:`Key` row gives the dotted path of a key (``[]`` marks the items of 
 name the user chooses: ``materials.<group>.youngs_modulus``, ``stages[].loads[].pressure``), its type,
 its SI unit and whether a string with a unit is accepted, its default, its allowed values and a
 one-line meaning. The allowed values are the schema's own tuples where it has them (imported here,
-so they cannot drift). ``tests/test_scene_reference.py`` checks the table against the keys the
+so they cannot drift). ``tests/scene/test_scene_reference.py`` checks the table against the keys the
 schema accepts, both ways, and the choices against those the schema checks.
 
 ``docs/scene.md`` is :func:`render_markdown`'s text; regenerate it with::
@@ -635,7 +635,7 @@ _INTRO = """\
 # Scene reference
 
 Every key a scene may hold. This file is generated from `masonrydam/scene/reference.py`
-(`python -m masonrydam.scene.reference > docs/scene.md`); `tests/test_scene_reference.py` checks the
+(`python -m masonrydam.scene.reference > docs/scene.md`); `tests/scene/test_scene_reference.py` checks the
 table against the keys the schema accepts.
 
 How to read it:

@@ -197,7 +197,7 @@ def _effects():
 
     return [Effect("dynamic_water", "[reservoir] dynamic = \"westergaard\" | \"acoustic\"", __name__,
                    "Westergaard 1933, Trans. ASCE 98; Kuo 1982, UCB/EERC-82/10; Zienkiewicz & Bettess 1978, IJNME 13; "
-                   "Fenves & Chopra 1984, EESD 12", "tests/test_added_mass.py, tests/test_acoustic.py",
+                   "Fenves & Chopra 1984, EESD 12", "tests/effects/test_added_mass.py, tests/effects/test_acoustic.py",
                    describe)]
 
 

@@ -274,10 +274,10 @@ def _effects():
 
     return [Effect("uplift", "[reservoir] uplift = { joints = [...] }", __name__,
                    "USBR Design of Small Dams (1987) sec. 5.7; USACE EM 1110-2-2200 (1995) sec. 3-3, 4-4; FERC "
-                   "Engineering Guidelines ch. 3 (2016)", "tests/test_reservoir.py", describe),
+                   "Engineering Guidelines ch. 3 (2016)", "tests/effects/test_reservoir.py", describe),
             Effect("earthquake_uplift", "[reservoir] uplift.earthquake with a dynamic stage", __name__,
                    "CADAM3D user's manual (Leclerc, Leger & Tinawi 2003) sec. 3.6; FERC Engineering Guidelines ch. 3 "
-                   "sec. 3-8.2", "tests/test_earthquake_water.py", _describe_earthquake)]
+                   "sec. 3-8.2", "tests/effects/test_earthquake_water.py", _describe_earthquake)]
 
 
 EFFECTS = _effects()

@@ -15,12 +15,12 @@ from __future__ import annotations
 
 import argparse
 import json
-import platform
 import sys
 import time
 from pathlib import Path
 
 import numpy as np
+from _common import cpu_model  # benchmarks/ is sys.path[0] when run as a script
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -30,16 +30,6 @@ SCENES = ["block_3d_oblique", "block_on_incline", "dam_3d_gravity", "dam_3d_rese
           "wall_3d_english", "wall_el_centro"]
 
 
-def _cpu() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown"
-
-
 def run(out: Path, only=None) -> None:
     import warnings
 
@@ -47,7 +37,7 @@ def run(out: Path, only=None) -> None:
     from masonrydam.cli.main import default_scene_path
 
     out.mkdir(parents=True, exist_ok=True)
-    times = {"cpu": _cpu(), "masonrydam": str(Path(masonrydam.__file__).parent)}
+    times = {"cpu": cpu_model(), "masonrydam": str(Path(masonrydam.__file__).parent)}
     todo = [("wall_push", default_scene_path())] + [(n, ROOT / "examples" / f"{n}.toml") for n in SCENES]
     for name, path in todo:
         if only and name not in only:

@@ -6,10 +6,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["ABSENT", "REQUIRED", "TIME", "UNIT", "Key", "Section", "key"]
+__all__ = ["ABSENT", "REQUIRED", "TIME", "UNIT", "Key", "Marker", "Section", "key"]
 
 
-class _Marker:
+class Marker:
+    """A default that is not a value: printed as its text in the reference."""
+
     def __init__(self, text):
         self.text = text
 
@@ -18,10 +20,10 @@ class _Marker:
 
 
 #: default of a key that must be given
-REQUIRED = _Marker("required")
+REQUIRED = Marker("required")
 #: default of an optional key without a value of its own (left out: the feature is off, or the value is
 #: computed; the meaning says which)
-ABSENT = _Marker("-")
+ABSENT = Marker("-")
 
 #: ``unit_string`` values: any unit of the key's dimension (``"16.7 GPa"``, ``"10 mm"``, ``"0.3 g"``), or a
 #: time in seconds or milliseconds (``"10 ms"``)

@@ -43,30 +43,28 @@ def test_no_module_is_longer_than_one_person_holds_in_mind():
     assert not long, f"split these modules by what their parts do (docs/architecture.md): {long}"
 
 
-def test_no_law_is_tested_by_name_outside_the_laws():
-    by_name = re.compile(r"""(law|\.name)\s*(==|!=)\s*["'](composite|mohr_coulomb|linear|von_mises|tresca|"""
-                         r"""drucker_prager)["']|law\s+(not\s+)?in\s*\(""")
+def _lines_outside_the_law_rooms(pattern) -> list[str]:
+    """``path:line: text`` of every line of masonrydam/ outside :data:`LAW_ROOMS` that ``pattern`` matches."""
     found = []
     for p in _modules():
         rel = p.relative_to(PACKAGE).as_posix()
         if rel.startswith(LAW_ROOMS):
             continue
-        for k, line in enumerate(p.read_text().splitlines(), 1):
-            if by_name.search(line):
-                found.append(f"{rel}:{k}: {line.strip()}")
+        found += [f"{rel}:{k}: {line.strip()}" for k, line in enumerate(p.read_text().splitlines(), 1)
+                  if pattern.search(line)]
+    return found
+
+
+def test_no_law_is_tested_by_name_outside_the_laws():
+    by_name = re.compile(r"""(law|\.name)\s*(==|!=)\s*["'](composite|mohr_coulomb|linear|von_mises|tresca|"""
+                         r"""drucker_prager)["']|law\s+(not\s+)?in\s*\(""")
+    found = _lines_outside_the_law_rooms(by_name)
     assert not found, "ask the law's descriptor instead:\n" + "\n".join(found)
 
 
 def test_no_law_column_is_read_outside_the_laws():
     column = re.compile(r"\b(mc\.(%s)|from \S*mohr_coulomb import)" % "|".join(MOHR_COULOMB_COLUMNS))
-    found = []
-    for p in _modules():
-        rel = p.relative_to(PACKAGE).as_posix()
-        if rel.startswith(LAW_ROOMS):
-            continue
-        for k, line in enumerate(p.read_text().splitlines(), 1):
-            if column.search(line):
-                found.append(f"{rel}:{k}: {line.strip()}")
+    found = _lines_outside_the_law_rooms(column)
     assert not found, "ask the law's descriptor or the joint group instead:\n" + "\n".join(found)
 
 

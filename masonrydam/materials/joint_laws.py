@@ -57,6 +57,7 @@ from typing import Callable
 import numpy as np
 
 from ..checks import number, seconds
+from .. import keys
 from ..errors import SceneError
 from ..units import SI_UNIT, quantity
 from . import composite as ci
@@ -81,19 +82,11 @@ FUSED_KERNELS = {None: "mohr_coulomb_point", 1: "composite_point"}
 UNBREAKABLE = 1e300
 
 
-class _Marker:
-    def __init__(self, text):
-        self.text = text
-
-    def __repr__(self):
-        return self.text
-
-
-#: default of a scene key that must be given
-REQUIRED = _Marker("required")
+#: default of a scene key that must be given (the scene reference's own marker, :data:`masonrydam.keys.REQUIRED`)
+REQUIRED = keys.REQUIRED
 #: default of a scene key that may be left out without a value of its own (the feature is off, or the law
 #: computes the value)
-OPTIONAL = _Marker("optional")
+OPTIONAL = keys.Marker("optional")
 
 #: the point-law contract of a plug-in law (see the module docstring)
 PointLaw = Callable[..., int]

@@ -19,7 +19,8 @@ from math import comb
 import numpy as np
 
 from ...elements.quadrature import collapsed_triangle_rule
-from ...elements.shapes import ELEMENT_TYPES, facet_outward_sign, facet_quadrature, facet_rule, shape_functions
+from ...elements.shapes import (ELEMENT_TYPES, facet_outward_sign, facet_quadrature, facet_rule, reference_nodes,
+                                shape_functions)
 from ...mesh.facets import FACET_TYPES
 
 __all__ = ["facet_pressure_forces", "region_points"]
@@ -34,8 +35,9 @@ _INTEGRAND_TOTAL_DEGREE = {"tri3": 2, "tri6": 6, "quad4": 6, "quad8": 10, "quad9
 #: quads), or the collapsed-rule order n (exact to total degree 2 n - 2) for triangle facets
 _FULL_RULE_POINTS = {"line2": 2, "line3": 3, "tri3": 2, "tri6": 4, "quad4": 2, "quad8": 4, "quad9": 4}
 
-_QUAD_CORNERS = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
-_TRI_CORNERS = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+#: corners of the reference quadrilateral and triangle
+_QUAD_CORNERS = reference_nodes("quad4")
+_TRI_CORNERS = reference_nodes("tri3")
 
 
 def _duffy_points_for_degree(p: int) -> int:

@@ -43,7 +43,8 @@ def facet_traction(model, facet_type: str, facets: np.ndarray, thickness: float 
     """Consistent nodal forces (n_dof,) of a traction on boundary facets: edges in 2D, faces in 3D.
 
     facets: (n, nfn) node lists in the facet type's order (line2/line3 in 2D; tri3/tri6/quad4/quad8/quad9
-    in 3D: :data:`masonrydam.mesh.facets.FACET_TYPES`); thickness: m (2D only); traction: (dim,) Pa, or pressure: Pa along the inward normal.
+    in 3D: :data:`masonrydam.mesh.facets.FACET_TYPES`); thickness: m (2D only); traction: (dim,) Pa, or
+    pressure: Pa along the inward normal.
     The inward side is taken from ``owner_centroids`` (n, dim) when given; otherwise the facet's
     own normal is taken as outward (2D: tangent turned -90 degrees, i.e. counter-clockwise
     boundaries; 3D: right-hand rule).

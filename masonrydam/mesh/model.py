@@ -54,7 +54,8 @@ class CellBlock:
 @dataclass
 class FacetSet:
     """Named set of facets (edges in 2D, faces in 3D): ``type`` is the facet type (line2/line3 in
-    2D; tri3/tri6/quad4/quad8/quad9 in 3D: :data:`masonrydam.mesh.facets.FACET_TYPES`), ``facets`` (n, nfn) node lists in that type's order."""
+    2D; tri3/tri6/quad4/quad8/quad9 in 3D: :data:`masonrydam.mesh.facets.FACET_TYPES`), ``facets``
+    (n, nfn) node lists in that type's order."""
 
     type: str
     facets: np.ndarray

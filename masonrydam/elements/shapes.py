@@ -344,7 +344,8 @@ def facet_outward_sign(facet_type: str, X: np.ndarray, inward_points: np.ndarray
 _SYMMETRIC_TRIANGLE_POINTS = {1: 1, 2: 3, 3: 6}
 
 
-def facet_rule(facet_type: str, points_per_direction: int, triangle: str = "collapsed") -> tuple[np.ndarray, np.ndarray]:
+def facet_rule(facet_type: str, points_per_direction: int,
+               triangle: str = "collapsed") -> tuple[np.ndarray, np.ndarray]:
     """Gauss rule on the reference facet of ``facet_type`` (edges line2 / line3, faces tri3 / tri6 /
     quad4 / quad8 / quad9): the one facet rule of the facet loads, the absorbing boundaries, the
     hydrostatic loads and the added mass.
@@ -404,12 +405,13 @@ def facet_quadrature(facet_type: str, X: np.ndarray, points: np.ndarray, weights
                      owner: np.ndarray | None = None) -> FacetQuadrature:
     """Points, Jacobians and normals of facets at reference ``points`` (q, r) with ``weights`` (q,), e.g.
     from :func:`facet_rule`: the one facet quadrature of the facet loads, the absorbing boundaries, the
-    hydrostatic loads and the added mass.
+    hydrostatic loads, the added mass, the uplift and the acoustic reservoir's boundary.
 
     X: (n, nfn, dim) m, the node coordinates of every facet. Without ``owner`` the same points are used
     on every facet (arrays ``(n, q, ...)``); with ``owner`` (P,) int, point ``p`` lies on facet
-    ``owner[p]`` (arrays ``(P, ...)``, e.g. the points of :func:`masonrydam.effects.reservoir.hydrostatics.region_points`
-    on the wet part of each facet). See :class:`FacetQuadrature`.
+    ``owner[p]`` (arrays ``(P, ...)``, e.g. the points of
+    :func:`masonrydam.effects.reservoir.hydrostatics.region_points` on the wet part of each facet). See
+    :class:`FacetQuadrature`.
     """
     N, dN = shape_functions(facet_type, points)
     if owner is None:

@@ -26,6 +26,7 @@ from ..mesh.sets import node_set
 def build_mesh(scene: dict, base_dir: Path) -> Mesh:
     spec = scene["mesh"]
     if "generator" in spec:
+        # (generators imports masonrydam, whose __init__ imports this module: a top-level import would be a cycle)
         from generators import GENERATORS
 
         return GENERATORS[spec["generator"]](**spec["parameters"])

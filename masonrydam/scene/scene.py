@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import re
 import tomllib
 from pathlib import Path
 
@@ -65,8 +66,6 @@ def read_toml(path: Path, key: str, what: str, hint: str = "") -> dict:
 
 def path_parts(path: str) -> list:
     """``"stages[1].loads[0].pressure"`` -> ``["stages", 1, "loads", 0, "pressure"]``."""
-    import re
-
     parts = []
     for piece in path.split("."):
         m = re.fullmatch(r"([A-Za-z0-9_-]+)((?:\[\d+\])*)", piece)

@@ -31,6 +31,7 @@ from ..effects import load_types, normalize_dynamic_load, sections
 from ..assembly.groups import JOINT_FRAMES, KINEMATICS
 from ..materials.continuum_laws import CONTINUUM_LAWS, material_law
 from ..materials.joint_laws import DEFAULT_JOINT_LAW, JOINT_KEYS, joint_law, joint_laws
+from ..results.writer import OutputOptions
 
 HYPOTHESES = ("plane_stress", "plane_strain")
 SUPPORT_KINDS = ("fixed", "tied")
@@ -89,6 +90,7 @@ def _model(d):
 def _generator_parameters(name, params, key):
     """The parameters of generator ``name`` checked against its signature (lengths and angles to SI,
     finite and plausible); those of the 2D generator inside ``extruded`` too."""
+    # (generators imports masonrydam, whose __init__ imports this module: a top-level import would be a cycle)
     from generators import GENERATORS
 
     sig = inspect.signature(GENERATORS[name])
@@ -120,6 +122,7 @@ def _generator_parameters(name, params, key):
 
 
 def _mesh(d):
+    # (generators imports masonrydam, whose __init__ imports this module: a top-level import would be a cycle)
     from generators import GENERATORS
 
     _check_keys(d, {"generator", "parameters", "file", "joints"}, "mesh")
@@ -566,8 +569,6 @@ def _check_reservoir_loads(stages, parts):
 
 def _output_options(d: dict) -> dict:
     """How steps reach the file (:class:`~masonrydam.results.writer.OutputOptions`)."""
-    from ..results.writer import OutputOptions
-
     default = OutputOptions()
     compression = _int(d.get("compression", default.compression), "output.compression", 0)
     if compression > 9:

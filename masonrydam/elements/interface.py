@@ -220,6 +220,30 @@ def local_frame(xm, dN, g, dim, R, size):
 
 
 @njit(cache=True, inline="always")
+def add_point_tangent(ke_out, e, N, g, ns, dim, ndof_half, Cg):
+    """Add the tangent of point ``g``, ``Cg`` (dim, dim) in global axes times the point's weight, to the
+    element tangent ``ke_out[e]`` (2 ndof_half, 2 ndof_half): ``+-N_a N_b Cg`` on the bottom/top blocks
+    (relative displacement = top minus bottom). Shared by the fused and the generic interface kernels."""
+    for a in range(ns):
+        Na = N[g, a]
+        if Na == 0.0:
+            continue
+        for b in range(ns):
+            NaNb = Na * N[g, b]
+            if NaNb == 0.0:
+                continue
+            for k in range(dim):
+                ra = a * dim + k
+                for m in range(dim):
+                    cb = b * dim + m
+                    v = NaNb * Cg[k, m]
+                    ke_out[e, ra, cb] += v
+                    ke_out[e, ra, ndof_half + cb] -= v
+                    ke_out[e, ndof_half + ra, cb] -= v
+                    ke_out[e, ndof_half + ra, ndof_half + cb] += v
+
+
+@njit(cache=True, inline="always")
 def joint_law_at(params_table, pidx, state_committed, state_trial, delta_out, traction_out, e, g, dim, C, law):
     """The joint law at point ``g`` of element ``e`` from its local relative displacement
     ``delta_out[e, g]`` and committed state: writes ``state_trial[e, g]``, ``traction_out[e, g]`` and the
@@ -401,23 +425,7 @@ def interface_evaluate(
                         for r in range(dim):
                             s += RC[k, r] * R[r, m]
                         Cg[k, m] = s * jwh
-                for a in range(ns):
-                    Na = N[g, a]
-                    if Na == 0.0:
-                        continue
-                    for b in range(ns):
-                        NaNb = Na * N[g, b]
-                        if NaNb == 0.0:
-                            continue
-                        for k in range(dim):
-                            ra = a * dim + k
-                            for m in range(dim):
-                                cb = b * dim + m
-                                v = NaNb * Cg[k, m]
-                                ke_out[e, ra, cb] += v
-                                ke_out[e, ra, ndof_half + cb] -= v
-                                ke_out[e, ndof_half + ra, cb] -= v
-                                ke_out[e, ndof_half + ra, ndof_half + cb] += v
+                add_point_tangent(ke_out, e, N, g, ns, dim, ndof_half, Cg)
 
         for r in range(2 * ndof_half):
             if not math.isfinite(fe_out[e, r]):
@@ -575,23 +583,7 @@ def interface_assemble(N, frame, jw, thickness, traction, tangent, want_tangent,
                         for r in range(dim):
                             s += RC[k, r] * frame[e, g, r, m]
                         Cg[k, m] = s * jwh
-                for a in range(ns):
-                    Na = N[g, a]
-                    if Na == 0.0:
-                        continue
-                    for b in range(ns):
-                        NaNb = Na * N[g, b]
-                        if NaNb == 0.0:
-                            continue
-                        for k in range(dim):
-                            ra = a * dim + k
-                            for m in range(dim):
-                                cb = b * dim + m
-                                v = NaNb * Cg[k, m]
-                                ke_out[e, ra, cb] += v
-                                ke_out[e, ra, ndof_half + cb] -= v
-                                ke_out[e, ndof_half + ra, cb] -= v
-                                ke_out[e, ndof_half + ra, ndof_half + cb] += v
+                add_point_tangent(ke_out, e, N, g, ns, dim, ndof_half, Cg)
         for r in range(2 * ndof_half):
             if not math.isfinite(fe_out[e, r]):
                 info[0] = e

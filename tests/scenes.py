@@ -248,6 +248,27 @@ def block_on_elastic_joint(modes=6, mass="consistent", *, overrides=None):
     return merged(scene, overrides)
 
 
+def oscillator(dynamic_stage: dict, *, normal_stiffness=1.0e9, density=1000.0, overrides=None):
+    """An undamped one-degree-of-freedom oscillator: a stiff 1 x 1 m block (``density`` kg/m3: m = 1000 kg) on
+    a linear joint of normal stiffness ``normal_stiffness`` (Pa/m) over 1 m (k = kn), on a fixed base, without
+    gravity; a static stage "rest" and the dynamic stage ``dynamic_stage`` (its name, type and mass given here:
+    "load", lumped). Chopra, Dynamics of Structures, 4th ed., 2012, ch. 3-4 (omega = sqrt(kn / rho))."""
+    material = {"youngs_modulus": 1e14, "poisson_ratio": 0.0, "density": density}
+    scene = {
+        "model": {"name": "sdof", "thickness": 1.0, "gravity": [0.0, 0.0]},
+        "mesh": {"generator": "blocks_2d", "parameters": {"element_size": 0.5, "blocks": [
+            {"x0": 0, "y0": -0.5, "x1": 1, "y1": 0, "group": "base"},
+            {"x0": 0, "y0": 0, "x1": 1, "y1": 1, "group": "block"}]}},
+        "materials": {"base": dict(material), "block": dict(material)},
+        "joints": {"joints": {"law": "linear", "normal_stiffness": normal_stiffness,
+                              "shear_stiffness": normal_stiffness}},
+        "supports": [{"set": "base", "components": ["x", "y"]}],
+        "stages": [{"name": "rest", "steps": 1, "loads": []},
+                   dict({"name": "load", "type": "dynamic", "mass": "lumped"}, **dynamic_stage)],
+    }
+    return merged(scene, overrides)
+
+
 # ----------------------------------------------------------------------------------------------
 # a small masonry wall
 # ----------------------------------------------------------------------------------------------

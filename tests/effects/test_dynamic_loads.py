@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 import masonrydam
+import scenes
 from masonrydam.effects.dynamic_loads import TimeFunction, normalize_time_function
 from masonrydam.errors import SceneError
 
@@ -23,19 +24,9 @@ OMEGA = math.sqrt(KN / RHO)  # 1000 rad/s
 
 
 def oscillator(time_function, steps=300, dt=6e-5, integrator="newmark_average"):
-    return {"model": {"name": "sdof", "thickness": 1.0, "gravity": [0.0, 0.0]},
-            "mesh": {"generator": "blocks_2d", "parameters": {"element_size": 0.5, "blocks": [
-                {"x0": 0, "y0": -0.5, "x1": 1, "y1": 0, "group": "base"},
-                {"x0": 0, "y0": 0, "x1": 1, "y1": 1, "group": "block"}]}},
-            "materials": {"base": {"youngs_modulus": 1e14, "poisson_ratio": 0.0, "density": RHO},
-                          "block": {"youngs_modulus": 1e14, "poisson_ratio": 0.0, "density": RHO}},
-            "joints": {"joints": {"law": "linear", "normal_stiffness": KN, "shear_stiffness": KN}},
-            "supports": [{"set": "base", "components": ["x", "y"]}],
-            "stages": [{"name": "rest", "steps": 1, "loads": []},
-                       {"name": "load", "type": "dynamic", "dt": dt, "steps": steps, "integrator": integrator,
-                        "mass": "lumped",
-                        "loads": [{"type": "edge_pressure", "set": "top_edge", "pressure": P,
-                                   "time_function": time_function}]}]}
+    return scenes.oscillator({"dt": dt, "steps": steps, "integrator": integrator,
+                              "loads": [{"type": "edge_pressure", "set": "top_edge", "pressure": P,
+                                         "time_function": time_function}]}, normal_stiffness=KN, density=RHO)
 
 
 def top_history(ds):

@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 import masonrydam
+import scenes
 from masonrydam.checks import check_keys, number, vector
 from masonrydam.effects import Effect, EffectRun, add_force, register, unregister
 from masonrydam.effects.loads import nodal_force
@@ -80,19 +81,10 @@ def shaker():
 
 
 def oscillator(steps=400, dt=6e-5, shaker=True):
-    scene = {"model": {"name": "sdof", "thickness": 1.0, "gravity": [0.0, 0.0]},
-             "mesh": {"generator": "blocks_2d", "parameters": {"element_size": 0.5, "blocks": [
-                 {"x0": 0, "y0": -0.5, "x1": 1, "y1": 0, "group": "base"},
-                 {"x0": 0, "y0": 0, "x1": 1, "y1": 1, "group": "block"}]}},
-             "materials": {"base": {"youngs_modulus": 1e14, "poisson_ratio": 0.0, "density": RHO},
-                           "block": {"youngs_modulus": 1e14, "poisson_ratio": 0.0, "density": RHO}},
-             "joints": {"joints": {"law": "linear", "normal_stiffness": KN, "shear_stiffness": KN}},
-             "supports": [{"set": "base", "components": ["x", "y"]}],
-             "stages": [{"name": "rest", "steps": 1, "loads": []},
-                        {"name": "shake", "type": "dynamic", "dt": dt, "steps": steps, "integrator": "newmark_average",
-                         "mass": "lumped",
-                         # still ground (a dynamic stage needs an excitation the schema knows of; this one adds 0)
-                         "ground_motion": {"x": {"values": [0.0, 0.0], "dt": 1.0, "units": "m/s2"}}}]}
+    # still ground: a dynamic stage needs an excitation the schema knows of; this one adds 0
+    scene = scenes.oscillator({"name": "shake", "dt": dt, "steps": steps, "integrator": "newmark_average",
+                               "ground_motion": {"x": {"values": [0.0, 0.0], "dt": 1.0, "units": "m/s2"}}},
+                              normal_stiffness=KN, density=RHO)
     if shaker:
         scene["shaker"] = {"set": "top_edge", "force": [0.0, -F], "frequency": B * OMEGA / (2 * math.pi)}
     return scene

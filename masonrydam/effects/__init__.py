@@ -27,6 +27,7 @@ _REGISTERED: list[Effect] = []
 
 
 def _modules():
+    # the effect modules (obspy, the reservoir) at the first registry look-up: keeps 'import masonrydam' 0.15 s shorter
     from . import dynamic_loads, foundation, ground_motion, large_kinematics, loads, plasticity, reservoir
 
     # (the reservoir is one package; its entries keep their places in the summary's order)

@@ -37,8 +37,8 @@ from ..errors import SceneError
 from ..keys import REQUIRED, TIME, Section
 from ..keys import key as row
 from ..pulses import PULSE_SHAPES, unit_pulse
-from .base import EffectRun, add_force
-from .loads import load_vector
+from .base import Effect, EffectRun, add_force
+from .loads import LOAD_TYPES, load_vector
 
 TIME_FUNCTIONS = ("table", "file", "pulse", "harmonic")
 #: static load types a dynamic stage takes, with a time function
@@ -89,8 +89,6 @@ def normalize_time_function(d, key: str) -> dict:
 def normalize_dynamic_load(d, key: str, dim: int) -> dict:
     """A load of a dynamic stage: a static load of a type in :data:`DYNAMIC_LOAD_TYPES` (normalised by
     :mod:`.loads`) with its ``time_function``."""
-    from .loads import LOAD_TYPES
-
     if not isinstance(d, dict) or "type" not in d:
         raise SceneError(f"{key}.type", "every load needs a 'type'")
     if d["type"] not in DYNAMIC_LOAD_TYPES:
@@ -251,8 +249,6 @@ _TIME_LOADS = Section("Loads of a dynamic stage", "A load of a dynamic stage is 
 
 
 def _effects():
-    from . import Effect
-
     return [Effect("dynamic_loads", "a dynamic stage's 'loads' with a 'time_function'", __name__,
                    "consistent nodal forces scaled in time; closed forms of Chopra (2012), Dynamics of Structures, "
                    "eqs. 3.1.6 and 4.3.2", "tests/effects/test_dynamic_loads.py", _describe, activate=_activate,

@@ -23,7 +23,7 @@ from ..errors import SceneError
 from ..keys import Section
 from ..keys import key as row
 from ..mesh.facets import FACET_TYPES, boundary_owners
-from .base import EffectRun, add_force
+from .base import Effect, EffectRun, add_force
 
 __all__ = ["normalize_section", "build", "Foundation", "Boundary", "wave_speeds", "dashpot_matrix", "describe",
            "DEFAULT_GROUP", "DEFAULT_BOTTOM", "DEFAULT_SIDES", "MOTIONS"]
@@ -672,8 +672,6 @@ _FOUNDATION = Section("[foundation]", "The rock under a dam (an element group of
 
 
 def _effects():
-    from . import Effect
-
     return [Effect("foundation", "[foundation] with mass = true", __name__,
                    "Lysmer & Kuhlemeyer 1969 (ASCE J. Eng. Mech. Div. 95(EM4)); Joyner & Chen 1975 (BSSA 65); "
                    "Nielsen 2006 (ABAQUS Users' Conf.); Lokke & Chopra 2018 (EESD 47)", "tests/effects/test_foundation.py",

@@ -18,6 +18,7 @@ from ..errors import SceneError
 from ..pulses import pulse_samples
 from ..records import RecordError
 from ..solvers.dynamic import GroundMotion, scheme_named
+from .base import Effect
 
 def _dynamic_stages(scene):
     return [st for st in scene["stages"] if st["type"] == "dynamic"]
@@ -112,10 +113,6 @@ def build_ground_motion(spec: dict, component: int, key: str, stage_dt: float, b
     processed (baseline, taper, band-pass, resampling, significant-duration trim, in the scene's order)
     and scaled as asked; its ``attrs`` hold the record's provenance with every step
     (``records.provenance_attrs``)."""
-    from .. import records as rec
-    from ..records import RecordError
-    from ..solvers.dynamic import GroundMotion
-
     try:
         src = spec["source"]
         if src == "record":
@@ -175,8 +172,6 @@ def _add_ground_motion(context, spec: dict, index: int, parts) -> None:
 
 
 def _effects():
-    from . import Effect
-
     return [
         Effect("static", "static stages only", __name__, "load and displacement control (solvers/static/stepping.py)",
                "tests/system/test_system.py", _static_only),

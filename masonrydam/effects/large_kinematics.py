@@ -9,6 +9,7 @@ blocks (:mod:`masonrydam.elements.continuum_large`) and joints whose frame turns
 """
 from __future__ import annotations
 
+from .base import Effect
 
 
 def _describe(scene: dict, model) -> list[str]:
@@ -22,8 +23,6 @@ def _describe(scene: dict, model) -> list[str]:
 
 
 def _effects():
-    from . import Effect
-
     return [Effect("large_kinematics", "[model] kinematics = \"large\"", __name__,
                    "total Lagrangian formulation (Bathe, Finite Element Procedures, 1996, sec. 6.2.3; Belytschko, Liu "
                    "& Moran 2000, sec. 4.9); co-rotational interface frame (Crisfield 1991, ch. 7)",

@@ -18,6 +18,7 @@ from ..errors import SceneError
 from ..mesh.facets import owner_centroids
 from ..mesh.sets import facet_set, node_set
 from ..units import quantity
+from .base import Effect
 
 
 def self_weight(model, gravity) -> np.ndarray:
@@ -190,8 +191,6 @@ def _add_displacement(context, stage, ld, key):
 
 
 def _effects():
-    from . import Effect
-
     ref = "consistent nodal forces (Zienkiewicz & Taylor, The Finite Element Method, vol. 1, ch. 6)"
     rows = [("displacement", "prescribed displacements (displacement control)", "load type 'displacement'"),
             ("nodal", "nodal forces", "load type 'nodal'"),

@@ -10,6 +10,7 @@ lines, the reference and the tests (:data:`EFFECTS`; docs/continuum_nonlinearity
 from __future__ import annotations
 
 from ..materials.continuum_laws import continuum_law
+from .base import Effect
 
 
 def _describe(scene: dict, model) -> list[str]:
@@ -29,8 +30,6 @@ def _describe(scene: dict, model) -> list[str]:
 
 
 def _effects():
-    from . import Effect
-
     return [Effect("plasticity", "[materials.<group>] law = \"von_mises\" | \"tresca\" | \"drucker_prager\" | "
                                  "\"mohr_coulomb\" (with viscosity: Perzyna)", __name__,
                    "implicit return mapping and consistent tangent (Simo & Hughes 1998, Computational Inelasticity; "

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
+from scipy.sparse.csgraph import connected_components
 
 from ...elements.quadrature import tensor_rule
 from ...elements.shapes import (ELEMENT_TYPES, facet_area_normal, facet_outward_sign, facet_quadrature, facet_rule,
@@ -276,7 +277,7 @@ def _pieces_3d(facet_type, coords, facets, level, axis, tol, reg):
 
 def _merge_coincident(P, tol):
     """Representative index of every point (coincident points, e.g. the two faces of a joint, merged)."""
-    from scipy.sparse.csgraph import connected_components
+    # scipy.spatial (0.1 s to import) only when an acoustic reservoir is built: keeps every run's start-up short
     from scipy.spatial import cKDTree
 
     rep = np.arange(len(P))

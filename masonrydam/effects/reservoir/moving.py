@@ -25,6 +25,9 @@ import scipy.sparse as sp
 
 from ...errors import SceneError
 from ...mesh.facets import boundary_owners
+from ...solvers.dynamic import AcousticStep
+from ..base import Effect
+from . import acoustic as ac
 from .added_mass import face_nodes, nodal_normals, westergaard_coefficient, westergaard_mass
 
 
@@ -77,8 +80,6 @@ class DynamicWater:
 
     # ------------------------------------------------------------------------------------------
     def _build_acoustic(self, a: dict, reservoir):
-        from . import acoustic as ac
-
         m, f = self.model, self.face
         length = a["length"] if a["length"] is not None else 3.0 * self.depth
         c = a["sound_speed"]
@@ -133,8 +134,6 @@ class DynamicWater:
         if self.acoustic is None or self.incompressible:
             return None
         if self._fluid_step is None:
-            from ...solvers.dynamic import AcousticStep
-
             A = self.acoustic
             self._fluid_step = AcousticStep(A.G, A.H, A.L, A.Q, A.B_face, A.B_bottom, self.density)
         return self._fluid_step
@@ -193,8 +192,6 @@ def describe(scene, model) -> list[str]:
 
 
 def _effects():
-    from .. import Effect
-
     return [Effect("dynamic_water", "[reservoir] dynamic = \"westergaard\" | \"acoustic\"", __name__,
                    "Westergaard 1933, Trans. ASCE 98; Kuo 1982, UCB/EERC-82/10; Zienkiewicz & Bettess 1978, IJNME 13; "
                    "Fenves & Chopra 1984, EESD 12", "tests/effects/test_added_mass.py, tests/effects/test_acoustic.py",

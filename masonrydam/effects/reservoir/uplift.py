@@ -14,10 +14,14 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from ...assembly.joint_lines import JointLines
 from ...checks import check_keys, choice, number, positive
 from ...elements.shapes import facet_quadrature
 from ...errors import SceneError
 from ...materials.joint_laws import RESULT_OPEN
+from ...mesh.model import INTERFACE_FACE_TYPE
+from ..base import Effect
+from .hydrostatics import region_points
 
 CRACKED = ("full_head", "unchanged", "none")
 #: uplift during the dynamic stages (the options of CADAM3D, Leclerc, Leger & Tinawi 2003, Adv. Eng. Softw.
@@ -58,8 +62,6 @@ class Uplift:
     scene key of the table (for errors)."""
 
     def __init__(self, spec: dict, model, unit_weight: float, vertical_axis: int, downstream, key: str):
-        from ...assembly.joint_lines import JointLines
-
         names = sorted({g.name for g in model.igroups})
         for j in spec["joints"]:
             if j not in names:
@@ -82,9 +84,6 @@ class Uplift:
         Sets ``self.matrix`` (n_dof, n_samples): nodal forces of a unit pressure at each sample (``N_a w
         n`` on the top face, minus that on the bottom face), and the samples' ``s``, ``elevation``,
         ``line``, ``strip`` and ``weight`` (m2)."""
-        from ...mesh.model import INTERFACE_FACE_TYPE
-        from .hydrostatics import region_points
-
         L, dim = self.lines, model.dim
         d = L.downstream
         up = np.zeros(dim)
@@ -270,8 +269,6 @@ def _describe_earthquake(scene, model) -> list[str]:
 
 
 def _effects():
-    from .. import Effect
-
     return [Effect("uplift", "[reservoir] uplift = { joints = [...] }", __name__,
                    "USBR Design of Small Dams (1987) sec. 5.7; USACE EM 1110-2-2200 (1995) sec. 3-3, 4-4; FERC "
                    "Engineering Guidelines ch. 3 (2016)", "tests/effects/test_reservoir.py", describe),

@@ -37,7 +37,9 @@ from ...keys import key as row
 from ...mesh.facets import owner_centroids
 from ...materials.joint_laws import RESULT_OPEN, RESULT_SLIP
 from ...units import quantity
+from ..base import Effect
 from . import uplift as _uplift
+from .hydrostatics import facet_pressure_forces
 
 #: default facet sets (the names of the dam generators)
 DEFAULT_FACE = "upstream_face"
@@ -216,8 +218,6 @@ class Reservoir:
     def face_force(self, level: float, tail: float | None, silt: float | None) -> np.ndarray:
         """Nodal forces (n_dof,) N of the water at ``level``, the tailwater at ``tail`` and the silt at
         ``silt`` (m; None: none)."""
-        from .hydrostatics import facet_pressure_forces
-
         m = self.model
         f = np.zeros(m.n_dof)
         kw = dict(vertical_axis=self.vertical, thickness=self.thickness)
@@ -375,7 +375,8 @@ def _finish_stage(context, stage):
 
 
 def _activate(context):
-    from .run import activate  # (run.py imports the classes of this module)
+    # (run.py imports this module: a top-level import would be a cycle)
+    from .run import activate
 
     return activate(context)
 
@@ -423,8 +424,6 @@ _RESERVOIR = Section("[reservoir]", "Water on a dam. A static stage applies it w
 
 
 def _effects():
-    from .. import Effect
-
     return [Effect("reservoir", "[reservoir] with a { type = \"reservoir\" } load in a static stage", __name__,
                    "hydrostatics (White, Fluid Mechanics, ch. 2); USBR Design of Small Dams (1987) sec. 5.6; "
                    "USACE EM 1110-2-2200 (1995) ch. 3", "tests/effects/test_reservoir.py, tests/effects/test_hydrostatics.py",

@@ -22,6 +22,7 @@ hook                                   what the effect adds
 :meth:`EffectRun.state_force`          forces that follow the committed joint states during shaking
 :meth:`EffectRun.dynamic_terms`        dashpots, forces in time, coupled fields of a dynamic stage
 :meth:`EffectRun.modal_analysis`       a modal analysis of its own (coupled fluid-structure modes)
+:meth:`EffectRun.summary_lines`        its lines in the printed summary of a run
 :meth:`EffectRun.diagnosis`            what the effect says about a stage that found no equilibrium
 =====================================  ============================================================
 
@@ -124,6 +125,10 @@ class EffectRun:
         one. ``mass``: a function () -> the structure's :class:`~masonrydam.assembly.mass.MassMatrix` without
         this effect's terms (built only when called)."""
         return None
+
+    def summary_lines(self, ds) -> list[str]:
+        """Lines of the run's printed summary from the result dataset ``ds`` (each ``"name       : text"``)."""
+        return []
 
     def diagnosis(self) -> tuple[str, str] | None:
         """``(kind, text)``: what the effect says about the last converged state of a stage that found no

@@ -74,7 +74,7 @@ def run(scene, output: str | os.PathLike | None = None, progress: bool = False, 
         os.unlink(work)
     if summary:
         print_summary(sc, job.mesh, job.model, job.effect_lines, job.solver, stats, target, ds,
-                      dyn_solvers=job.dyn_solvers)
+                      dyn_solvers=job.dyn_solvers, effects=job.effects)
     for text in filter(None, (stats.get("energy_warnings", "") + " | " + stats.get("joint_slip_warnings", "")).split(" | ")):
         warnings.warn(text, AccuracyWarning, stacklevel=2)
     return ds

@@ -112,8 +112,23 @@ def _columns_note(columns, seconds, store_full=0):
     return f"; {columns} flexibility columns computed when first needed ({seconds:.3g} s{full})"
 
 
-def print_summary(sc, mesh, model, eff, solver, stats, path, ds, file=None, dyn_solvers=()):
-    file = file or sys.stdout
+def print_summary(sc, mesh, model, eff, solver, stats, path, ds, file=None, dyn_solvers=(), effects=()):
+    """Print the one-screen summary of a run: the model and what it simulates, the static stages and the
+    solver, the dynamic stages, the end state (joints, limit, modes, what the active ``effects`` report) and
+    the wall time. ``eff``: the lines of ``simulated_effects``; ``stats``: :func:`stats_attrs`; ``ds``: the
+    result dataset; ``path``: where it was kept (None: not kept)."""
+    w = 72
+    lines = (["=" * w, f"masonrydam {__version__} | scene '{sc.name}' ({sc.source})", "-" * w]
+             + _model_lines(mesh, model, eff) + _static_lines(solver, stats, model)
+             + _dynamic_lines(dyn_solvers, stats, model) + _end_lines(ds, stats, effects))
+    lines.append(f"wall time  : {stats['total_wall_time_s']:.2f} s (solve {stats['solve_wall_time_s']:.2f} s)")
+    if path:
+        lines.append(f"results    : {path}")
+    lines.append("=" * w)
+    print("\n".join(lines), file=file or sys.stdout)
+
+
+def _model_lines(mesh, model, eff) -> list[str]:
     n_ip = sum(g.n_elem * g.nip for g in model.igroups)
     types = {}
     for b in mesh.blocks:
@@ -121,14 +136,16 @@ def print_summary(sc, mesh, model, eff, solver, stats, path, ds, file=None, dyn_
     jsets = {}
     for g in model.igroups:
         jsets[g.name] = jsets.get(g.name, 0) + g.n_elem
-    w = 72
-    lines = ["=" * w, f"masonrydam {__version__} | scene '{sc.name}' ({sc.source})", "-" * w,
-             f"model      : {mesh.dim}D, {model.n_nodes} nodes, {model.n_dof} DOFs, "
+    lines = [f"model      : {mesh.dim}D, {model.n_nodes} nodes, {model.n_dof} DOFs, "
              + ", ".join(f"{n} {t}" for t, n in sorted(types.items())),
              f"joints     : " + (", ".join(f"{k} {v} el." for k, v in sorted(jsets.items())) or "none")
              + f" ({n_ip} integration points)",
              "effects    : " + eff[0]]
-    lines += ["             " + e for e in eff[1:]]
+    return lines + ["             " + e for e in eff[1:]]
+
+
+def _static_lines(solver, stats, model) -> list[str]:
+    lines = []
     for ps in solver.stats.per_stage:
         lines.append(f"stage      : {ps['stage']}: {ps['steps']} steps, {ps['iterations']} Newton iterations, "
                      f"{ps['step_cuts']} step cuts"
@@ -150,6 +167,11 @@ def print_summary(sc, mesh, model, eff, solver, stats, path, ds, file=None, dyn_
                      f"there in {stats['joint_space_iterations']} iterations, {stats['joint_space_splits']} cut "
                      "where it did not converge"
                      + _columns_note(stats['joint_space_flexibility_columns'], stats['joint_space_flexibility_s']))
+    return lines
+
+
+def _dynamic_lines(dyn_solvers, stats, model) -> list[str]:
+    lines = []
     for dsol in dyn_solvers:
         for p in dsol.stats.per_stage:
             crit = f", dt_crit {p['dt_critical']:.3g} s" if p.get("dt_critical") else ""
@@ -187,6 +209,11 @@ def print_summary(sc, mesh, model, eff, solver, stats, path, ds, file=None, dyn_
                      f"({100 * stats['energy_error_relative']:.3g} % of the largest energy term); numerical "
                      f"dissipation {100 * stats['energy_numerical_relative']:.3g} %, contact events "
                      f"{100 * stats['energy_contact_relative']:.3g} %")
+    return lines
+
+
+def _end_lines(ds, stats, effects) -> list[str]:
+    lines = []
     if "joint_state" in ds and ds.sizes.get("joint_point", 0):
         last = ds.joint_state.isel(step=-1).values
         crushed = int((last == 3).sum())
@@ -203,18 +230,9 @@ def print_summary(sc, mesh, model, eff, solver, stats, path, ds, file=None, dyn_
             r = ds.effective_mass_ratio.values[k]
             lines.append(f"             {k + 1:4d}  {float(ds.frequency[k]):8.4g}  {float(ds.period[k]):7.4g}  "
                          + "  ".join(f"{100 * v:6.2f}" for v in r))
-    if "section" in ds.dims and ds.sizes.get("step", 0):
-        last = ds.isel(step=-1)
-        sf = last.sliding_safety_factor.values
-        k = int(np.nanargmin(np.where(np.isfinite(sf), sf, np.inf)))
-        lines.append(f"stability  : {ds.sizes['section']} joint lines; lowest sliding factor {sf[k]:.3g} on "
-                     f"'{str(last.section.values[k])}', largest cracked ratio "
-                     f"{float(np.nanmax(last.cracked_length_ratio.values)):.3g} (masonrydam assess FILE)")
+    for effect in effects:
+        lines += effect.summary_lines(ds)
     u = ds.displacement.isel(step=-1)
     umax = float(np.abs(u).max())
     lines.append(f"max |u|    : {umax:.4g} m")
-    lines.append(f"wall time  : {stats['total_wall_time_s']:.2f} s (solve {stats['solve_wall_time_s']:.2f} s)")
-    if path:
-        lines.append(f"results    : {path}")
-    lines.append("=" * w)
-    print("\n".join(lines), file=file)
+    return lines

@@ -175,6 +175,18 @@ class ReservoirRun(EffectRun):
         return coupled_modal_analysis(model, stage.modes, self.moving.fluid_step(), lumped=stage.lumped, u=u,
                                       mass=mass())
 
+    def summary_lines(self, ds) -> list[str]:
+        """The joint line with the lowest sliding factor and the largest cracked ratio at the last step."""
+        lines = []
+        if "section" in ds.dims and ds.sizes.get("step", 0):
+            last = ds.isel(step=-1)
+            sf = last.sliding_safety_factor.values
+            k = int(np.nanargmin(np.where(np.isfinite(sf), sf, np.inf)))
+            lines.append(f"stability  : {ds.sizes['section']} joint lines; lowest sliding factor {sf[k]:.3g} on "
+                         f"'{str(last.section.values[k])}', largest cracked ratio "
+                         f"{float(np.nanmax(last.cracked_length_ratio.values)):.3g} (masonrydam assess FILE)")
+        return lines
+
     def extra(self, st, lam) -> dict:
         """Step values for the writer; ``st``/``lam``: the static stage and load factor (None: a dynamic
         step, which keeps the water of the last static step)."""

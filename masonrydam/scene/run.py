@@ -20,9 +20,9 @@ import scipy.sparse as sp
 import xarray as xr
 
 from ..assembly.mass import MassMatrix
+from ..checks import check_output_path
 from ..effects import RunContext, activate
 from ..errors import AccuracyWarning, ConvergenceError, MechanismError, OutputError, RunStopped
-from ..checks import check_output_path
 from ..results.files import claim_working_file, partial_path, settle_partial
 from ..results.writer import OutputOptions, ResultWriter
 from ..solvers.dynamic import DynamicSolver, DynamicStage, DynamicTerms, ModalStage, modal_analysis

@@ -29,11 +29,19 @@ the default scene takes 3.4x longer with AMG.
 """
 from __future__ import annotations
 
+import ctypes
+import glob
+import os
+import sys
+
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from .common import SingularMatrix  # noqa: F401  (raised here; importable from this module too)
+from .iterative import AMGSolver, is_symmetric
+from .ldlt_kernels import (ldlt_solve_block, ldlt_solve_block_supernodal, ldlt_solve_vector, supernode_panels,
+                           supernode_partition)
 
 LINEAR_SOLVERS = ("auto", "pardiso", "superlu", "amg")
 DIRECT_SOLVERS = ("pardiso", "superlu")
@@ -57,10 +65,6 @@ def _point_pypardiso_at_mkl() -> None:
     it, ``sys.prefix/lib``: on import pypardiso otherwise runs ``ctypes.util.find_library`` and a
     recursive glob over ``sys.prefix/lib*``, site-packages included, which took 0.24 s of the default
     scene's start-up (``python -X importtime``)."""
-    import glob
-    import os
-    import sys
-
     if "PYPARDISO_MKL_RT" in os.environ:
         return
     found = sorted(glob.glob(os.path.join(sys.prefix, "lib", "libmkl_rt.so*")), key=len)
@@ -71,9 +75,8 @@ def _point_pypardiso_at_mkl() -> None:
 def _new_pardiso(mtype: int = 11):
     """A PyPardisoSolver; the MKL library path found by the first one is reused (finding it costs
     about 0.15 s per solver otherwise)."""
-    import os
-
     _point_pypardiso_at_mkl()
+    # an optional, platform-bound dependency (MKL), loaded once the MKL path is set: 0.4 s, not at import
     import pypardiso
 
     ps = pypardiso.PyPardisoSolver(mtype=mtype)
@@ -81,8 +84,6 @@ def _new_pardiso(mtype: int = 11):
     # analysis amplifies last-bit differences into different slip/open paths. Kernels and runs
     # must be deterministic (docs/architecture.md).
     try:
-        import ctypes
-
         ps.libmkl.MKL_Set_Num_Threads(ctypes.c_int(1))
     except AttributeError:  # pragma: no cover - very old MKL
         pass
@@ -110,6 +111,7 @@ def _pyamg_available() -> bool:
     global _PYAMG_OK
     if _PYAMG_OK is None:
         try:
+            # whether pyamg is installed, asked only where a 3D model might take the AMG solver
             import pyamg  # noqa: F401
 
             _PYAMG_OK = True
@@ -154,8 +156,6 @@ def make_solver(K: sp.csr_matrix, backend: str = "auto", near_nullspace: np.ndar
         dim = {3: 2, 6: 3}.get(np.shape(near_nullspace)[1] if np.ndim(near_nullspace) == 2 else 0)
     name = resolve_backend(backend, n_dof=K.shape[0], dim=dim if near_nullspace is not None else None)
     if name == "amg":
-        from .iterative import AMGSolver
-
         return AMGSolver(K, near_nullspace, residual_check, dof_coords=dof_coords, dof_nodes=dof_nodes, **amg_options)
     return Factorization(K, name, residual_check)
 
@@ -309,9 +309,6 @@ class SymmetricFactorization:
     backend = "ldlt"
 
     def __init__(self, K: sp.csr_matrix, residual_check: float = 1e-6):
-        from .iterative import is_symmetric
-        from .ldlt_kernels import ldlt_solve_block, ldlt_solve_vector
-
         self._vector, self._block = ldlt_solve_vector, ldlt_solve_block
         self.K = K
         self.residual_check = residual_check
@@ -350,8 +347,6 @@ class SymmetricFactorization:
             x = np.empty_like(b)
             st = self._vector(self._Lp, self._Li, self._Lx, self._d, self._perm, np.ascontiguousarray(b), x, self._w)
         elif self.nnz_factor >= SUPERNODAL_MIN_FACTOR:
-            from .ldlt_kernels import (ldlt_solve_block_supernodal, supernode_panels, supernode_partition)
-
             if self._supernodes is None:
                 starts = supernode_partition(self._Lp, self._Li, SUPERNODE_MAX_WIDTH)
                 self._supernodes = (starts, *supernode_panels(self._Lp, self._Lx, starts))

@@ -20,6 +20,7 @@ import numpy as np
 
 from ...errors import ConvergenceError, NumericalError
 from ..linear.direct import SingularMatrix
+from .dissipation import JointDissipation
 
 #: an arc-length stage may take this many times its nominal steps before it gives up
 MAX_STEPS_PER_NOMINAL = 20
@@ -303,8 +304,6 @@ class ArcLengthStage:
         a dissipation step fails, a step under the stage's own control is tried once (accepted unless it
         jumps), then the target is halved; below its least value the stage's own control takes over with its
         own cuts, and where that fails too the stage ends with an error."""
-        from .dissipation import JointDissipation
-
         s, m, free, st = self.solver.s, self.m, self.free, self.st
         meter = JointDissipation(m, f"stage '{st.name}'")
         u0, _ = self._state(self.u[free], self.lam)

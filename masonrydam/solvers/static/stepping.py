@@ -33,6 +33,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
+from threadpoolctl import threadpool_limits
 
 from ...assembly.elastic import elastic_tangent_data
 from ...errors import ConvergenceError, MechanismError, NumericalError
@@ -44,6 +45,7 @@ from ..linear.iterative import rigid_body_modes
 from ..linear.direct import SingularMatrix, SymmetricFactorization, make_solver, resolve_backend
 from ..newton import (ConvergenceTest, IterationFailed, StepCutting, force_scale, newton_iterations,
                       secant_line_search)
+from .arc_length import ArcLengthStage
 
 #: tangent factor of open joint points in ordinary Newton iterations: a tiny stiffness in the
 #: tangent only (tractions stay zero) so that a block resting on a single contact point does not make
@@ -490,8 +492,6 @@ class StaticSolver:
                     direction_dlam=None):
         """The stage from ``lam`` under arc-length control (:class:`~.arc_length.ArcLengthStage`); returns
         (u, lam) where it ended (lam >= 1: the stage is done). Every converged step is recorded."""
-        from .arc_length import ArcLengthStage
-
         def record(u_now, lam_now, f_int, f_ext):
             stage_stats["steps"] += 1
             self.on_step(si, st, lam_now, u_now, f_int, f_ext)
@@ -584,8 +584,6 @@ class StaticSolver:
 
     # -- stages -----------------------------------------------------------------------------------
     def run(self, stages: list[StaticStage], u0: np.ndarray | None = None):
-        from threadpoolctl import threadpool_limits
-
         t0 = time.perf_counter()
         try:
             # one BLAS thread, as in the dynamic solver: the dense LU of the joint-space iteration

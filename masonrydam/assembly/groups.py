@@ -12,6 +12,9 @@ import numpy as np
 
 from ..elements import continuum as ck
 from ..elements import interface as ik
+from ..elements.continuum_large import continuum_cauchy_stress, continuum_large_evaluate
+from ..elements.continuum_plastic import continuum_plastic_evaluate
+from ..elements.interface_large import interface_large_evaluate
 from ..elements.shapes import shape_functions
 from ..errors import STATUS_BAD_GEOMETRY, STATUS_BAD_JACOBIAN, STATUS_NAN, MeshError, NumericalError
 from ..materials.continuum_laws import continuum_law
@@ -131,14 +134,10 @@ class ContinuumGroup:
         committed state (trial state written), :mod:`masonrydam.elements.continuum_plastic`; large
         kinematics, :mod:`masonrydam.elements.continuum_large` (``energy`` written too)."""
         if self.large:
-            from ..elements.continuum_large import continuum_large_evaluate
-
             st = continuum_large_evaluate(coords, self.conn, self.dN, self.weights, self.D_table, self.material_index,
                                           self.thickness, u, want_tangent, self.fe, self.ke, self.energy, self.info)
             raise_for_status(st, self.info, self.name, "large-displacement element")
             return
-        from ..elements.continuum_plastic import continuum_plastic_evaluate
-
         st = continuum_plastic_evaluate(coords, self.conn, self.dN, self.weights, self.thickness, u, self.law_params,
                                         self.param_index, self.state_committed, self.state_trial, dt, want_tangent,
                                         self.continuum_law.kernel_id, self.fe, self.ke, self.info)
@@ -182,8 +181,6 @@ class ContinuumGroup:
             return self.state_trial[:, cols].reshape(self.n_elem, len(self.weights), ns).copy()
         out = np.empty((self.n_elem, len(self.weights), ns))
         if self.large:  # Cauchy stress of the current configuration
-            from ..elements.continuum_large import continuum_cauchy_stress
-
             st = continuum_cauchy_stress(coords, self.conn, self.dN, self.D_table, self.material_index, u, out,
                                          self.info)
             raise_for_status(st, self.info, self.name, "stress (inverted deformation, det F <= 0)")
@@ -274,8 +271,6 @@ class InterfaceGroup:
                 self.param_index, self.state_base, self.state_trial, self.delta, self.traction, self.fe, self.ke,
                 want_tangent, self.info)
         if self.kinematics == "large":
-            from ..elements.interface_large import interface_large_evaluate
-
             st = interface_large_evaluate(*args, 0.0 if self.frame_surface == "bottom" else 0.5, self.law_id)
         else:
             st = ik.interface_evaluate(*args, self.law_id)

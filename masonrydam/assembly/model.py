@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from ..elements.shapes import ELEMENT_TYPES, reference_nodes, shape_functions
 from ..errors import MeshError
 from .dofmap import DofMap
 from .groups import ContinuumGroup, InterfaceGroup
@@ -41,8 +42,6 @@ def check_corners(coords: np.ndarray, group: ContinuumGroup, rtol: float = 1e-10
     MeshError
         Naming ``group.name`` and the indices (rows of ``group.conn``) of all failing elements.
     """
-    from ..elements.shapes import ELEMENT_TYPES, reference_nodes, shape_functions
-
     et = ELEMENT_TYPES[group.type]
     nc = et.corner_nodes
     x = coords[group.conn[:, :nc]]  # (ne, nc, dim)

@@ -62,6 +62,7 @@ def _gmsh_physical_names(path: Path) -> dict[tuple[int, int], str]:
 
 
 def read_mesh(path: str | Path, joints: list[str], dim: int = 2, key: str = "mesh.file") -> Mesh:
+    # meshio (0.1 s to import) only for a scene with a mesh file: keeps a generated scene's start-up short
     import meshio
 
     path = Path(path)
@@ -142,6 +143,7 @@ def read_mesh(path: str | Path, joints: list[str], dim: int = 2, key: str = "mes
 def to_meshio(mesh: Mesh, point_data=None, cell_data=None):
     """A ``meshio.Mesh`` for ParaView with one cell block per continuum group and per joint set
     (interfaces as degenerate cells; see the module docstring)."""
+    # meshio (0.1 s to import) only for exports: keeps 'masonrydam run' start-up short
     import meshio
 
     cells = []
@@ -187,6 +189,7 @@ def to_gmsh(mesh: Mesh):
     (read back, it holds every copy) with a warning. Raises :class:`MeshError` for joints of non-zero
     thickness, a facet set named like a joint set, or a name gmsh cannot hold.
     """
+    # meshio (0.1 s to import) only for exports: keeps 'masonrydam run' start-up short
     import meshio
 
     conformal, faces = remove_interfaces(mesh)
@@ -237,10 +240,12 @@ def to_gmsh(mesh: Mesh):
 
 def writable_extensions() -> list[str]:
     """File extensions that meshio writes (from its registry), sorted."""
+    # meshio (0.1 s to import) only for exports: keeps 'masonrydam run' start-up short
     import meshio
 
     registry = getattr(meshio, "extension_to_filetypes", None)
     if registry is None:
+        # (a meshio that does not export its registry at the top keeps it in meshio._helpers)
         from meshio import _helpers as registry_module
 
         registry = registry_module.extension_to_filetypes

@@ -51,7 +51,11 @@ def build_stages(scene: dict, mesh: Mesh, model: Model, base_dir: Path | None = 
         loads = StaticStageLoads(i, st, np.zeros(model.n_dof), np.zeros(model.n_dof, dtype=bool),
                                  np.zeros(model.n_dof), supports, carried)
         for j, ld in enumerate(st["loads"]):
-            builders[ld["type"]](context, loads, ld, f"stages[{i}].loads[{j}]")
+            key = f"stages[{i}].loads[{j}]"
+            if ld["type"] not in builders:  # a registered load type whose effect gives no stage_loads
+                raise SceneError(f"{key}.type", f"load type {ld['type']!r} has no effect that applies it in a static "
+                                                f"stage (types applied: {sorted(builders)})")
+            builders[ld["type"]](context, loads, ld, key)
         finish_static_stage(context, loads)
         viscous = [g.name for g in model.cgroups if g.viscous]
         if viscous and "duration" not in st:

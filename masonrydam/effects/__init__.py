@@ -20,7 +20,8 @@ from ..errors import SceneError
 from .base import DynamicStageParts, Effect, EffectRun, ModelContext, RunContext, StaticStageLoads, add_force
 
 __all__ = ["DynamicStageParts", "Effect", "EffectRun", "ModelContext", "RunContext", "StaticStageLoads", "activate",
-           "add_force", "effect_reference", "effect_sections_meaning", "load_types", "normalize_dynamic_load", "register", "registry", "sections", "simulated", "unregister"]
+           "add_force", "check_scene", "effect_reference", "effect_sections_meaning", "load_types",
+           "normalize_dynamic_load", "register", "registry", "sections", "simulated", "unregister"]
 
 #: effects registered from outside the package (:func:`register`), after the built-in ones
 _REGISTERED: list[Effect] = []
@@ -128,6 +129,13 @@ def effect_sections_meaning() -> dict:
     for e in registry().values():
         out.update(e.section_meanings)
     return out
+
+
+def check_scene(stages: list, sections: dict) -> None:
+    """Every effect's checks across the normalised scene (:attr:`Effect.check_scene`), in registry order."""
+    for e in registry().values():
+        if e.check_scene is not None:
+            e.check_scene(stages, sections)
 
 
 def simulated(scene: dict, model) -> list[str]:

@@ -196,7 +196,10 @@ class Effect:
     for the effect that owns them; scene_keys: the :class:`~masonrydam.keys.Section` tables of its scene keys
     for the scene reference (docs/scene.md); scene_keys_place: where they go there (``"section"``: with the
     top-level sections at the end, ``"dynamic_stage"``: with the keys of dynamic stages); section_meanings:
-    one line per top-level section it owns, for the reference's table of sections."""
+    one line per top-level section it owns, for the reference's table of sections; check_scene:
+    ``(stages, sections) -> None``, checks across the normalised scene (the normalised stages, and the
+    effects' sections by name) that no one part can make, e.g. a section needs a load that applies it:
+    a SceneError naming the key."""
 
     name: str
     asked_by: str
@@ -214,3 +217,4 @@ class Effect:
     scene_keys: tuple = ()
     scene_keys_place: str = "section"
     section_meanings: dict = field(default_factory=dict)
+    check_scene: Callable | None = None

@@ -27,7 +27,7 @@ from ..checks import positive as _positive
 from ..checks import seconds as _time
 from ..checks import vector as _vector
 from ..units import quantity
-from ..effects import load_types, normalize_dynamic_load, sections
+from ..effects import check_scene, load_types, normalize_dynamic_load, sections
 from ..assembly.groups import JOINT_FRAMES, KINEMATICS
 from ..materials.continuum_laws import CONTINUUM_LAWS, material_law
 from ..materials.joint_laws import DEFAULT_JOINT_LAW, JOINT_KEYS, joint_law, joint_laws
@@ -543,30 +543,6 @@ def _dynamic_stage(s, key, dim, index):
     return out
 
 
-def _check_reservoir_loads(stages, parts):
-    """A reservoir load needs the [reservoir] section, and the section a stage that applies it; one
-    reservoir load per stage."""
-    used = False
-    for i, st in enumerate(stages):
-        if st["type"] != "static":
-            continue
-        found = [j for j, ld in enumerate(st["loads"]) if ld["type"] == "reservoir"]
-        if found and "reservoir" not in parts:
-            raise SceneError(f"stages[{i}].loads[{found[0]}].type", "a reservoir load needs a [reservoir] section "
-                                                                    "(level, density, face, ...)")
-        if len(found) > 1:
-            raise SceneError(f"stages[{i}].loads[{found[1]}]", "one reservoir load per stage (give the level "
-                                                               "the stage raises the water to)")
-        used = used or bool(found)
-    if "reservoir" in parts and not used:
-        raise SceneError("reservoir", "no static stage applies the water: add { type = \"reservoir\" } to the loads "
-                                      "of a stage")
-    dyn = parts.get("reservoir", {}).get("dynamic", "none") if isinstance(parts.get("reservoir"), dict) else "none"
-    if dyn != "none" and not any(st["type"] in ("dynamic", "modal") for st in stages):
-        raise SceneError("reservoir.dynamic", f"\"{dyn}\" moves the water with the dam in dynamic and modal stages; "
-                                              "the scene has neither (remove the key, or add a stage)")
-
-
 def _output_options(d: dict) -> dict:
     """How steps reach the file (:class:`~masonrydam.results.writer.OutputOptions`)."""
     default = OutputOptions()
@@ -659,7 +635,7 @@ def normalize(raw: dict) -> dict:
             raise SceneError(f"stages[{j}].output", f"selects other nodes or joints than stages[{i}].output; the "
                                                     "result file has one node and joint selection for all stages")
     effect_parts = {name: norm(raw[name], model) for name, norm in effect_sections.items() if name in raw}
-    _check_reservoir_loads(st, effect_parts)
+    check_scene(st, effect_parts)
     out_raw = raw.get("output", {})
     _check_keys(out_raw, {"nodes", "joints", "precision", "compression", "buffer_steps", "flush_seconds", "stress"},
                 "output")

@@ -334,6 +334,30 @@ def describe(scene, model) -> list[str]:
     return out
 
 
+def _check_scene(stages, parts):
+    """A reservoir load needs the [reservoir] section, and the section a stage that applies it; one
+    reservoir load per stage."""
+    used = False
+    for i, st in enumerate(stages):
+        if st["type"] != "static":
+            continue
+        found = [j for j, ld in enumerate(st["loads"]) if ld["type"] == "reservoir"]
+        if found and "reservoir" not in parts:
+            raise SceneError(f"stages[{i}].loads[{found[0]}].type", "a reservoir load needs a [reservoir] section "
+                                                                    "(level, density, face, ...)")
+        if len(found) > 1:
+            raise SceneError(f"stages[{i}].loads[{found[1]}]", "one reservoir load per stage (give the level "
+                                                               "the stage raises the water to)")
+        used = used or bool(found)
+    if "reservoir" in parts and not used:
+        raise SceneError("reservoir", "no static stage applies the water: add { type = \"reservoir\" } to the loads "
+                                      "of a stage")
+    dyn = parts.get("reservoir", {}).get("dynamic", "none") if isinstance(parts.get("reservoir"), dict) else "none"
+    if dyn != "none" and not any(st["type"] in ("dynamic", "modal") for st in stages):
+        raise SceneError("reservoir.dynamic", f"\"{dyn}\" moves the water with the dam in dynamic and modal stages; "
+                                              "the scene has neither (remove the key, or add a stage)")
+
+
 def _reservoir(context, stage) -> "Reservoir":
     """The run's :class:`Reservoir` (built once, kept with the stages' carried values)."""
     if "reservoir" not in stage.carried:
@@ -428,7 +452,7 @@ def _effects():
                    "hydrostatics (White, Fluid Mechanics, ch. 2); USBR Design of Small Dams (1987) sec. 5.6; "
                    "USACE EM 1110-2-2200 (1995) ch. 3", "tests/effects/test_reservoir.py, tests/effects/test_hydrostatics.py",
                    describe, activate=_activate, stage_loads={"reservoir": _add_reservoir_load},
-                   finish_stage=_finish_stage, scene_keys=(_RESERVOIR,),
+                   finish_stage=_finish_stage, check_scene=_check_scene, scene_keys=(_RESERVOIR,),
                    section_meanings={"reservoir": "water on a dam: reservoir, tailwater, silt, uplift, water in "
                                                   "earthquakes"})]
 

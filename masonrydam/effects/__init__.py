@@ -93,28 +93,32 @@ def stage_load_builders() -> dict[str, Callable]:
     return out
 
 
+def _hooks(field_name: str) -> list[Callable]:
+    """The given hooks ``field_name`` (a callable field of :class:`Effect`) of the registered effects, in
+    registry order."""
+    return [hook for hook in (getattr(e, field_name) for e in registry().values()) if hook is not None]
+
+
 def finish_static_stage(context: ModelContext, stage_loads: StaticStageLoads) -> None:
     """Let every effect finish a static stage's loads (:attr:`Effect.finish_stage`), in registry order."""
-    for e in registry().values():
-        if e.finish_stage is not None:
-            e.finish_stage(context, stage_loads)
+    for hook in _hooks("finish_stage"):
+        hook(context, stage_loads)
 
 
 def build_dynamic_stage(context: ModelContext, spec: dict, index: int, parts: DynamicStageParts) -> None:
     """Let every effect add its part to a dynamic stage being built (:attr:`Effect.dynamic_stage`): ground
     motions, forces in time."""
-    for e in registry().values():
-        if e.dynamic_stage is not None:
-            e.dynamic_stage(context, spec, index, parts)
+    for hook in _hooks("dynamic_stage"):
+        hook(context, spec, index, parts)
 
 
 def normalize_dynamic_load(raw, key: str, dim: int) -> dict:
     """One entry of a dynamic stage's ``loads``, normalised by the effect that owns them
     (:attr:`Effect.dynamic_loads`)."""
-    owners = [e for e in registry().values() if e.dynamic_loads is not None]
+    owners = _hooks("dynamic_loads")
     if not owners:
         raise SceneError(key, "no registered effect takes loads in dynamic stages")
-    return owners[0].dynamic_loads(raw, key, dim)
+    return owners[0](raw, key, dim)
 
 
 def effect_reference(place: str) -> tuple:
@@ -133,9 +137,8 @@ def effect_sections_meaning() -> dict:
 
 def check_scene(stages: list, sections: dict) -> None:
     """Every effect's checks across the normalised scene (:attr:`Effect.check_scene`), in registry order."""
-    for e in registry().values():
-        if e.check_scene is not None:
-            e.check_scene(stages, sections)
+    for hook in _hooks("check_scene"):
+        hook(stages, sections)
 
 
 def simulated(scene: dict, model) -> list[str]:

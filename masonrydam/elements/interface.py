@@ -223,7 +223,7 @@ def local_frame(xm, dN, g, dim, R, size):
 def add_point_tangent(ke_out, e, N, g, ns, dim, ndof_half, Cg):
     """Add the tangent of point ``g``, ``Cg`` (dim, dim) in global axes times the point's weight, to the
     element tangent ``ke_out[e]`` (2 ndof_half, 2 ndof_half): ``+-N_a N_b Cg`` on the bottom/top blocks
-    (relative displacement = top minus bottom). Shared by the fused and the generic interface kernels."""
+    (relative displacement = top minus bottom)."""
     for a in range(ns):
         Na = N[g, a]
         if Na == 0.0:
@@ -241,6 +241,39 @@ def add_point_tangent(ke_out, e, N, g, ns, dim, ndof_half, Cg):
                     ke_out[e, ra, ndof_half + cb] -= v
                     ke_out[e, ndof_half + ra, cb] -= v
                     ke_out[e, ndof_half + ra, ndof_half + cb] += v
+
+
+@njit(cache=True, inline="always")
+def add_point(fe_out, ke_out, e, N, g, ns, dim, ndof_half, R, t, C, jwh, want_tangent, tg, RC, Cg):
+    """Add integration point ``g`` to element ``e``: the force ``-+N_a R^T t jwh`` on the bottom/top nodes and,
+    with ``want_tangent``, the tangent ``R^T C R jwh`` (:func:`add_point_tangent`). ``R`` (dim, dim) the local
+    frame (rows: tangent(s), normal), ``t`` (dim,) the local traction (Pa), ``C`` (dim, dim) its tangent (Pa/m),
+    ``jwh`` the point's weight (j w h); ``tg`` (dim,), ``RC`` and ``Cg`` (dim, dim) scratch. Shared by the fused
+    and the generic interface kernels (seed eqs. 7-10)."""
+    for k in range(dim):  # global traction R^T t
+        s = 0.0
+        for r in range(dim):
+            s += R[r, k] * t[r]
+        tg[k] = s * jwh
+    for a in range(ns):
+        Na = N[g, a]
+        for k in range(dim):
+            fe_out[e, a * dim + k] -= Na * tg[k]
+            fe_out[e, ndof_half + a * dim + k] += Na * tg[k]
+    if want_tangent:  # Cg = R^T C R * jwh
+        for k in range(dim):
+            for r in range(dim):
+                s = 0.0
+                for q in range(dim):
+                    s += R[q, k] * C[q, r]
+                RC[k, r] = s
+        for k in range(dim):
+            for m in range(dim):
+                s = 0.0
+                for r in range(dim):
+                    s += RC[k, r] * R[r, m]
+                Cg[k, m] = s * jwh
+        add_point_tangent(ke_out, e, N, g, ns, dim, ndof_half, Cg)
 
 
 @njit(cache=True, inline="always")
@@ -399,33 +432,8 @@ def interface_evaluate(
                 return status
 
             jwh = j * weights[g] * h
-            # global traction R^T t
-            for k in range(dim):
-                s = 0.0
-                for r in range(dim):
-                    s += R[r, k] * traction_out[e, g, r]
-                tg[k] = s * jwh
-            for a in range(ns):
-                Na = N[g, a]
-                for k in range(dim):
-                    fe_out[e, a * dim + k] -= Na * tg[k]
-                    fe_out[e, ndof_half + a * dim + k] += Na * tg[k]
-
-            if want_tangent:
-                # Cg = R^T C R * jwh
-                for k in range(dim):
-                    for r in range(dim):
-                        s = 0.0
-                        for q in range(dim):
-                            s += R[q, k] * C[q, r]
-                        RC[k, r] = s
-                for k in range(dim):
-                    for m in range(dim):
-                        s = 0.0
-                        for r in range(dim):
-                            s += RC[k, r] * R[r, m]
-                        Cg[k, m] = s * jwh
-                add_point_tangent(ke_out, e, N, g, ns, dim, ndof_half, Cg)
+            add_point(fe_out, ke_out, e, N, g, ns, dim, ndof_half, R, traction_out[e, g], C, jwh, want_tangent, tg,
+                      RC, Cg)
 
         for r in range(2 * ndof_half):
             if not math.isfinite(fe_out[e, r]):
@@ -560,30 +568,8 @@ def interface_assemble(N, frame, jw, thickness, traction, tangent, want_tangent,
         h = thickness[e]
         for g in range(nip):
             jwh = jw[e, g] * h
-            for k in range(dim):
-                s = 0.0
-                for r in range(dim):
-                    s += frame[e, g, r, k] * traction[e, g, r]
-                tg[k] = s * jwh
-            for a in range(ns):
-                Na = N[g, a]
-                for k in range(dim):
-                    fe_out[e, a * dim + k] -= Na * tg[k]
-                    fe_out[e, ndof_half + a * dim + k] += Na * tg[k]
-            if want_tangent:
-                for k in range(dim):
-                    for r in range(dim):
-                        s = 0.0
-                        for q in range(dim):
-                            s += frame[e, g, q, k] * tangent[e, g, q, r]
-                        RC[k, r] = s
-                for k in range(dim):
-                    for m in range(dim):
-                        s = 0.0
-                        for r in range(dim):
-                            s += RC[k, r] * frame[e, g, r, m]
-                        Cg[k, m] = s * jwh
-                add_point_tangent(ke_out, e, N, g, ns, dim, ndof_half, Cg)
+            add_point(fe_out, ke_out, e, N, g, ns, dim, ndof_half, frame[e, g], traction[e, g], tangent[e, g], jwh,
+                      want_tangent, tg, RC, Cg)
         for r in range(2 * ndof_half):
             if not math.isfinite(fe_out[e, r]):
                 info[0] = e

@@ -58,7 +58,9 @@ class MassMatrix:
         #: not ``M iota`` (incompressible acoustic water pushed by the bottom and banks; the dynamic solver
         #: applies ``-extra_influence . a_bottom``)
         self.extra_influence = extra_influence
-        self._groups = element_masses(model, self.lumped, tuple(massless))
+        #: names of the element groups left without mass
+        self.massless = tuple(massless)
+        self._groups = element_masses(model, self.lumped, self.massless)
         self.n_dof = model.n_dof
         self.added = None if added is None or added.nnz == 0 else sp.csr_matrix(added)
         if self.lumped:

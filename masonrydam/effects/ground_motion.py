@@ -38,7 +38,8 @@ def _inertia(scene, model):
         scheme = scheme_named(st["integrator"])
         what = scheme.label + "".join(f" ({name} {st[name]:g})" for name in scheme.parameters)
         steps = (f"dt auto (tolerance {st['tolerance']:g}, dt_max {st['dt']:g} s)" if st.get("adaptive")
-                 else f"dt {st['dt']:g} s")
+                 else f"dt auto (the largest stable step dividing the output interval {st['dt']:g} s)"
+                 if st.get("stable_step") else f"dt {st['dt']:g} s")
         out.append(f"dynamic stage '{st['name']}': {st['mass']} mass inertia, {what}, {steps}")
         for it in st.get("initial_velocity") or []:
             how = (f"velocity {it['velocity']} m/s" if "velocity" in it else
@@ -57,6 +58,10 @@ def _damping(scene, model):
         d = st["damping"]
         if d is None:
             out.append(f"dynamic stage '{st['name']}': no viscous damping")
+            continue
+        if d.get("model") == "local":
+            out.append(f"dynamic stage '{st['name']}': local (non-viscous) damping, {100 * d['ratio']:g} % at every "
+                       "frequency (Cundall 1987; Itasca 3DEC)")
             continue
         which = "continuum stiffness only (joints excluded)" if d["exclude_joints"] else "continuum and joint stiffness"
         if "ratio" in d:
@@ -181,7 +186,7 @@ def _effects():
         Effect("modes", "a stage with type = 'modal'", __name__,
                "generalized eigenproblem K phi = omega^2 M phi (Chopra, Dynamics of Structures, ch. 10, 13)",
                "tests/solvers/test_modal_stage.py", _modes),
-        Effect("damping", "stages.damping", __name__, "Rayleigh damping (Chopra, Dynamics of Structures, sec. 11.4)",
+        Effect("damping", "stages.damping", __name__, "Rayleigh damping (Chopra, Dynamics of Structures, sec. 11.4); local damping of an explicit step (Cundall 1987; Itasca 3DEC manual)",
                "tests/solvers/test_dynamics.py", _damping),
         Effect("ground_motion", "stages.ground_motion", __name__,
                "relative formulation, effective earthquake forces -M iota a_g (Chopra, sec. 9.4)",

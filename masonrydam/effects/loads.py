@@ -21,12 +21,14 @@ from ..units import quantity
 from .base import Effect
 
 
-def self_weight(model, gravity) -> np.ndarray:
-    """Consistent nodal forces (n_dof,) of the self-weight under ``gravity`` (m/s2, vector)."""
+def self_weight(model, gravity, groups=None) -> np.ndarray:
+    """Consistent nodal forces (n_dof,) of the self-weight under ``gravity`` (m/s2, vector), of the element
+    groups named in ``groups`` only (None: all)."""
     f = np.zeros(model.n_dof)
     g = np.asarray(gravity, dtype=np.float64)
     for grp in model.cgroups:
-        scatter_vector(grp.body_force(model.coords, g), grp.dofs, f)
+        if groups is None or grp.name in groups:
+            scatter_vector(grp.body_force(model.coords, g), grp.dofs, f)
     return f
 
 
@@ -85,8 +87,16 @@ def edge_traction(model, facet_type: str, facets: np.ndarray, thickness: float, 
 
 # -- scene schema: the load types of a static stage ([[stages.loads]]) ----------------------------------
 def _self_weight(d, key, dim):
-    check_keys(d, {"type", "factor", "acceleration"}, key)
+    check_keys(d, {"type", "factor", "acceleration", "groups"}, key)
     out = {"type": "self_weight", "factor": number(d.get("factor", 1.0), f"{key}.factor")}
+    if "groups" in d:  # the weight of some groups only: a foundation's rock carries its own weight before the
+        # dam is built, so a dam analysis loads the dam alone (the rock may still have mass for shaking)
+        gs = d["groups"]
+        if isinstance(gs, str):
+            gs = [gs]
+        if not isinstance(gs, list) or not gs or not all(isinstance(x, str) and x for x in gs):
+            raise SceneError(f"{key}.groups", f"expected a list of element group names, got {d['groups']!r}")
+        out["groups"] = list(gs)
     if "acceleration" in d:  # a body force rho a in another direction than gravity (pseudo-static seismic
         # coefficient, a tilt-table test): replaces [model] gravity for this load
         out["acceleration"] = vector(d["acceleration"], "acceleration", f"{key}.acceleration", dim)
@@ -165,13 +175,21 @@ def load_vector(context, ld: dict, key: str) -> np.ndarray:
 
 
 def _add_self_weight(context, stage, ld, key):
-    """Self-weight: the scene's gravity (one vector for all stages), or a body force in its own direction."""
+    """Self-weight: the scene's gravity (one vector for all stages), or a body force in its own direction; of
+    all groups, or of the ``groups`` named."""
+    groups = ld.get("groups")
+    if groups is not None:
+        known = [g.name for g in context.model.cgroups]
+        for name in groups:
+            if name not in known:
+                raise SceneError(f"{key}.groups", f"no element group {name!r}; the model's groups: {known}")
     if "acceleration" in ld:
-        stage.force += ld["factor"] * self_weight(context.model, ld["acceleration"])
+        stage.force += ld["factor"] * self_weight(context.model, ld["acceleration"], groups)
         return
-    if "self_weight" not in stage.carried:
-        stage.carried["self_weight"] = self_weight(context.model, context.scene["model"]["gravity"])
-    stage.force += ld["factor"] * stage.carried["self_weight"]
+    name = "self_weight" if groups is None else "self_weight:" + ",".join(sorted(groups))
+    if name not in stage.carried:
+        stage.carried[name] = self_weight(context.model, context.scene["model"]["gravity"], groups)
+    stage.force += ld["factor"] * stage.carried[name]
 
 
 def _add_force(context, stage, ld, key):

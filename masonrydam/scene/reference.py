@@ -378,6 +378,9 @@ _LOADS = Section("[[stages.loads]] of a static stage", "A load is applied in ful
     _k("stages[].loads[].acceleration", "list", "a body force rho a in its own direction instead of [model] gravity "
        "(pseudo-static seismic coefficient, tilt table)", "m/s2", UNIT, default_text="[model] gravity",
        variants=("self_weight",)),
+    _k("stages[].loads[].groups", "list", "the element groups whose weight is applied (a foundation's rock carries "
+       "its own weight before the dam is built: `groups = [\"dam\"]`)", default_text="all groups",
+       variants=("self_weight",)),
     _k("stages[].loads[].set", "string", "node set (nodal, displacement) or facet set (edges in 2D, faces in 3D)",
        default=REQUIRED, variants=_SET_TYPES),
     _k("stages[].loads[].force", "list", "force on every node of the set, one value per axis", "N", UNIT,
@@ -409,8 +412,10 @@ _DYNAMIC = Section("[[stages]] type = \"dynamic\"", "A time history from the sta
                    "default).", _for(("dynamic",), (
     _STAGE_NAME,
     _type_row("dynamic"),
-    _k("stages[].dt", "number or string", "time step, or `\"auto\"`: steps dt_max / 2^k chosen by their local "
-       "error, never crossing a multiple of dt_max", "s", TIME, REQUIRED),
+    _k("stages[].dt", "number or string", "time step, or `\"auto\"`: implicit schemes take steps dt_max / 2^k chosen "
+       "by their local error, never crossing a multiple of dt_max; central_difference takes the largest stable step "
+       "that divides the output interval (`output.dt`, default 0.01 s), its reason in the run summary", "s", TIME,
+       REQUIRED),
     _k("stages[].steps", "integer", "number of steps (of dt_max with dt = \"auto\"); or give `duration`"),
     _k("stages[].duration", "number", "length of the stage; or give `steps`", "s", TIME),
     _k("stages[].tolerance", "number", "dt = \"auto\": relative local error per step", default=AUTO_TOLERANCE_DEFAULT),
@@ -447,8 +452,14 @@ _DYNAMIC = Section("[[stages]] type = \"dynamic\"", "A time history from the sta
 )), "type")
 
 _DAMPING = Section("[stages.damping]", "Rayleigh damping C = alpha M + beta K: give `ratio` and `frequencies`, or "
-                   "`alpha` and `beta`.", (
-    _k("stages[].damping.ratio", "number", "damping ratio at the two frequencies, in [0, 0.99]"),
+                   "`alpha` and `beta`. With central_difference, `model = \"local\"` and a `ratio` give local "
+                   "(non-viscous) damping, the same ratio at every frequency, which leaves the stable step alone "
+                   "(docs/dam_3d.md).", (
+    _k("stages[].damping.model", "string", "`rayleigh`: viscous C = alpha M + beta K; `local`: the force "
+       "-alpha_L |f_int - f_s| sign(v) at every DOF, alpha_L = tanh(pi ratio) (Cundall 1987; explicit only)",
+       default="rayleigh", choices=("rayleigh", "local")),
+    _k("stages[].damping.ratio", "number", "damping ratio at the two frequencies, in [0, 0.99]; local: at every "
+       "frequency, in [0, 0.3]"),
     _k("stages[].damping.frequencies", "list", "the two frequencies [f1, f2], f1 < f2", "Hz"),
     _k("stages[].damping.alpha", "number", "mass-proportional coefficient", "1/s", default_text="0 (with beta)"),
     _k("stages[].damping.beta", "number", "stiffness-proportional coefficient", "s", default_text="0 (with alpha)"),

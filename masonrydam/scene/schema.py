@@ -229,6 +229,8 @@ def _selection(value, key):
 
 
 STAGE_TYPES = ("static", "modal", "dynamic")
+#: damping models of a dynamic stage: viscous Rayleigh damping, local (non-viscous) damping of an explicit step
+DAMPING_MODELS = ("rayleigh", "local")
 #: keys of a dynamic stage that apply to dt = "auto" only
 AUTO_STEP_KEYS = ("tolerance", "dt_min", "dt_max")
 _DYNAMIC_KEYS = {"name", "type", "steps", "duration", "dt", "integrator", "alpha", "rho_inf", "mass", "damping",
@@ -415,6 +417,33 @@ def _initial_velocity(d, key, dim, translation="velocity", rotation="angular_vel
     return out
 
 
+
+def _rayleigh_damping(damp: dict, dk: str) -> dict:
+    """The normalised Rayleigh ``[stages.damping]`` table (``dk``: its scene key)."""
+    by_ratio = "ratio" in damp or "frequencies" in damp
+    by_coef = "alpha" in damp or "beta" in damp
+    if by_ratio == by_coef:
+        raise SceneError(dk, "give 'ratio' and 'frequencies' = [f1, f2] (Hz), or the Rayleigh coefficients "
+                             "'alpha' (1/s) and 'beta' (s)")
+    d = {"model": "rayleigh", "exclude_joints": _bool(damp.get("exclude_joints", True), f"{dk}.exclude_joints")}
+    if by_ratio:
+        if "ratio" not in damp or "frequencies" not in damp:
+            raise SceneError(dk, "'ratio' needs 'frequencies' = [f1, f2] (Hz) and vice versa")
+        d["ratio"] = _number(damp["ratio"], f"{dk}.ratio", 0.0, 0.99)
+        fr = damp["frequencies"]
+        if not isinstance(fr, list) or len(fr) != 2:
+            raise SceneError(f"{dk}.frequencies", f"expected [f1, f2] in Hz, got {fr!r}")
+        f1 = _number(fr[0], f"{dk}.frequencies[0]", 0.0, open_min=True)
+        f2 = _number(fr[1], f"{dk}.frequencies[1]", 0.0, open_min=True)
+        if not f1 < f2:
+            raise SceneError(f"{dk}.frequencies", f"need f1 < f2, got {fr!r}")
+        d["frequencies"] = [f1, f2]
+    else:
+        d["alpha"] = _number(damp.get("alpha", 0.0), f"{dk}.alpha", 0.0)
+        d["beta"] = _number(damp.get("beta", 0.0), f"{dk}.beta", 0.0)
+    return d
+
+
 def _dynamic_stage(s, key, dim, index):
     _check_keys(s, _DYNAMIC_KEYS, key)
     out = {"name": str(s.get("name", f"stage{index + 1}")), "type": "dynamic"}
@@ -429,7 +458,22 @@ def _dynamic_stage(s, key, dim, index):
     if not isinstance(o, dict):
         raise SceneError(f"{key}.output", f"expected a table, e.g. {{ stride = 10 }}, got {o!r}")
     out_dt = None if "dt" not in o else _time(o["dt"], f"{key}.output.dt")
-    if s["dt"] == "auto":
+    integ_named = s.get("integrator", "hht")
+    explicit = integ_named in INTEGRATORS and scheme_named(integ_named).explicit
+    out["stable_step"] = False
+    if s["dt"] == "auto" and explicit:
+        # the explicit step chosen by the program: the largest stable one that divides the output interval
+        for k in ("tolerance", "dt_min", "dt_max", "steps"):
+            if k in s:
+                raise SceneError(f"{key}.{k}", f"does not apply to dt = \"auto\" with {integ_named}: the program "
+                                               "takes the largest stable step that divides the output interval "
+                                               "(give output.dt and duration)")
+        out["adaptive"] = False
+        out["stable_step"] = True
+        out["dt"] = out_dt or AUTO_DT_MAX_DEFAULT  # the output grid; the steps divide it
+        out["dt_min"] = None
+        out["tolerance"] = AUTO_TOLERANCE_DEFAULT
+    elif s["dt"] == "auto":
         # error-controlled steps: dt_max / 2^k down to dt_min (solvers.dynamic.step_control.AdaptiveStepping)
         out["adaptive"] = True
         out["dt"] = _time(s.get("dt_max", out_dt or AUTO_DT_MAX_DEFAULT), f"{key}.dt_max")
@@ -483,29 +527,21 @@ def _dynamic_stage(s, key, dim, index):
         out["damping"] = None
     else:
         dk = f"{key}.damping"
-        _check_keys(damp, {"ratio", "frequencies", "alpha", "beta", "exclude_joints"}, dk)
-        by_ratio = "ratio" in damp or "frequencies" in damp
-        by_coef = "alpha" in damp or "beta" in damp
-        if by_ratio == by_coef:
-            raise SceneError(dk, "give 'ratio' and 'frequencies' = [f1, f2] (Hz), or the Rayleigh coefficients "
-                                 "'alpha' (1/s) and 'beta' (s)")
-        d = {"exclude_joints": _bool(damp.get("exclude_joints", True), f"{dk}.exclude_joints")}
-        if by_ratio:
-            if "ratio" not in damp or "frequencies" not in damp:
-                raise SceneError(dk, "'ratio' needs 'frequencies' = [f1, f2] (Hz) and vice versa")
-            d["ratio"] = _number(damp["ratio"], f"{dk}.ratio", 0.0, 0.99)
-            fr = damp["frequencies"]
-            if not isinstance(fr, list) or len(fr) != 2:
-                raise SceneError(f"{dk}.frequencies", f"expected [f1, f2] in Hz, got {fr!r}")
-            f1 = _number(fr[0], f"{dk}.frequencies[0]", 0.0, open_min=True)
-            f2 = _number(fr[1], f"{dk}.frequencies[1]", 0.0, open_min=True)
-            if not f1 < f2:
-                raise SceneError(f"{dk}.frequencies", f"need f1 < f2, got {fr!r}")
-            d["frequencies"] = [f1, f2]
+        _check_keys(damp, {"model", "ratio", "frequencies", "alpha", "beta", "exclude_joints"}, dk)
+        dmodel = _choice(damp.get("model", "rayleigh"), DAMPING_MODELS, f"{dk}.model")
+        if dmodel == "local":
+            if not scheme.explicit:
+                raise SceneError(f"{dk}.model", f"local damping acts in an explicit step only (integrator = "
+                                                f"\"central_difference\"); {scheme.label} takes model = \"rayleigh\"")
+            for k in ("frequencies", "alpha", "beta", "exclude_joints"):
+                if k in damp:
+                    raise SceneError(f"{dk}.{k}", "is a Rayleigh damping key; local damping takes 'ratio' alone "
+                                                  "(the same ratio at every frequency)")
+            if "ratio" not in damp:
+                raise SceneError(f"{dk}.ratio", "is required with model = \"local\" (e.g. 0.05)")
+            out["damping"] = {"model": "local", "ratio": _number(damp["ratio"], f"{dk}.ratio", 0.0, 0.3)}
         else:
-            d["alpha"] = _number(damp.get("alpha", 0.0), f"{dk}.alpha", 0.0)
-            d["beta"] = _number(damp.get("beta", 0.0), f"{dk}.beta", 0.0)
-        out["damping"] = d
+            out["damping"] = _rayleigh_damping(damp, dk)
     out["initial_velocity"] = (None if "initial_velocity" not in s else
                                _initial_velocity(s["initial_velocity"], f"{key}.initial_velocity", dim))
     # a displaced start (released from a deformed shape: a pluck test), on top of the static state

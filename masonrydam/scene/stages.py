@@ -121,7 +121,10 @@ def dynamic_settings(st: dict, index: int, linear_solver: str = "auto"):
 
     d = st["damping"]
     damping = None
-    if d is not None:
+    local_ratio = 0.0
+    if d is not None and d.get("model") == "local":
+        local_ratio = d["ratio"]
+    elif d is not None:
         if "ratio" in d:
             damping = RayleighDamping.from_frequencies(d["frequencies"][0], d["frequencies"][1], d["ratio"],
                                                        d["exclude_joints"])
@@ -132,7 +135,8 @@ def dynamic_settings(st: dict, index: int, linear_solver: str = "auto"):
                            energy_tolerance=st["energy_tolerance"], max_substeps=st["max_substeps"], mass=st["mass"],
                            damping=damping, linear_solver=linear_solver, low_rank_max=st["low_rank_max"],
                            joint_space=st["joint_space"], adaptive=st["adaptive"], tolerance=st["tolerance"],
-                           dt_min=st["dt_min"], key=f"stages[{index}].")
+                           dt_min=st["dt_min"], local_damping=local_ratio,
+                           stable_step=st.get("stable_step", False), key=f"stages[{index}].")
 
 
 def initial_velocity_field(model: Model, items: list, key: str, translation="velocity",

@@ -180,7 +180,9 @@ def _dynamic_lines(dyn_solvers, stats, model) -> list[str]:
                              f"{p['dt_largest']:.3g} s, tolerance {p['tolerance']:g}), {p['steps_rejected']} "
                              f"refused and retried smaller ({p['integrator']})")
             else:
-                lines.append(f"dynamic    : {p['stage']}: {p['steps']} steps of {p['dt']:g} s ({p['integrator']}{crit})")
+                lines.append(f"dynamic    : {p['stage']}: {p['steps']} steps of {p['dt']:.4g} s ({p['integrator']}{crit})")
+                if p.get("dt_reason"):
+                    lines.append(f"             {p['dt_reason']}")
     if dyn_solvers:
         lines.append(f"dynamics   : {stats['dynamic_newton_iterations']} general Newton iterations, {stats['dynamic_substeps']} "
                      f"sub-step splits, {stats['dynamic_factorizations']} factorization(s) "

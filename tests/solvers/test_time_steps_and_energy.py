@@ -166,7 +166,7 @@ def test_rocking_impacts_are_a_named_loss():
     ({"dt": "auto", "tolerance": 2.0}, "stages[1].tolerance", "1"),
     ({"dt": 0.004, "output": {"dt": 0.01}}, "stages[1].output.dt", "whole multiple"),
     ({"dt": 0.002, "output": {"dt": 0.01, "stride": 5}}, "stages[1].output.dt", "not both"),
-    ({"dt": "auto", "integrator": "central_difference"}, "stages[1].dt", "implicit"),
+    ({"dt": "auto", "integrator": "central_difference", "tolerance": 1e-4}, "stages[1].tolerance", "largest stable"),
     ({"dt": "auto", "integrator": "newmark_linear"}, "stages[1].dt", "newmark_linear"),
 ])
 def test_auto_dt_scene_errors_name_the_key(stage, key, match):

@@ -120,11 +120,11 @@ class EnergyBalance:
         generalized-alpha their sum is the energy the scheme takes out of the high modes (its cumulative
         value is the dissipation plus a bounded "algorithmic energy" of order h^2 a.M a; Krenk 2006, Comput.
         Methods Appl. Mech. Eng. 195:6110-6124). For central difference ``numerical`` is the kinematic
-        part ``-h^2/8 d(a.M a)`` alone (its damping force lags half a step; that lag stays in ``error``).
-        What is left, ``error``, is the Newton tolerance and round-off (and central difference's damping lag)."""
+        part ``-h^2/8 d(a.M a)`` alone, and its damping work is that of the half-step damping forces the steps
+        applied (:func:`~.explicit_kernels.central_difference_correct`). What is left, ``error``, is the Newton
+        tolerance and round-off."""
         eq = self.eq
         free = eq.free
-        e = dict(prev.energy)
         v0f, v1f = prev.v[free], st.v[free]
         cv0, cv1 = (eq.damping_force(v0f), eq.damping_force(v1f)) if eq.damped else (eq.zeros_free, eq.zeros_free)
         if eq.mass_diagonal is not None:
@@ -143,6 +143,14 @@ class EnergyBalance:
             hydro = 0.5 * float((prev.fw + st.fw) @ (st.u[free][wet] - prev.u[free][wet]))
         step_works(free, prev.u, st.u, pg0, pg1, eq.static_load, cv0, cv1, prev.f_int, st.f_int, prev.Kc_u, st.Kc_u,
                    v1f, eq.kernel_mass_diagonal, mv1, prev.a, st.a, ma0, ma1, w)
+        self.record_works(st, prev, w, hydro)
+
+    def record_works(self, st, prev, w, hydro=0.0):
+        """The second half of :meth:`record`: the step's works ``w`` (10,) J in the order of
+        :func:`~.kernels.step_works` (computed by :meth:`record`, or by the explicit step's fused kernel,
+        :func:`~.explicit_kernels.central_difference_correct`) added to ``prev``'s energies, the stored and
+        joint energies of ``st``, the balance error; ``hydro`` J the compressible water's work on the dam."""
+        e = dict(prev.energy)
         e["input"] += float(w[0]) - hydro
         e["hydrodynamic"] = e.get("hydrodynamic", 0.0) + hydro
         e["external"] += float(w[1])
@@ -206,8 +214,8 @@ def energy_warnings(stats: DynamicStats, integrator: str, dt: str) -> list[str]:
     err = stats.energy_error_max / scale
     if err > ENERGY_WARNING_FRACTION:
         scheme = scheme_named(integrator)
-        cause = (f"{scheme.label} lags the damping force half a step: dt is too large for the damping"
-                 if scheme.explicit else
+        cause = (f"{scheme.label} balances its works exactly up to round-off, so this is a defect: please report "
+                 "the scene" if scheme.explicit else
                  "the Newton tolerances (force_tolerance, energy_tolerance) are too loose for this run, or steps "
                  "were accepted at their last halving")
         out.append(f"the energy balance misses by {100 * err:.3g} % of its largest term ({stats.energy_error_max:.3g} "

@@ -1,19 +1,40 @@
 """The explicit scheme: central difference in velocity form, one joint evaluation per step.
 
     v_{n+1/2} = v_n + h/2 a_n,   u_{n+1} = u_n + h v_{n+1/2},
-    M a_{n+1} = p_{n+1} - f_int(u_{n+1}) - C v_{n+1/2},   v_{n+1} = v_{n+1/2} + h/2 a_{n+1}
+    M a_{n+1} = p_{n+1} - f_int(u_{n+1}) - f_d(v_{n+1/2}),   v_{n+1} = v_{n+1/2} + h/2 a_{n+1}
 
-(Hughes 2000, sec. 9.1.2; Belytschko, Liu & Moran 2000, Box 6.1): lumped (diagonal) mass only, the damping
-force lagged half a step, dt below the critical step (:mod:`.stability`). Vectors on the free DOFs (n_eq,),
-SI units. See docs/dynamics.md.
+(Hughes 2000, sec. 9.1.2; Belytschko, Liu & Moran 2000, Box 6.1): lumped (diagonal) mass only, dt below the
+critical step (:mod:`.stability`; dt = "auto" takes the largest stable step that divides the output interval).
+The damping force, lagged half a step, is the viscous ``C v_{n+1/2}`` (a diagonal C, mass-proportional, costs
+a product of two vectors; dashpots or a stiffness part a sparse product) plus the local damping of Cundall
+(``alpha_L |f_int - f_s| sign(v)``, :func:`~masonrydam.assembly.damping.local_damping_coefficient`), which
+damps every mode by the same ratio and leaves the stable step alone. A step costs the blocks' sparse product,
+the joint kernels and two fused passes over the DOFs (:mod:`.explicit_kernels`), which also give the step's
+works: the energy balance of an explicit stage closes to round-off. Vectors on the free DOFs (n_eq,), SI
+units. See docs/dynamics.md and docs/dam_3d.md.
 """
 from __future__ import annotations
 
 import numpy as np
+import scipy.sparse as sp
 
-from ...errors import NumericalError
+from ...assembly.damping import local_damping_coefficient
+from ...errors import STATUS_OK, NumericalError
+from .explicit_kernels import central_difference_correct, central_difference_predict
 from .stage import StepState
 from .step_control import step_end
+
+
+def _diagonal_damping(equations):
+    """The diagonal of C (n_eq,) N s/m where C is diagonal (mass-proportional Rayleigh damping alone), else
+    None (a sparse product per step)."""
+    C = equations.damping_free
+    if C is None:
+        return None
+    d = C.diagonal()
+    off = C - sp.diags(d, format="csr")
+    off.eliminate_zeros()
+    return np.ascontiguousarray(d) if off.nnz == 0 else None
 
 
 def run_central_difference(model, settings, equations, energy, stats, stage, st, record_step, fail):
@@ -22,32 +43,53 @@ def run_central_difference(model, settings, equations, energy, stats, stage, st,
     after each, ``fail(stage, st, exc)`` records the last state and raises."""
     m, s, eq = model, settings, equations
     free = eq.free
+    n = eq.n
     md = eq.mass_diagonal
     n_steps = stage.n_steps
+    local_alpha = local_damping_coefficient(s.local_damping) if s.local_damping > 0.0 else 0.0
+    empty = np.zeros(0)
+    c_diag = _diagonal_damping(eq) if eq.damped else None
+    viscous_sparse = eq.damped and c_diag is None
+    if viscous_sparse:  # the stage's C lives in the model's pattern: keep its nonzeros only (dashpots on the
+        # boundary nodes of a foundation are a small fraction of it)
+        C = eq.damping_free.copy()
+        C.eliminate_zeros()
+    c_diag = empty if c_diag is None else c_diag
+    # the damping force of the initial state, as the initial acceleration took it (its viscous part)
+    fd0 = eq.damping_force(st.v[free]).copy() if eq.damped else np.zeros(n)
+    pg0 = eq.ground_load(st.ag, st.tau).copy()
+    works = np.zeros(10)
     for k in range(1, n_steps + 1):
         t_end, h = step_end(k, n_steps, s.dt, stage.duration, st.tau)
         if h <= 1e-9 * s.dt:
             break
-        v_half = st.v[free] + 0.5 * h * st.a[free]
+        u = np.empty(m.n_dof)
+        v_half = np.empty(n)
+        central_difference_predict(free, st.u, st.v, st.a, h, u, v_half)
         m.time_step = h
-        u = st.u.copy()
-        u[free] += h * v_half
         f_int, _ = m.evaluate(u, want_tangent=False)
+        kc = m.continuum_force(u)
         ag1 = eq.ground_at(t_end)
-        rhs = eq.static_load + eq.ground_load(ag1, t_end) + eq.update_state_force() - f_int[free] \
-            - eq.damping_force(v_half)
-        a1 = rhs / md
-        if not np.isfinite(a1).all():
+        pg1 = eq.ground_load(ag1, t_end).copy()
+        state_force = eq.update_state_force()
+        cv = C @ v_half if viscous_sparse else empty
+        v1 = np.zeros(m.n_dof)
+        a1 = np.zeros(m.n_dof)
+        fd1 = np.empty(n)
+        status = central_difference_correct(free, h, md, eq.static_load, pg0, pg1, state_force, st.f_int, f_int,
+                                            st.Kc_u, kc, st.u, u, st.a, v_half, cv, c_diag, local_alpha, fd0, fd1,
+                                            v1, a1, works)
+        if status != STATUS_OK:
             fail(stage, st, NumericalError(
-                f"dynamic stage '{stage.name}': NaN or infinity at t = {st.t + h:.6g} s (central difference)"))
+                f"dynamic stage '{stage.name}': NaN or infinity at t = {st.t + h:.6g} s (central difference, "
+                f"dt = {h:.4g} s; dt_crit = {stats.dt_critical:.4g} s)"))
         m.commit()
-        new = StepState(st.t - st.tau + t_end, t_end, u, np.zeros_like(st.v), np.zeros_like(st.a), f_int, None, ag1)
-        new.a[free] = a1
-        new.v[free] = v_half + 0.5 * h * a1
-        new.Kc_u = m.continuum_force(u)
-        energy.record(new, st)
+        new = StepState(st.t - st.tau + t_end, t_end, u, v1, a1, f_int, None, ag1)
+        new.Kc_u = kc
+        energy.record_works(new, st, works)
         energy.accept(new)
         st = new
+        fd0, pg0 = fd1, pg1
         stats.steps += 1
         record_step(stage, k, st, n_steps)
     return st

@@ -62,6 +62,12 @@ class DynamicSettings:
     adaptive: bool = False
     tolerance: float = 1e-5
     dt_min: float | None = None
+    #: local (non-viscous) damping ratio of an explicit step (Cundall 1987; :func:`~masonrydam.assembly.damping.
+    #: local_damping_coefficient`): the same ratio at every frequency, no effect on the stable step
+    local_damping: float = 0.0
+    #: dt = "auto" with an explicit scheme: ``dt`` is the output interval, the step is the largest stable one
+    #: (``stability_safety`` x dt_crit) that divides it, chosen by the solver (:func:`.stability.stable_step`)
+    stable_step: bool = False
     key: str = ""
 
     def __post_init__(self):
@@ -100,6 +106,12 @@ class DynamicSettings:
                 self.dt_min = self.dt / 2 ** ADAPTIVE_DEFAULT_LEVELS
             if not (math.isfinite(self.dt_min) and 0.0 < self.dt_min <= self.dt):
                 raise SceneError(f"{k}dt_min", f"must be in (0, dt_max = {self.dt:g} s], got {self.dt_min!r}")
+        if not (math.isfinite(self.local_damping) and 0.0 <= self.local_damping < 1.0):
+            raise SceneError(f"{k}damping.ratio", f"must be in [0, 1), got {self.local_damping!r}")
+        if (self.local_damping > 0.0 or self.stable_step) and not scheme.explicit:
+            what = "damping.model" if self.local_damping > 0.0 else "dt"
+            raise SceneError(f"{k}{what}", f"{'local damping' if self.local_damping > 0 else 'the stable step'} "
+                                           f"needs an explicit integrator (central_difference), not {scheme.label}")
         if self.joint_space not in JOINT_SPACE_MODES:
             raise SceneError(f"{k}joint_space", f"must be one of {list(JOINT_SPACE_MODES)}, got {self.joint_space!r}")
         if self.linear_solver not in ("auto",) + DIRECT_SOLVERS:

@@ -27,7 +27,7 @@ from .equations import StageEquations
 from .explicit import run_central_difference
 from .implicit import ImplicitStep, JointSpaces
 from .settings import OPEN_TANGENT_DYNAMIC, DynamicSettings
-from .stability import check_time_step
+from .stability import check_time_step, stable_step
 from .stage import DynamicStage, DynamicState, DynamicStats, StepState
 from .step_control import AdaptiveStepping, FixedSteps
 
@@ -95,6 +95,18 @@ class DynamicSolver:
         v = np.zeros(m.n_dof) if v0 is None else np.array(v0, dtype=np.float64)
         self.f_static = np.zeros(m.n_dof) if f_static is None else np.asarray(f_static, dtype=np.float64).copy()
         dtc = check_time_step(eq, s, self.backend, self.stats)
+        dt_reason = None
+        if s.stable_step:  # dt = "auto" with an explicit scheme: the stage's dt is its output interval
+            interval = s.dt
+            s.dt, per_interval = stable_step(interval, dtc, s.stability_safety)
+            s.stable_step = False  # chosen: the settings now hold the step
+            stage.output_stride *= per_interval
+            w_max = self.stats.omega_max
+            dt_reason = (f"dt = auto: {s.dt:.4g} s = output interval {interval:g} s / {per_interval}, the largest "
+                         f"such step below {s.stability_safety:g} x dt_crit ({dtc:.4g} s, set by the highest "
+                         f"frequency {w_max / (2 * np.pi):.4g} Hz with every joint sticking"
+                         + (", lowered by the stiffness part of the Rayleigh damping" if s.damping is not None
+                            and s.damping.beta > 0 else "") + ")")
         m.set_open_tangent(OPEN_TANGENT_DYNAMIC)
         m.time_step = 0.0  # the state carried over, not a step in time
         stepping = None
@@ -136,6 +148,10 @@ class DynamicSolver:
             self.stats.wall_time_s += time.perf_counter() - t_wall
         entry = {"stage": stage.name, "steps": self.stats.steps - steps_before, "dt": s.dt, "integrator": s.integrator,
                  "dt_critical": dtc}
+        if dt_reason is not None:
+            entry["dt_reason"] = dt_reason
+        if s.local_damping > 0.0:
+            entry["local_damping"] = s.local_damping
         if s.adaptive:
             entry.update({"dt": "auto", "dt_max": s.dt, "dt_min": s.dt_min, "tolerance": s.tolerance,
                           "steps_rejected": self.stats.steps_rejected - rejected_before,

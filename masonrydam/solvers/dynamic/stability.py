@@ -69,13 +69,22 @@ def check_time_step(equations, settings, backend, stats):
         md = mass.free_diag
         if not (md > 0).all():
             bad = int(equations.free[np.nonzero(~(md > 0))[0][0]])
-            raise SceneError(f"{s.key}integrator", f"{s.integrator} needs a positive mass at every free DOF; "
-                                                   f"DOF {bad} (node {bad // model.dim}) has none (density 0?)")
+            node = bad // model.dim
+            owners = [g.name for g in model.cgroups if (g.conn == node).any()]
+            where = f"node {node} (DOF {bad})" + (f", in element group(s) {owners}" if owners else ", in no element")
+            key = (f"{s.key}integrator" if not owners else "foundation.mass" if owners[0] in mass.massless
+                   else f"materials.{owners[0]}.density")
+            raise SceneError(key, f"{s.integrator} (explicit) needs a positive mass at every free DOF: {where} has "
+                                  "none (density 0, or [foundation] mass = false); give the region a density > 0 "
+                                  "(for rock under a dam: [foundation] mass = true), or use an implicit integrator")
         dtc, w = critical_time_step(K, mass_diag=md, damping=s.damping, omega_crit=Oc)
     else:
         dtc, w = critical_time_step(K, M=equations.mass_free, damping=s.damping, omega_crit=Oc,
                                     linear_solver=backend)
     stats.dt_critical = dtc
+    stats.omega_max = w
+    if s.stable_step:
+        return dtc
     if s.dt > s.stability_safety * dtc:
         raise SceneError(f"{s.key}dt", f"dt = {s.dt:.4g} s is above {s.stability_safety:g} x the critical time "
                                        f"step of {s.integrator}: dt_crit = {dtc:.4g} s (highest frequency "
@@ -83,3 +92,10 @@ def check_time_step(equations, settings, backend, stats):
                                        f"penalty stiffnesses usually set it). Use dt <= "
                                        f"{s.stability_safety * dtc:.4g} s or an implicit integrator")
     return dtc
+
+
+def stable_step(interval: float, dt_critical: float, safety: float) -> tuple[float, int]:
+    """The explicit step the program chooses (dt = "auto"): the largest ``h = interval / n`` (n whole) with
+    ``h <= safety x dt_critical``, so that the steps land on the output grid ``interval`` (s). Returns (h, n)."""
+    n = max(1, int(math.ceil(interval / (safety * dt_critical) - 1e-12)))
+    return interval / n, n

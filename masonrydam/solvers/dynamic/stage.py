@@ -141,6 +141,8 @@ class DynamicStats:
     energy_contact: float = 0.0
     energy_bond_break: float = 0.0
     dt_critical: float | None = None
+    #: highest circular frequency (rad/s) with every joint sticking, where a stable step was computed
+    omega_max: float = 0.0
     static_residual: float = 0.0
     joint_space_size: int = 0
     joint_space_setup_s: float = 0.0

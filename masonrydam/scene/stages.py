@@ -17,7 +17,7 @@ from ..effects import stage_load_builders
 from ..errors import SceneError
 from ..mesh.model import Mesh
 from ..mesh.sets import node_set
-from ..solvers.dynamic import DynamicSettings, DynamicStage, ModalStage
+from ..solvers.dynamic import ADAPTIVE_DEFAULT_LEVELS, DynamicSettings, DynamicStage, ModalStage
 from ..solvers.linear.direct import DIRECT_SOLVERS
 from ..solvers.static.stepping import StaticStage
 
@@ -94,8 +94,11 @@ def _dynamic_stage(context: ModelContext, st: dict, i: int, supports: np.ndarray
     model = context.model
     settings = dynamic_settings(st, i, context.scene["solver"]["linear_solver"])
     # a pulse is sampled at the analysis step (dt = "auto": at its smallest, so that the steps,
-    # not the samples, decide how sharply its start and end are resolved)
-    parts = DynamicStageParts(settings, settings.dt_min if settings.adaptive else st["dt"])
+    # not the samples, decide how sharply its start and end are resolved; an explicit dt = "auto", whose
+    # step is chosen by the solver below the critical one, at the output interval / 2^ADAPTIVE_DEFAULT_LEVELS)
+    sample_dt = (settings.dt_min if settings.adaptive else
+                 st["dt"] / 2 ** ADAPTIVE_DEFAULT_LEVELS if settings.stable_step else st["dt"])
+    parts = DynamicStageParts(settings, sample_dt)
     build_dynamic_stage(context, st, i, parts)
     gms = parts.ground_motion
     if st["steps"] is not None:

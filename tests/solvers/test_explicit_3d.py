@@ -130,7 +130,7 @@ def test_sliding_block_3d_auto_step_matches_newmark(sliding_run):
     block, as the 2D model does (tests/solvers/test_time_steps_and_energy.py: +0.27 % converged). The pulse is
     sampled every 1e-4 s, so its jumps are spread over 1e-4 s (a rigid-block slip 2.5e-4 smaller than Newmark's);
     0.5 % leaves room for both, not for an error of the step or the joint law (a lag of one 0.01-s sample is
-    -2.5 %, see the xfail below)."""
+    -2.5 %, see the test below)."""
     ds = sliding_run
     stage = per_stage(ds)
     dt, dtc = stage["dt"], stage["dt_critical"]
@@ -166,16 +166,11 @@ def test_sliding_block_3d_slides_along_an_oblique_pulse():
     assert angle == pytest.approx(30.0, abs=0.1)
 
 
-@pytest.mark.xfail(strict=True, reason="package defect: with an explicit dt = 'auto' the scene's pulse is sampled "
-                                      "at the output interval (masonrydam/scene/stages.py _dynamic_stage passes "
-                                      "st['dt'], the output interval, as sample_dt), not at the step the solver "
-                                      "chooses: the rectangular pulse's jumps are spread over 0.01 s and the slip "
-                                      "is 2.4 % below Newmark's (the rigid block under that trapezoid: -2.5 %)")
 @pytest.mark.reference
 def test_sliding_block_3d_auto_step_samples_the_pulse_at_the_step():
-    """The scene's pulse is sampled at the analysis step (masonrydam/scene/stages.py: "a pulse is sampled at the
-    analysis step"): with dt = "auto" and no dt of the pulse's own, Newmark's (1965) slip within 0.5 % as in
-    the test above (measured: -2.4 %)."""
+    """The scene's pulse is sampled finer than the step the solver chooses (masonrydam/scene/stages.py: at the
+    output interval / 1024 for an explicit dt = "auto"): with no dt of the pulse's own, Newmark's (1965) slip
+    within 0.5 % as in the test above (when it was sampled at the 0.01-s output interval: -2.4 %)."""
     ds = masonrydam.run(sliding_scene(pulse_dt=None))
     assert abs(final_slip_vector(ds)[0]) == pytest.approx(NEWMARK_SLIP, rel=5e-3)
 

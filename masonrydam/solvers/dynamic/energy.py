@@ -222,8 +222,12 @@ def energy_warnings(stats: DynamicStats, integrator: str, dt: str) -> list[str]:
                    f"J): {cause}")
     created = -stats.energy_contact / scale
     if created > ENERGY_WARNING_FRACTION:
+        scheme = scheme_named(integrator)
+        advice = ("an explicit step near the critical one resolves a contact event in a few steps only: give a "
+                  "fixed dt a few times below dt_crit and converge it (docs/dam_3d.md)" if scheme.explicit else
+                  "converge dt (a smaller dt, or dt = \"auto\"; docs/accuracy.md)")
         out.append(f"joint contact events created {100 * created:.3g} % of the largest energy term "
                    f"({-stats.energy_contact:.3g} J: compressed points opening within a step): dt = {dt} is "
                    f"too large for the joint stiffness and contact events are stepped over ({integrator}); "
-                   "converge dt (a smaller dt, or dt = \"auto\"; docs/accuracy.md)")
+                   + advice)
     return out

@@ -40,6 +40,10 @@ MAX_INITIAL_STIFFNESS_ITERATIONS = 60
 SPLIT_INITIAL_STIFFNESS_ITERATIONS = 10
 #: state changes of a point within a step after which it is held sticking until the others converge
 FLIPS_BEFORE_HOLD = 3
+#: a point that has changed state this many times in a step after its bond broke in one of the step's iterates
+#: (it opened: the cohesion is gone) while its committed bond is intact gets its bond latched broken for the
+#: rest of the step instead of being held (see :meth:`JointSpace._solve_step`); None: never
+FLIPS_BEFORE_LATCH = FLIPS_BEFORE_HOLD
 #: the reference LU of the capacitance matrix is updated (not refactorized) while at most
 #: max(UPDATE_MIN_CHANGES, (rows of the reference + current rows) / UPDATE_CHANGE_FRACTION) rows changed:
 #: an update costs about 2 |D| n^2 against 2/3 n^3 for a new LU
@@ -339,6 +343,9 @@ class JointSpace:
         self.updates = 0
         #: points held sticking within a step because their state kept flipping (statistics)
         self.hold_events = 0
+        #: points whose bond was latched broken within a step because they kept flipping across the cohesion
+        #: jump (statistics; see _bond_chatter)
+        self.bond_latches = 0
         #: converged steps whose displacements came from the stored columns, not a substitution (statistics)
         self.column_recoveries = 0
         #: the last step needed more columns of S than the store holds
@@ -478,6 +485,27 @@ class JointSpace:
         state_key(self.codes, self.traction, key)
         return key
 
+    def _bond_chatter(self, flips, broke):
+        """(P,) bool: the points to latch broken (:data:`FLIPS_BEFORE_LATCH`): they have changed state that
+        many times in the step, their bond broke in one of its iterates (``broke``: state rows whose bond
+        column holds the bonds broken so far) and is intact in ``self.base``.
+
+        Why: with cohesion ``c`` and no tensile strength a point whose normal traction is about zero sits on
+        a jump of the law: closed, its bond carries a shear up to ``c``; open, it breaks and carries nothing.
+        At the tip of a crack (the dam-rock joint under the reservoir) the intact bond's shear pulls the
+        point open, the broken one lets it close, and Newton flips it from one iterate to the next; held
+        sticking it carries its elastic shear, far from either side, and the true law refuses the held
+        solution. A bond that broke stays broken: the law is then continuous at the point (friction alone,
+        ``tau_y = -t_n tan(phi)``, zero at ``t_n = 0``), and Newton converges. This is the latching of the
+        chatter guard (:mod:`masonrydam.solvers.chatter`), per point instead of the whole pattern, which
+        must repeat exactly (on 8 096 points it seldom did). Bond failure is irreversible (the law's
+        ``S_BOND_BROKEN``: a joint that has opened once is a crack, ``c = ft = 0``; Tzamtzis & Asteris sec.
+        3.4), so a bond that an iterate of the step broke is an admissible state of the step's end; the
+        converged iterate satisfies the law with that bond broken (never a held state)."""
+        if FLIPS_BEFORE_LATCH is None or not self.law.latches_bonds:
+            return np.zeros(self.n_points, dtype=bool)
+        return ((flips >= FLIPS_BEFORE_LATCH) & self.law.bond_broken(broke) & ~self.law.bond_broken(self.base))
+
     def solve_step(self, u_n, R_n, force_tolerance, initial_stiffness_iterations=None):
         """Solve one step in joint space (see :meth:`_solve_step`); no point is held on entry, and none is
         left held on any exit (return, non-convergence, NaN or an exception). A step that needs more
@@ -556,6 +584,9 @@ class JointSpace:
                     self._restore(at_predictor)
         flips = np.zeros(P, dtype=np.int64)
         released = np.zeros(P, dtype=bool)  # held once in this step and let go: never held again
+        # the bonds broken in any iterate of the step (the law's bond column, accumulated): see FLIPS_BEFORE_LATCH
+        broke = np.zeros_like(self.trial)
+        self.law.keep_latched_bonds(broke, self.base)
         seen, prev_sig, prev_key, stabilized, same = set(), None, None, False, 0
         it, why = 0, ""
         n_fixed = MAX_INITIAL_STIFFNESS_ITERATIONS if initial_stiffness_iterations is None else initial_stiffness_iterations
@@ -587,6 +618,7 @@ class JointSpace:
                        f"({MAX_JOINT_SPACE_ITERATIONS} Newton, {n_fixed} with the initial stiffness)")
                 break
             fixed_point = it >= MAX_JOINT_SPACE_ITERATIONS
+            self.law.keep_latched_bonds(broke, self.trial)
             if prev_key is not None:
                 changed_state = key != prev_key
                 same = 0 if changed_state.any() else same + 1
@@ -599,12 +631,21 @@ class JointSpace:
                 else:
                     flips += changed_state
                     hold = (flips >= FLIPS_BEFORE_HOLD) & ~released & (self.held == 0)
-                    if hold.any():
+                    crack = self._bond_chatter(flips, broke)
+                    if crack.any():
+                        # flipping across the cohesion jump: the bond stays broken for the step
+                        sub = self.base[crack]
+                        self.law.keep_latched_bonds(sub, broke[crack])
+                        self.base[crack] = sub
+                        self.bond_latches += int(crack.sum())
+                        flips[crack] = 0
+                        hold &= ~crack
+                    if hold.any() or crack.any():
                         # points that keep flipping are held sticking (residual and tangent) while
                         # the others converge
                         self.held[hold] = 1
                         self.hold_events += int(hold.sum())
-                        err = self._reevaluate(np.flatnonzero(hold), delta)
+                        err = self._reevaluate(np.flatnonzero(hold | crack), delta)
                         if err <= force_tolerance:
                             continue  # the held problem is solved already: let the true law decide
                         key = self._state_key()

@@ -19,11 +19,12 @@ import scipy.sparse as sp
 
 from ..checks import boolean, check_keys, choice
 from ..elements.shapes import ELEMENT_TYPES, facet_outward_sign, facet_quadrature, facet_rule
-from ..errors import SceneError
+from ..errors import STATUS_OK, SceneError
 from ..keys import Section
 from ..keys import key as row
 from ..mesh.facets import FACET_TYPES, boundary_owners
 from .base import Effect, EffectRun, add_force
+from .foundation_kernels import free_field_force
 
 __all__ = ["normalize_section", "build", "Foundation", "Boundary", "wave_speeds", "dashpot_matrix", "describe",
            "DEFAULT_GROUP", "DEFAULT_BOTTOM", "DEFAULT_SIDES", "MOTIONS"]
@@ -287,6 +288,37 @@ class _Upgoing:
         return (np.interp(t, self._tg, self._ug, left=0.0), np.interp(t, self._tg, self._vg, left=0.0))
 
 
+@dataclass(eq=False)
+class _FreeFieldOperator:
+    """What :meth:`Foundation.effective_force` precomputes for one set of records: ``K`` (CSR of its
+    ``rows`` (n_rows,) DOFs x n_comp * n_z columns, N per unit strain or per m/s) maps the free-field values
+    at the distinct elevations to the force; the delays (n_comp, n_z) s; the packed velocity grids
+    (see :func:`~masonrydam.effects.foundation_kernels.free_field_force`); ``w`` (n_comp * n_z,) and
+    ``out`` (n_rows,) the kernel's outputs."""
+
+    records: dict
+    upgoing: list
+    rows: np.ndarray
+    n_strain: int
+    delay_1: np.ndarray
+    delay_2: np.ndarray
+    delay_min: np.ndarray
+    dt: np.ndarray
+    scale: np.ndarray
+    speed: np.ndarray
+    indptr: np.ndarray
+    indices: np.ndarray
+    data: np.ndarray
+    w: np.ndarray
+    out: np.ndarray
+    grids: np.ndarray = None
+    grid_offset: np.ndarray = None
+    grid_length: np.ndarray = None
+    base_offset: np.ndarray = None
+    base_length: np.ndarray = None
+    sources: list = None
+
+
 # ---------------------------------------------------------------------------------------------
 # the foundation
 
@@ -403,6 +435,7 @@ class Foundation:
             self._S = sp.csr_matrix((self.n_dof, 0))
         self._xs, self._ns = xs, ns
         self._records: dict[int, _Upgoing] = {}
+        self._ff_op: _FreeFieldOperator | None = None
         if records is not None:
             self.set_motion(records)
 
@@ -479,7 +512,116 @@ class Foundation:
 
     def effective_force(self, t: float) -> np.ndarray:
         """Free-field effective force (n_dof,) N at time t (s): ``int N^T sigma_ff n dA + C_dashpot
-        v_ff(nodes)``, with ``v_ff`` relative to the base motion for within. Zero with no record set."""
+        v_ff(nodes)``, with ``v_ff`` relative to the base motion for within. Zero with no record set.
+
+        One kernel call (:func:`~masonrydam.effects.foundation_kernels.free_field_force`) on an operator
+        built at the first call after :meth:`set_motion`: the values of :meth:`_effective_force_reference`
+        (the same interpolations of :meth:`free_field`) to round-off of the sums."""
+        if not self._records or not self._points:
+            return np.zeros(self.n_dof)
+        t = float(t)
+        op = self._operator()
+        for k, up in enumerate(op.upgoing):  # the within grid must reach the latest time the kernel reads
+            if up.motion == "within" and t - op.delay_min[k] > up._grid_end:
+                up._extend(t - op.delay_min[k])
+            if op.sources[k] is not (up.rec.v if up.motion == "outcrop" else up._vg):
+                self._pack_grids(op)
+        status = free_field_force(t, op.grids, op.grid_offset, op.grid_length, op.base_offset, op.base_length,
+                                  op.dt, op.scale, op.speed, op.delay_1, op.delay_2, op.n_strain, op.indptr,
+                                  op.indices, op.data, op.w, op.out)
+        if status != STATUS_OK:  # pragma: no cover - the kernel has no failing case
+            raise RuntimeError(f"free_field_force returned status {status}")
+        f = np.zeros(self.n_dof)
+        f[op.rows] = op.out
+        return f
+
+    def _operator(self) -> "_FreeFieldOperator":
+        """The operator of :meth:`effective_force` for the records of the last :meth:`set_motion`."""
+        op = getattr(self, "_ff_op", None)
+        if op is not None and op.records is self._records:
+            return op
+        dim, ax = self.dim, self.axis
+        comps = list(self._records)
+        nc = len(comps)
+        z_pts, i_pts = np.unique(self._xs[:, ax], return_inverse=True)
+        nodes = self.absorbing_nodes
+        z_nodes, i_nodes = np.unique(self.coords[nodes, ax], return_inverse=True)
+        z = np.concatenate([z_pts, z_nodes])
+        nzt, nz = len(z_pts), len(z)
+        # the delays exactly as free_field forms them
+        delay_1 = np.array([(z - self.z_b) / self.speed[ci] for ci in comps]).reshape(nc, nz)
+        delay_2 = np.array([(2.0 * self.z_top - self.z_b - z) / self.speed[ci] for ci in comps]).reshape(nc, nz)
+        # traction T (P, dim) = sum_c a_c (P, dim) * strain_c(z_p) (the stress of _traction); V on the nodes
+        m, n, P = self.moduli, self._ns, len(self._xs)
+        pts = np.arange(P)
+        rows_a, cols_a, vals_a, rows_b, cols_b = [], [], [], [], []
+        for k, ci in enumerate(comps):
+            a = np.zeros((P, dim))
+            if ci == ax:  # P wave: sigma_zz = M e, sigma_hh = lam e
+                for h in range(dim):
+                    a[:, h] = (m["M"] if h == ax else m["lam"]) * n[:, h]
+            else:  # S wave: sigma_hz = sigma_zh = G e
+                a[:, ci] += m["G"] * n[:, ax]
+                a[:, ax] += m["G"] * n[:, ci]
+            for h in range(dim):
+                rows_a.append(pts * dim + h)
+                cols_a.append(k * nz + i_pts)
+                vals_a.append(a[:, h])
+            rows_b.append(nodes * dim + ci)
+            cols_b.append(k * nz + nzt + i_nodes)
+        A = sp.csr_matrix((np.concatenate(vals_a), (np.concatenate(rows_a), np.concatenate(cols_a))),
+                          shape=(P * dim, nc * nz))
+        rb = np.concatenate(rows_b)
+        B = sp.csr_matrix((np.ones(len(rb)), (rb, np.concatenate(cols_b))), shape=(self.n_dof, nc * nz))
+        K = (self._S @ A + self.dashpots @ B).tocsr()
+        K.sum_duplicates()
+        rows = np.flatnonzero(np.diff(K.indptr))
+        K = K[rows]
+        up = [self._records[ci] for ci in comps]
+        op = _FreeFieldOperator(
+            records=self._records, upgoing=up, rows=rows.astype(np.int64), n_strain=nzt,
+            delay_1=np.ascontiguousarray(delay_1), delay_2=np.ascontiguousarray(delay_2),
+            delay_min=np.minimum(delay_1, delay_2).min(axis=1) if nz else np.zeros(nc),
+            dt=np.array([u.rec.dt for u in up]), scale=np.array([0.5 if u.motion == "outcrop" else 1.0 for u in up]),
+            speed=np.array([float(self.speed[ci]) for ci in comps]),
+            indptr=K.indptr.astype(np.int64), indices=K.indices.astype(np.int64), data=np.ascontiguousarray(K.data),
+            w=np.zeros(nc * nz), out=np.zeros(len(rows)))
+        self._pack_grids(op)
+        self._ff_op = op
+        return op
+
+    @staticmethod
+    def _pack_grids(op: "_FreeFieldOperator") -> None:
+        """Pack the velocity grids of the operator's components (upgoing wave, then base motion) into one
+        array (after :meth:`set_motion` and whenever a within grid was extended)."""
+        parts, off, goff, glen, boff, blen, sources = [], 0, [], [], [], [], []
+        for u in op.upgoing:
+            g = u.rec.v if u.motion == "outcrop" else u._vg
+            if g is None:  # a within grid not built yet
+                u._extend(0.0)
+                g = u._vg
+            sources.append(g)
+            parts.append(g)
+            goff.append(off)
+            glen.append(len(g))
+            off += len(g)
+        for u in op.upgoing:
+            if u.motion == "within":  # free_field subtracts the base motion (relative) for within
+                parts.append(u.rec.v)
+                boff.append(off)
+                blen.append(len(u.rec.v))
+                off += len(u.rec.v)
+            else:
+                boff.append(0)
+                blen.append(0)
+        op.grids = np.concatenate(parts) if parts else np.zeros(0)
+        op.grid_offset, op.grid_length = np.array(goff, dtype=np.int64), np.array(glen, dtype=np.int64)
+        op.base_offset, op.base_length = np.array(boff, dtype=np.int64), np.array(blen, dtype=np.int64)
+        op.sources = sources
+
+    def _effective_force_reference(self, t: float) -> np.ndarray:
+        """:meth:`effective_force` evaluated point by point with :meth:`free_field` and :meth:`_traction`
+        (the reference the tests compare the kernel with)."""
         f = np.zeros(self.n_dof)
         if not self._records or not self._points:
             return f

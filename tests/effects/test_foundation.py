@@ -455,6 +455,71 @@ def test_within_series_layer_on_rigid_base():
         assert e[1] == pytest.approx(0.0, abs=1e-12)
 
 
+def _force_difference(fnd, times):
+    """max |effective_force - the point-by-point reference| / max |reference| over ``times``."""
+    worst, scale = 0.0, 0.0
+    for tk in times:
+        f, ref = fnd.effective_force(tk), fnd._effective_force_reference(tk)
+        assert f.shape == ref.shape == (fnd.n_dof,)
+        worst, scale = max(worst, float(np.abs(f - ref).max())), max(scale, float(np.abs(ref).max()))
+    assert scale > 0.0
+    return worst / scale
+
+
+@pytest.mark.parametrize("motion", ["outcrop", "within"])
+def test_effective_force_kernel_matches_free_field_2d(motion):
+    """The kernel path of effective_force (uniform-grid interpolation at the distinct elevations, one
+    precomputed operator) gives the forces of free_field / _traction point by point to round-off over the
+    whole record and after it (the within grid extended on demand, times out of order), for two
+    components on a mesh with uneven element heights; set_motion rebuilds the operator."""
+    mesh = block_mesh(3, 12, 9.0, 40.0, z0=-40.0)
+    z = mesh.points[:, 1]
+    mesh.points[:, 1] = np.where((z > -40.0) & (z < 0.0), z + 0.7 * np.sin(3.1 * z), z)
+    acc, dt = record(0.6)
+    spec = F.normalize_section({"mass": True, "motion": motion}, MODEL_2D)
+    mats = {"foundation": {"youngs_modulus": E_MOD, "poisson_ratio": NU, "density": RHO}}
+    fnd = F.build(spec, mesh, mats, MODEL_2D, records={"x": (acc, dt), "y": (-0.6 * acc, dt)})
+    times = np.concatenate([[5.0, 0.0, -0.01], dt * np.arange(0, int(round(0.75 / dt)), 3),
+                            [0.6, 2.3, 1.37 * dt, 11.0]])
+    diff = _force_difference(fnd, times)
+    print(f"\n{motion}: largest difference {diff:.2e} of the largest force")
+    assert diff < 1e-12
+    op = fnd._ff_op
+    fnd.set_motion({"y": (acc, dt)})
+    assert _force_difference(fnd, dt * np.arange(0, 400, 7)) < 1e-12
+    assert fnd._ff_op is not op
+    fnd.set_motion({})
+    assert not fnd.effective_force(0.3).any()
+
+
+def test_effective_force_kernel_matches_free_field_3d():
+    """3D, three components of a within motion (two S waves and a P wave): the kernel path against the
+    point-by-point reference, to round-off."""
+    mesh = hex_mesh(2, 3, 6, 12.0, 18.0, 30.0)
+    model = {"dimension": 3, "hypothesis": "3d", "thickness": 1.0, "gravity": [0.0, 0.0, -9.81]}
+    spec = F.normalize_section({"mass": True, "motion": "within"}, model)
+    acc, dt = record(0.4)
+    fnd = F.build(spec, mesh, {"foundation": {"youngs_modulus": E_MOD, "poisson_ratio": NU, "density": RHO}},
+                  model, records={"y": (acc, dt), "x": (-0.5 * acc, dt), "z": (0.3 * acc[::-1], dt)})
+    assert _force_difference(fnd, dt * np.arange(0, int(round(1.5 / dt)), 5)) < 1e-12
+
+
+@pytest.mark.parametrize("n", [1, 2, 7, 400])
+def test_interp_uniform_is_numpy_interp(n):
+    """The kernel's interpolation on the grid dt * arange(n) is numpy.interp(..., left=0.0) bit for bit:
+    before the grid, on its points, between them and after its end."""
+    from masonrydam.effects.foundation_kernels import interp_uniform
+    rng = np.random.default_rng(n)
+    dt = 1.0 / 3.0e3 if n > 2 else 0.01
+    tg = dt * np.arange(n)
+    vals = np.concatenate([rng.normal(size=5), rng.normal(size=n)])  # offset 5 into a packed array
+    x = np.concatenate([[-1.0, -1e-300, 0.0, tg[-1], tg[-1] * (1 + 1e-16), tg[-1] + dt, 10.0], tg,
+                        tg + dt * 1e-14, tg - dt * 1e-14, rng.uniform(-dt, n * dt * 1.2, 500)])
+    want = np.interp(x, tg, vals[5:], left=0.0)
+    got = np.array([interp_uniform(xi, vals, 5, n, dt) for xi in x])
+    assert np.array_equal(got, want)
+
+
 # ----------------------------------------------------------------------------------------------
 # d. bad input
 

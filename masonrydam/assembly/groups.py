@@ -272,6 +272,10 @@ class InterfaceGroup:
                 want_tangent, self.info)
         if self.kinematics == "large":
             st = interface_large_evaluate(*args, 0.0 if self.frame_surface == "bottom" else 0.5, self.law_id)
+        elif not want_tangent:  # forces only (an explicit step): the reference frames computed once
+            st = ik.interface_forces(self.conn, u, self.N, self.frame, self.jw, self.thickness, self.params_table,
+                                     self.param_index, self.state_base, self.state_trial, self.delta, self.traction,
+                                     self.fe, self.info, self.law_id)
         else:
             st = ik.interface_evaluate(*args, self.law_id)
         raise_for_status(st, self.info, self.name, "joint evaluation")

@@ -443,6 +443,63 @@ def interface_evaluate(
 
 
 @njit(cache=True)
+def interface_forces(conn, u, N, frame, jw, thickness, params_table, param_index, state_committed, state_trial,
+                     delta_out, traction_out, fe_out, info, law=None):
+    """Internal forces and joint state of a group of small-displacement interface elements, no tangent: the
+    forces of :func:`interface_evaluate` with ``want_tangent = False``, bit for bit, from the frames and
+    tributary areas of the reference mid-surface computed once (:func:`interface_geometry`: ``frame`` (n_elem,
+    nip, dim, dim), ``jw`` (n_elem, nip) = j w) instead of at every call. What an explicit step asks of its
+    joints: the frames are a third of the kernel's work, and they do not change under small displacements.
+    Other arguments and the status as in :func:`interface_evaluate` (seed eqs. 4-10)."""
+    n_elem = conn.shape[0]
+    dim = frame.shape[2]
+    nip = N.shape[0]
+    ns = N.shape[1]
+    ndof_half = ns * dim
+    du = np.empty((ns, dim))
+    R = np.empty((dim, dim))
+    C = np.empty((dim, dim))
+    tg = np.empty(dim)
+    Dug = np.empty(dim)
+    no_tangent = np.empty((0, 0, 0))
+    scratch = np.empty((dim, dim))
+    for e in range(n_elem):
+        for r in range(2 * ndof_half):
+            fe_out[e, r] = 0.0
+        for a in range(ns):
+            b = conn[e, a]
+            t = conn[e, ns + a]
+            for k in range(dim):
+                du[a, k] = u[t * dim + k] - u[b * dim + k]
+        h = thickness[e]
+        pidx = param_index[e]
+        for g in range(nip):
+            for k in range(dim):
+                s = 0.0
+                for a in range(ns):
+                    s += N[g, a] * du[a, k]
+                Dug[k] = s
+            for r in range(dim):
+                s = 0.0
+                for k in range(dim):
+                    R[r, k] = frame[e, g, r, k]
+                    s += R[r, k] * Dug[k]
+                delta_out[e, g, r] = s
+            status = joint_law_at(params_table, pidx, state_committed, state_trial, delta_out, traction_out, e, g,
+                                  dim, C, law)
+            if status != STATUS_OK:
+                info[0] = e
+                return status
+            add_point(fe_out, no_tangent, e, N, g, ns, dim, ndof_half, R, traction_out[e, g], C, jw[e, g] * h,
+                      False, tg, scratch, scratch)
+        for r in range(2 * ndof_half):
+            if not math.isfinite(fe_out[e, r]):
+                info[0] = e
+                return STATUS_NAN
+    return STATUS_OK
+
+
+@njit(cache=True)
 def interface_point_tangents(params_table, param_index, state_base, delta, dim, law, state_scratch, traction_scratch,
                              tangent_out, info):
     """The joint law's tangent ``dt/d delta`` (local axes) at every integration point, for the relative

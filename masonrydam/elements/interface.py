@@ -220,6 +220,26 @@ def local_frame(xm, dN, g, dim, R, size):
 
 
 @njit(cache=True, inline="always")
+def displacement_jumps(conn, u, e, ns, dim, du):
+    """The jumps ``du[a] = u_top,a - u_bot,a`` (ns, dim) m across element ``e``'s node pairs (seed eq. 4)."""
+    for a in range(ns):
+        b = conn[e, a]
+        t = conn[e, ns + a]
+        for k in range(dim):
+            du[a, k] = u[t * dim + k] - u[b * dim + k]
+
+
+@njit(cache=True, inline="always")
+def jump_at_point(N, g, ns, dim, du, Dug):
+    """The jump at integration point ``g`` in global axes, ``Dug = sum_a N_a du[a]`` (dim,) m (seed eq. 5)."""
+    for k in range(dim):
+        s = 0.0
+        for a in range(ns):
+            s += N[g, a] * du[a, k]
+        Dug[k] = s
+
+
+@njit(cache=True, inline="always")
 def add_point_tangent(ke_out, e, N, g, ns, dim, ndof_half, Cg):
     """Add the tangent of point ``g``, ``Cg`` (dim, dim) in global axes times the point's weight, to the
     element tangent ``ke_out[e]`` (2 ndof_half, 2 ndof_half): ``+-N_a N_b Cg`` on the bottom/top blocks
@@ -396,11 +416,7 @@ def interface_evaluate(
                     ke_out[e, r, c2] = 0.0
 
         size = mid_surface_derivatives(coords, conn, e, ns, dim, xm)
-        for a in range(ns):
-            b = conn[e, a]
-            t = conn[e, ns + a]
-            for k in range(dim):
-                du[a, k] = u[t * dim + k] - u[b * dim + k]
+        displacement_jumps(conn, u, e, ns, dim, du)
         h = thickness[e]
         pidx = param_index[e]
 
@@ -414,11 +430,7 @@ def interface_evaluate(
                 return STATUS_BAD_GEOMETRY
 
             # relative displacement in global then local axes
-            for k in range(dim):
-                s = 0.0
-                for a in range(ns):
-                    s += N[g, a] * du[a, k]
-                Dug[k] = s
+            jump_at_point(N, g, ns, dim, du, Dug)
             for r in range(dim):
                 s = 0.0
                 for k in range(dim):
@@ -466,19 +478,11 @@ def interface_forces(conn, u, N, frame, jw, thickness, params_table, param_index
     for e in range(n_elem):
         for r in range(2 * ndof_half):
             fe_out[e, r] = 0.0
-        for a in range(ns):
-            b = conn[e, a]
-            t = conn[e, ns + a]
-            for k in range(dim):
-                du[a, k] = u[t * dim + k] - u[b * dim + k]
+        displacement_jumps(conn, u, e, ns, dim, du)
         h = thickness[e]
         pidx = param_index[e]
         for g in range(nip):
-            for k in range(dim):
-                s = 0.0
-                for a in range(ns):
-                    s += N[g, a] * du[a, k]
-                Dug[k] = s
+            jump_at_point(N, g, ns, dim, du, Dug)
             for r in range(dim):
                 s = 0.0
                 for k in range(dim):
@@ -567,17 +571,9 @@ def interface_relative_displacements(conn, u, N, frame, delta_out, info):
     du = np.empty((ns, dim))
     Dug = np.empty(dim)
     for e in range(n_elem):
-        for a in range(ns):
-            b = conn[e, a]
-            t = conn[e, ns + a]
-            for k in range(dim):
-                du[a, k] = u[t * dim + k] - u[b * dim + k]
+        displacement_jumps(conn, u, e, ns, dim, du)
         for g in range(nip):
-            for k in range(dim):
-                s = 0.0
-                for a in range(ns):
-                    s += N[g, a] * du[a, k]
-                Dug[k] = s
+            jump_at_point(N, g, ns, dim, du, Dug)
             for r in range(dim):
                 s = 0.0
                 for k in range(dim):

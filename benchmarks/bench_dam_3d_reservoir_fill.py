@@ -19,6 +19,16 @@ the limit (if any), the wall time of each stage (from the start of the static so
 its steps, Newton iterations (joint space and general) and step cuts, the joint-space splits, holds and bond
 latches, the lowest sliding factor, and the ratio reservoir / gravity.
 
+With ``--reference`` each scene is run a second time with ``force_tolerance`` 1e-9, ``energy_tolerance`` 1e-14,
+100 iterations a step and 8 step cuts (as ``bench_dam_3d_gravity.py --reference``; then 1e-8 / 1e-13 if that does
+not converge), and the final joint states and displacements are compared with it: the number of joint points in
+another state and max_i |u_i - u_ref,i| / max_i |u_ref,i| over the nodes (Euclidean norms per node);
+``--reference-dir`` keeps and reuses the reference runs.
+
+The figures before (``BEFORE``) are printed with those measured now: on main before issue 33 the 8-monolith dam
+stopped at about 51-52 m; after the bond latch (a26e3bd) it filled in 9 steps, 807 iterations, 8 cuts and 8
+joint-space splits (reservoir 101.5 s against gravity 28.5 s); the 20-monolith scene took 192 s dry and 515 s wet.
+
 This is a benchmark, not a test: it never fails on a slow figure.
 """
 from __future__ import annotations
@@ -35,6 +45,16 @@ import tomllib
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+#: figures measured before (one thread): on main before issue 33, and after a26e3bd (the bond latch of the joint space)
+BEFORE = {
+    "fill8": ["main before issue 33: stopped at about 51-52 m, 'no convergence' (lowest sliding factor 5.3)",
+              "a26e3bd: level 57 m; gravity 28.5 s; reservoir 101.5 s, 9 steps, 807 it, 8 cuts, 8 joint-space splits "
+              "(ratio 3.57)"],
+    "reservoir20": ["main before issue 33: gravity 192 s, reservoir 515 s (ratio 2.68)"],
+}
+#: solver settings of the tight-tolerance reference runs, tightest first (the first that converges is used)
+REFERENCE_SOLVERS = [{"force_tolerance": 1e-9, "energy_tolerance": 1e-14, "max_iterations": 100, "max_step_cuts": 8},
+                     {"force_tolerance": 1e-8, "energy_tolerance": 1e-13, "max_iterations": 100, "max_step_cuts": 8}]
 GRAVITY = ROOT / "examples" / "dam_3d_gravity.toml"
 RESERVOIR = ROOT / "examples" / "dam_3d_reservoir.toml"
 
@@ -50,11 +70,14 @@ def scene_of(name: str) -> dict:
     return scene
 
 
-def child(name: str) -> None:
-    """Run one scene with its stages timed; print a JSON line of figures."""
+def child(name: str, solver: dict | None = None, arrays: str | None = None) -> None:
+    """Run one scene (with ``solver`` settings merged into its ``[solver]``) with its stages timed; print a JSON
+    line of figures; with ``arrays``, save the final joint states and displacements there (.npz)."""
     import importlib
     import time
     import warnings
+
+    import numpy as np
 
     import masonrydam
     from masonrydam.solvers.static.stepping import StaticSolver
@@ -105,6 +128,8 @@ def child(name: str) -> None:
 
     run_module._Run.on_static_step = timed_step
     scene = scene_of(name)
+    if solver:
+        scene.setdefault("solver", {}).update(solver)
     t0 = time.perf_counter()
     error = None
     try:
@@ -129,11 +154,15 @@ def child(name: str) -> None:
                    level=float(ds.reservoir_level.values[-1]))
         if "sliding_safety_factor" in ds:
             out["min_sliding_factor"] = float(ds.sliding_safety_factor.isel(step=-1).min())
+        if arrays:
+            np.savez(arrays, state=ds.joint_state.isel(step=-1).values.astype(np.int8),
+                     u=ds.displacement.isel(step=-1).values, level=out["level"])
     print("RESULT " + json.dumps(out, default=str))
 
 
-def run_child(name: str) -> dict:
-    proc = subprocess.run([sys.executable, __file__, "--child", name], capture_output=True, text=True)
+def run_child(name: str, solver: dict | None = None, arrays: str | None = None) -> dict:
+    cmd = [sys.executable, __file__, "--child", name, "--solver", json.dumps(solver or {})]
+    proc = subprocess.run(cmd + (["--arrays", arrays] if arrays else []), capture_output=True, text=True)
     for line in proc.stdout.splitlines():
         if line.startswith("RESULT "):
             return json.loads(line[7:])
@@ -143,16 +172,26 @@ def run_child(name: str) -> dict:
 def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--only", choices=("fill8", "reservoir20"))
+    p.add_argument("--reference", action="store_true", help="also run (or read) the tight-tolerance reference and compare")
+    p.add_argument("--reference-dir", default=None, help="keep the reference results here and reuse them")
     p.add_argument("--child", help=argparse.SUPPRESS)
+    p.add_argument("--solver", default="{}", help=argparse.SUPPRESS)
+    p.add_argument("--arrays", default=None, help=argparse.SUPPRESS)
     args = p.parse_args()
     if args.child:
-        child(args.child)
+        child(args.child, json.loads(args.solver), args.arrays)
         return
+    import tempfile
+
     from _common import cpu_model
 
     print(f"bench_dam_3d_reservoir_fill: one thread, {cpu_model()}")
+    tmp = tempfile.TemporaryDirectory(prefix="reservoir_fill_")
     for name in ([args.only] if args.only else ["fill8", "reservoir20"]):
-        r = run_child(name)
+        for line in BEFORE[name]:
+            print(f"{name} before, {line}")
+        now = str(Path(tmp.name) / f"{name}.npz")
+        r = run_child(name, arrays=now)
         if r["error"]:
             print(f"{name}: stopped: {r['error']} (stages timed: {r['stage_s']})")
             continue
@@ -165,6 +204,48 @@ def main():
         times = r["stage_s"]
         if "gravity" in times and "reservoir" in times:
             print(f"     reservoir / gravity stage time: {times['reservoir'] / times['gravity']:.2f} (target: at most 1.5)")
+        if args.reference:
+            compare(name, now, reference(name, args.reference_dir, tmp.name))
+
+
+def reference(name: str, store_dir: str | None, tmp: str) -> str | None:
+    """Path of the .npz of the tight-tolerance reference run of ``name`` (run now, or read from ``store_dir``)."""
+    import hashlib
+
+    key = hashlib.sha256(json.dumps(scene_of(name), sort_keys=True, default=str).encode()).hexdigest()[:16]
+    if store_dir:
+        store = Path(store_dir) / f"reservoir_fill_ref_{name}_{key}.npz"
+        if store.exists():
+            print(f"     reference read from {store}")
+            return str(store)
+    for solver in REFERENCE_SOLVERS:
+        path = str(Path(store_dir or tmp) / f"reservoir_fill_ref_{name}_{key}.npz")
+        Path(path).parent.mkdir(parents=True, exist_ok=True)
+        r = run_child(name, solver, path)
+        if not r["error"] and r.get("completed") in (True, "true", "True", 1):
+            print(f"     reference (force_tolerance {solver['force_tolerance']:g}): {r['run_s']:.1f} s, "
+                  + "; ".join(f"{s['stage']} {s['steps']} steps, {s['iterations']} it, {s['step_cuts']} cuts"
+                              for s in r["per_stage"]))
+            return path
+        print(f"     reference at force_tolerance {solver['force_tolerance']:g} failed: {r['error'] or r.get('limit_state')}")
+    return None
+
+
+def compare(name: str, now: str, ref: str | None) -> None:
+    """Final joint states and displacements of this run against the reference."""
+    import numpy as np
+
+    if ref is None or not Path(now).exists():
+        print(f"     {name}: no comparison (no reference or no result)")
+        return
+    a, b = np.load(now), np.load(ref)
+    if a["state"].shape != b["state"].shape:
+        print(f"     {name}: not comparable ({a['state'].shape} against {b['state'].shape} joint points)")
+        return
+    diff = int((a["state"] != b["state"]).sum())
+    du = np.linalg.norm(a["u"] - b["u"], axis=1).max() / np.linalg.norm(b["u"], axis=1).max()
+    print(f"     against the reference: {diff} of {a['state'].size} joint points in another final state; "
+          f"max |u - u_ref| / max |u_ref| = {du:.2e} (max |u_ref| = {np.linalg.norm(b['u'], axis=1).max() * 1e3:.2f} mm)")
 
 
 if __name__ == "__main__":

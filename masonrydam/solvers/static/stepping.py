@@ -116,6 +116,13 @@ class StaticStage:
 #: in 5 general iterations, 2.2 s condensed with 1 954 columns; the 3D dam example, 39 744 equations:
 #: 63 s general, 20 s condensed)
 STATIC_COLUMNS_MIN_EQUATIONS = 20_000
+#: with ``linear_solver = "auto"`` a static stage is condensed on its joints up to this many equations also where
+#: the general path takes AMG (from AUTO_ITERATIVE_MIN_DOF): the condensation needs one L D L^T factorization of
+#: the all-stick stiffness per constraint set, and AMG on a tangent with sliding and open joints converges 3-6x
+#: slower than on an elastic one (docs/performance.md). On the 20-monolith dam of examples/dam_3d_reservoir.toml
+#: (60 258 equations, 42 912 joint unknowns) the factor has 39 M entries (20 s, 3.1 GB peak with the column store)
+#: and the reservoir stage took 54 s condensed against more than 900 s (not finished) on the general AMG path
+STATIC_JOINT_SPACE_AUTO_MAX_EQUATIONS = 80_000
 
 
 #: path-following controls (:mod:`.arc_length`), in the order tried where load control stalls: the global arc
@@ -402,7 +409,8 @@ class StaticSolver:
         step can be solved on the relative displacements of the nonlinear joints, condensed from the
         all-stick stiffness ``K_ref`` (factorized once per constraint set, L D L^T), as the dynamic
         solver does with its effective matrix (:mod:`masonrydam.solvers.joint_space`): no sparse factorization per
-        iteration. It applies with ``joint_space = "auto"``, full Newton, a direct solver and nonlinear
+        iteration. It applies with ``joint_space = "auto"``, full Newton, a direct solver (or ``"auto"`` up to
+        STATIC_JOINT_SPACE_AUTO_MAX_EQUATIONS equations, where the general path takes AMG) and nonlinear
         joints (above JOINT_SPACE_MAX joint unknowns the columns of the flexibility are computed as the
         iterations need them, :class:`~masonrydam.solvers.joint_space.FlexibilityColumns`, in models of
         at least STATIC_COLUMNS_MIN_EQUATIONS equations)."""
@@ -413,7 +421,9 @@ class StaticSolver:
         if self._js_dofmap is m.dofmap:
             return self._js
         self._js, self._js_dofmap = None, m.dofmap
-        if resolve_backend(s.linear_solver, n_dof=len(m.dofmap.free), dim=m.dim) == "amg":
+        n_eq = len(m.dofmap.free)
+        if resolve_backend(s.linear_solver, n_dof=n_eq, dim=m.dim) == "amg" \
+                and (s.linear_solver != "auto" or n_eq > STATIC_JOINT_SPACE_AUTO_MAX_EQUATIONS):
             return None
         if (lazy_flexibility(joint_space_size(m))
                 and len(m.dofmap.free) < STATIC_COLUMNS_MIN_EQUATIONS):

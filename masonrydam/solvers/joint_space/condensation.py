@@ -283,8 +283,14 @@ class JointSpace:
     this fraction of :data:`FLEXIBILITY_MEMORY_MAX` bytes.
     """
 
-    def __init__(self, model, factorization, store_columns=True, column_memory_share=1.0):
+    def __init__(self, model, factorization, store_columns=True, column_memory_share=1.0, static=False):
         self.model = model
+        #: a static stage's joint space: points flipping across the cohesion jump get their bond latched broken
+        #: (:meth:`_bond_chatter`) and Newton a fresh budget after a release (:data:`FRESH_BUDGET_RELEASES`).
+        #: Dynamic steps keep the hold-and-release of before: their inertia already regularises the step, and
+        #: the latch would change the histories of cracking sections (the Koyna section at dt = 0.01 s: the
+        #: energy its contact events create, -20 % of the largest term, became a +4 % loss)
+        self.static = bool(static)
         self.dim = dim = model.dim
         self.groups = [g for g in model.igroups if g.nonlinear]
         #: the joint law of the points: the one the joint-space kernels carry (``JointLaw.joint_space``, the seed's
@@ -504,7 +510,7 @@ class JointSpace:
         ``S_BOND_BROKEN``: a joint that has opened once is a crack, ``c = ft = 0``; Tzamtzis & Asteris sec.
         3.4), so a bond that an iterate of the step broke is an admissible state of the step's end; the
         converged iterate satisfies the law with that bond broken (never a held state)."""
-        if FLIPS_BEFORE_LATCH is None or not self.law.latches_bonds:
+        if FLIPS_BEFORE_LATCH is None or not self.static or not self.law.latches_bonds:
             return np.zeros(self.n_points, dtype=bool)
         return ((flips >= FLIPS_BEFORE_LATCH) & self.law.bond_broken(broke) & ~self.law.bond_broken(self.base))
 
@@ -617,7 +623,7 @@ class JointSpace:
                     break
                 released |= was_held
                 flips[was_held] = 0
-                if restarts < FRESH_BUDGET_RELEASES and it - newton_start < MAX_JOINT_SPACE_ITERATIONS:
+                if self.static and restarts < FRESH_BUDGET_RELEASES and it - newton_start < MAX_JOINT_SPACE_ITERATIONS:
                     restarts += 1
                     newton_start = it
                     flips[:] = 0

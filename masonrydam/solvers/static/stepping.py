@@ -437,7 +437,7 @@ class StaticSolver:
             return None
         self.stats.factorizations += 1
         self.stats.analyses += 1
-        self._js = JointSpace(m, ref)
+        self._js = JointSpace(m, ref, static=True)
         self.stats.joint_space_size = max(self.stats.joint_space_size, joint_space_size(m))
         self.stats.joint_space_setup_s += time.perf_counter() - t0
         return self._js

@@ -131,7 +131,7 @@ def child(spec):
         ds = masonrydam.run(spec["scene"], Path(tmp) / "out.nc")
         wall = time.perf_counter() - t0
         a = dict(ds.attrs)
-        out = {"wall_s": wall, "peak_gib": rss.peak / 2**30, "n_dof": None}  # RssSampler.peak is in bytes
+        out = {"wall_s": wall, "peak_gib": rss.peak / 2**30, "n_dof": None}  # in bytes inside the block (MiB after it)
         stage_names = json.loads(ds.stage.attrs["stage_names"])
         dyn = int(np.max(ds.stage.values))
         steps = ds.stage.values == dyn

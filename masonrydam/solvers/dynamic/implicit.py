@@ -138,7 +138,9 @@ class ImplicitStep:
     """
 
     def __init__(self, model, settings, equations, effective, energy, joint_spaces, stats, count_iterations,
-                 st, t_end, h):
+                 st, t_end, h, stop_check=None):
+        #: called before every general Newton iteration (None: never); raises to stop within the step
+        self.stop_check = stop_check
         self.model, self.s, self.eq, self.effective = model, settings, equations, effective
         self.energy, self.joint_spaces, self.stats = energy, joint_spaces, stats
         self.count_iterations = count_iterations
@@ -310,7 +312,8 @@ class ImplicitStep:
         self.kind_prev, self.rn_prev, self.allow_modified = None, math.inf, s.modified_newton
         self.damping = CycleDamping()
         result = newton_iterations(self, current, self.test, s.max_iterations,
-                                   guard=self.guard if self.nonlinear else None)
+                                   guard=self.guard if self.nonlinear else None,
+                                   on_check=None if self.stop_check is None else lambda it, rn, scale: self.stop_check())
         if result.converged:
             return result.iterate, ""
         last = result.iterate

@@ -36,6 +36,15 @@ from .step_control import AdaptiveStepping, FixedSteps
 OPEN_TANGENT_AFTER_STAGE = 1e-6
 
 
+class StepInterrupted(KeyboardInterrupt):
+    """A stop requested within an implicit step (between two Newton iterations): the step is abandoned and the
+    last converged step kept. A ``KeyboardInterrupt``, so that no handler of failed steps retries it."""
+
+    def __init__(self, status: str):
+        super().__init__(status)
+        self.status = status
+
+
 class DynamicSolver:
     """Time integration of a :class:`~masonrydam.assembly.model.Model` through a :class:`~.stage.DynamicStage`.
 
@@ -46,7 +55,8 @@ class DynamicSolver:
     ``iterations`` (Newton iterations since the last record), ``reaction`` (full-DOF, N, at the
     constrained DOFs; zero elsewhere), ``final`` (bool).
 
-    ``stop_requested()``, when given, is asked after every converged step; a status it returns (e.g.
+    ``stop_requested()``, when given, is asked after every converged step (and between the Newton iterations of an
+    implicit step, which is then abandoned); a status it returns (e.g.
     ``"interrupted"``) records that step (if the stride skipped it) and raises
     :class:`~masonrydam.errors.RunStopped` naming the step and the time.
     """
@@ -136,11 +146,18 @@ class DynamicSolver:
                 self.joint_spaces.set_up(ref)
                 stepping = (AdaptiveStepping(self, s, eq, self.energy, self.stats) if s.adaptive
                             else FixedSteps(self, s, self.stats))
+                self._last_converged = (0, st)
                 try:
                     # one BLAS thread: the dense LU of the joint-space solver (LAPACK) must be bitwise
                     # reproducible, and with few cores threads only slowed these small systems down
                     with threadpool_limits(limits=1, user_api="blas"):
                         st = stepping.run(stage, st)
+                except StepInterrupted as stop:  # a stop asked for within a step: keep the last converged one
+                    k, last = self._last_converged
+                    self.refuse_step(last)
+                    self.fail(stage, last, RunStopped(stop.status, f"at step {k} of {stage.n_steps} (t = {last.t:.4g} s) "
+                                                                   f"of stage '{stage.name}', within the step after it "
+                                                                   "(abandoned)"))
                 finally:
                     self.joint_spaces.close()  # their factors and columns: each stage sets up its own
         finally:
@@ -228,8 +245,16 @@ class DynamicSolver:
         """One implicit step of size ``h`` from the committed state ``st`` to stage time ``t_end``: (ok,
         new_state, why); see :meth:`~.implicit.ImplicitStep.solve`."""
         step = ImplicitStep(self.model, self.s, self.eq, self.effective, self.energy, self.joint_spaces, self.stats,
-                            self._count_iterations, st, t_end, h)
+                            self._count_iterations, st, t_end, h,
+                            stop_check=None if self.stop_requested is None else self._stop_within_step)
         return step.solve(can_split=can_split, error_check=error_check, split_joint_space=split_joint_space)
+
+    def _stop_within_step(self):
+        """Between two Newton iterations of an implicit step: raise :class:`StepInterrupted` where a stop was asked
+        for (a step of a large 3D model in the general Newton path can take minutes)."""
+        status = self.stop_requested()
+        if status is not None:
+            raise StepInterrupted(status)
 
     def refuse_step(self, st):
         """Back to the committed state ``st`` after a step that failed or was refused: the joints' trial states
@@ -243,6 +268,7 @@ class DynamicSolver:
     def record_step(self, stage, k, st, n_steps):
         """After converged step ``k`` of ``n_steps``: recorded every ``output_stride`` steps and at the last,
         the progress told, and the run stopped where a stop was requested."""
+        self._last_converged = (k, st)
         self._maybe_emit(stage, k, st, n_steps)
 
     def fail(self, stage, st, exc):

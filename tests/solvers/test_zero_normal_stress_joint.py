@@ -87,7 +87,10 @@ def test_bond_chatter_latches_only_flipping_points_whose_bond_broke():
     broke[[0, 1, 3], mc.S_BOND_BROKEN] = 1.0
     fake = SimpleNamespace(law=law, base=base, n_points=4, static=True)
     flips = np.array([js_module.FLIPS_BEFORE_LATCH, js_module.FLIPS_BEFORE_LATCH - 1, 5, 5])
+    assert js_module.JointSpace._latches(fake)
     assert js_module.JointSpace._bond_chatter(fake, flips, broke).tolist() == [True, False, False, False]
-    # a dynamic step's joint space never latches: its histories stay those of the hold-and-release
+    # a dynamic step's joint space never latches (it keeps no broken bonds): its histories stay those of the
+    # hold-and-release
     fake.static = False
-    assert not js_module.JointSpace._bond_chatter(fake, flips, broke).any()
+    assert not js_module.JointSpace._latches(fake)
+    assert not js_module.JointSpace._bond_chatter(fake, flips, None).any()

@@ -493,10 +493,16 @@ class JointSpace:
         state_key(self.codes, self.traction, key)
         return key
 
+    def _latches(self) -> bool:
+        """Whether this joint space latches the bonds of flipping points (:meth:`_bond_chatter`): a static one with
+        a law whose bonds latch."""
+        return FLIPS_BEFORE_LATCH is not None and self.static and self.law.latches_bonds
+
     def _bond_chatter(self, flips, broke):
         """(P,) bool: the points to latch broken (:data:`FLIPS_BEFORE_LATCH`): they have changed state that
         many times in the step, their bond broke in one of its iterates (``broke``: state rows whose bond
-        column holds the bonds broken so far) and is intact in ``self.base``.
+        column holds the bonds broken so far; None where the step does not latch, :meth:`_latches`) and is intact in
+        ``self.base``.
 
         Why: with cohesion ``c`` and no tensile strength a point whose normal traction is about zero sits on
         a jump of the law: closed, its bond carries a shear up to ``c``; open, it breaks and carries nothing.
@@ -510,7 +516,7 @@ class JointSpace:
         ``S_BOND_BROKEN``: a joint that has opened once is a crack, ``c = ft = 0``; Tzamtzis & Asteris sec.
         3.4), so a bond that an iterate of the step broke is an admissible state of the step's end; the
         converged iterate satisfies the law with that bond broken (never a held state)."""
-        if FLIPS_BEFORE_LATCH is None or not self.static or not self.law.latches_bonds:
+        if broke is None:
             return np.zeros(self.n_points, dtype=bool)
         return ((flips >= FLIPS_BEFORE_LATCH) & self.law.bond_broken(broke) & ~self.law.bond_broken(self.base))
 
@@ -601,9 +607,12 @@ class JointSpace:
                     self._restore(at_predictor)
         flips = np.zeros(P, dtype=np.int64)
         released = np.zeros(P, dtype=bool)  # held once in this step and let go: never held again
-        # the bonds broken in any iterate of the step (the law's bond column, accumulated): see FLIPS_BEFORE_LATCH
-        broke = np.zeros_like(self.trial)
-        self.law.keep_latched_bonds(broke, self.base)
+        # the bonds broken in any iterate of the step (the law's bond column, accumulated): see FLIPS_BEFORE_LATCH;
+        # not kept where the step does not latch (dynamic steps)
+        broke = None
+        if self._latches():
+            broke = np.zeros_like(self.trial)
+            self.law.keep_latched_bonds(broke, self.base)
         seen, prev_sig, prev_key, stabilized, same = set(), None, None, False, 0
         it, why = 0, ""
         newton_start, restarts = 0, 0  # the iteration of the last release with a fresh budget, and their number
@@ -640,7 +649,8 @@ class JointSpace:
                        f"({MAX_JOINT_SPACE_ITERATIONS} Newton, {n_fixed} with the initial stiffness)")
                 break
             fixed_point = it - newton_start >= MAX_JOINT_SPACE_ITERATIONS
-            self.law.keep_latched_bonds(broke, self.trial)
+            if broke is not None:
+                self.law.keep_latched_bonds(broke, self.trial)
             if prev_key is not None:
                 changed_state = key != prev_key
                 same = 0 if changed_state.any() else same + 1

@@ -83,3 +83,16 @@ class RssSampler:
         self._stop.set()
         self._t.join()
         self.peak = max(self.peak, self.proc.memory_info().rss) / 2**20
+
+
+def child_result(cmd: list, marker: str = "RESULT ") -> dict:
+    """Run ``cmd`` (a benchmark's child process) and return the JSON of its last stdout line starting with
+    ``marker``; RuntimeError with the tails of its output when it printed none."""
+    import json
+    import subprocess
+
+    proc = subprocess.run(cmd, capture_output=True, text=True)
+    lines = [x for x in proc.stdout.splitlines() if x.startswith(marker)]
+    if not lines:
+        raise RuntimeError(f"run failed:\n{proc.stdout[-2000:]}\n{proc.stderr[-4000:]}")
+    return json.loads(lines[-1][len(marker):])

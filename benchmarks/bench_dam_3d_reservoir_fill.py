@@ -33,13 +33,12 @@ This is a benchmark, not a test: it never fails on a slow figure.
 """
 from __future__ import annotations
 
-from _common import pin_one_thread  # benchmarks/ is sys.path[0] when run as a script
+from _common import child_result, pin_one_thread  # benchmarks/ is sys.path[0] when run as a script
 
 pin_one_thread()
 
 import argparse
 import json
-import subprocess
 import sys
 import tomllib
 from pathlib import Path
@@ -162,11 +161,7 @@ def child(name: str, solver: dict | None = None, arrays: str | None = None) -> N
 
 def run_child(name: str, solver: dict | None = None, arrays: str | None = None) -> dict:
     cmd = [sys.executable, __file__, "--child", name, "--solver", json.dumps(solver or {})]
-    proc = subprocess.run(cmd + (["--arrays", arrays] if arrays else []), capture_output=True, text=True)
-    for line in proc.stdout.splitlines():
-        if line.startswith("RESULT "):
-            return json.loads(line[7:])
-    raise RuntimeError(f"run failed:\n{proc.stdout[-2000:]}\n{proc.stderr[-4000:]}")
+    return child_result(cmd + (["--arrays", arrays] if arrays else []))
 
 
 def main():

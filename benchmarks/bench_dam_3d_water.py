@@ -23,13 +23,12 @@ This is a benchmark, not a test: it never fails on a slow figure.
 """
 from __future__ import annotations
 
-from _common import pin_one_thread  # benchmarks/ is sys.path[0] when run as a script
+from _common import child_result, pin_one_thread  # benchmarks/ is sys.path[0] when run as a script
 
 pin_one_thread()
 
 import argparse
 import json
-import subprocess
 import sys
 import tomllib
 from pathlib import Path
@@ -104,11 +103,7 @@ def scenes(args):
 
 
 def run_child(scene) -> dict:
-    proc = subprocess.run([sys.executable, __file__, "--child", json.dumps(scene)], capture_output=True, text=True)
-    for line in proc.stdout.splitlines():
-        if line.startswith("RESULT "):
-            return json.loads(line[7:])
-    raise RuntimeError(f"run failed:\n{proc.stdout[-2000:]}\n{proc.stderr[-4000:]}")
+    return child_result([sys.executable, __file__, "--child", json.dumps(scene)])
 
 
 def main():

@@ -301,6 +301,28 @@ def small_wall(*, length=0.8, height=0.4, elements_per_unit=3, bond="running", n
 
 
 # ----------------------------------------------------------------------------------------------
+# a weightless 3D block on a cohesive joint, driven by its top face
+# ----------------------------------------------------------------------------------------------
+
+def driven_block_on_cohesive_joint(name, stages, *, normal_stiffness=1e11):
+    """A 1 x 1 x 0.5 m block on a 1 x 1 x 0.5 m base (blocks_3d, 0.5 m elements, E = 30 GPa, nu = 0.2), joined by
+    a Mohr-Coulomb joint (kn = ``normal_stiffness``, ks = 1e11 Pa/m, phi = 45 deg, c = 0.5 MPa, no tensile
+    strength), without gravity, the base held; each of ``stages``, a list of ``(stage name, [ux, uy, uz])``,
+    drives the top face to that displacement (m) in one step."""
+    blocks = [{"x0": 0, "y0": 0, "z0": -0.5, "x1": 1, "y1": 1, "z1": 0, "group": "base"},
+              {"x0": 0, "y0": 0, "z0": 0, "x1": 1, "y1": 1, "z1": 0.5, "group": "block"}]
+    return {"model": {"name": name, "dimension": 3, "gravity": [0.0, 0.0, 0.0]},
+            "mesh": {"generator": "blocks_3d", "parameters": {"element_size": 0.5, "blocks": blocks}},
+            "materials": {g: {"youngs_modulus": 3e10, "poisson_ratio": 0.2, "density": 2400.0} for g in ("base", "block")},
+            "joints": {"joints": {"normal_stiffness": normal_stiffness, "shear_stiffness": 1e11, "friction_angle": 45.0,
+                                  "cohesion": "0.5 MPa"}},
+            "supports": [{"set": "base"}],
+            "stages": [{"name": stage, "steps": 1, "loads": [{"type": "displacement", "set": "top",
+                                                              "components": ["x", "y", "z"], "value": list(value)}]}
+                       for stage, value in stages]}
+
+
+# ----------------------------------------------------------------------------------------------
 # a gravity dam with its reservoir
 # ----------------------------------------------------------------------------------------------
 

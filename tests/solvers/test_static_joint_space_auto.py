@@ -15,20 +15,11 @@ import numpy as np
 import masonrydam
 from masonrydam.solvers.linear import direct
 from masonrydam.solvers.static import stepping
+from scenes import driven_block_on_cohesive_joint
 
 
 def _scene():
-    blocks = [{"x0": 0, "y0": 0, "z0": -0.5, "x1": 1, "y1": 1, "z1": 0, "group": "base"},
-              {"x0": 0, "y0": 0, "z0": 0, "x1": 1, "y1": 1, "z1": 0.5, "group": "block"}]
-    drive = lambda value: {"type": "displacement", "set": "top", "components": ["x", "y", "z"], "value": value}
-    return {"model": {"name": "auto_amg", "dimension": 3, "gravity": [0.0, 0.0, 0.0]},
-            "mesh": {"generator": "blocks_3d", "parameters": {"element_size": 0.5, "blocks": blocks}},
-            "materials": {g: {"youngs_modulus": 3e10, "poisson_ratio": 0.2, "density": 2400.0} for g in ("base", "block")},
-            "joints": {"joints": {"normal_stiffness": 1e11, "shear_stiffness": 1e11, "friction_angle": 45.0,
-                                  "cohesion": "0.5 MPa"}},
-            "supports": [{"set": "base"}],
-            "stages": [{"name": "shear", "steps": 1, "loads": [drive([2e-5, 1e-5, -1e-6])]},
-                       {"name": "lift", "steps": 1, "loads": [drive([3e-5, 1e-5, 2e-6])]}]}
+    return driven_block_on_cohesive_joint("auto_amg", [("shear", [2e-5, 1e-5, -1e-6]), ("lift", [3e-5, 1e-5, 2e-6])])
 
 
 def test_auto_condenses_where_the_general_path_takes_amg(monkeypatch):

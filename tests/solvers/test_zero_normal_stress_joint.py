@@ -18,23 +18,14 @@ import pytest
 import masonrydam
 from masonrydam.materials import mohr_coulomb as mc
 from masonrydam.solvers.joint_space import condensation as js_module
+from scenes import driven_block_on_cohesive_joint
 
 TAN_PHI = 1.0  # phi = 45 deg
 KN = 1e11
 
 
 def _scene():
-    blocks = [{"x0": 0, "y0": 0, "z0": -0.5, "x1": 1, "y1": 1, "z1": 0, "group": "base"},
-              {"x0": 0, "y0": 0, "z0": 0, "x1": 1, "y1": 1, "z1": 0.5, "group": "block"}]
-    drive = lambda value: {"type": "displacement", "set": "top", "components": ["x", "y", "z"], "value": value}
-    return {"model": {"name": "zero_stress", "dimension": 3, "gravity": [0.0, 0.0, 0.0]},
-            "mesh": {"generator": "blocks_3d", "parameters": {"element_size": 0.5, "blocks": blocks}},
-            "materials": {g: {"youngs_modulus": 3e10, "poisson_ratio": 0.2, "density": 2400.0} for g in ("base", "block")},
-            "joints": {"joints": {"normal_stiffness": KN, "shear_stiffness": 1e11, "friction_angle": 45.0,
-                                  "cohesion": "0.5 MPa"}},
-            "supports": [{"set": "base"}],
-            "stages": [{"name": "open", "steps": 1, "loads": [drive([2e-6, 1e-6, 1e-6])]},
-                       {"name": "close", "steps": 1, "loads": [drive([4e-6, 3e-6, -2.5e-6])]}]}
+    return driven_block_on_cohesive_joint("zero_stress", [("open", [2e-6, 1e-6, 1e-6]), ("close", [4e-6, 3e-6, -2.5e-6])], normal_stiffness=KN)
 
 
 @pytest.fixture(scope="module")

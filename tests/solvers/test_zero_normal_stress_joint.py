@@ -25,7 +25,8 @@ KN = 1e11
 
 
 def _scene():
-    return driven_block_on_cohesive_joint("zero_stress", [("open", [2e-6, 1e-6, 1e-6]), ("close", [4e-6, 3e-6, -2.5e-6])], normal_stiffness=KN)
+    return driven_block_on_cohesive_joint("zero_stress", [("open", [2e-6, 1e-6, 1e-6]), ("close", [4e-6, 3e-6, -2.5e-6])],
+                                          normal_stiffness=KN)
 
 
 @pytest.fixture(scope="module")

@@ -97,3 +97,14 @@ class RunStopped(KeyboardInterrupt):
 
     def __str__(self) -> str:
         return self.message()
+
+
+class StepInterrupted(KeyboardInterrupt):
+    """A stop requested within a step (between two Newton or joint-space iterations): the solver abandons
+    the step, reverts the joints' trial states and keeps the last converged step; it then raises
+    :class:`RunStopped`. A ``KeyboardInterrupt``, so that no handler of failed steps retries it.
+    status: ``"interrupted"`` or ``"terminated"``."""
+
+    def __init__(self, status: str):
+        super().__init__(status)
+        self.status = status

@@ -206,7 +206,8 @@ class _Run:
         try:
             stopper.install()
             bar = Progress(len(self.stages), progress)
-            self.solver = solver = StaticSolver(model, self.settings, on_step=self.on_static_step, progress=bar)
+            self.solver = solver = StaticSolver(model, self.settings, on_step=self.on_static_step, progress=bar,
+                                                stop_requested=stopper.requested)
             u = solver.run(self.static_stages) if self.static_stages else np.zeros(model.n_dof)
             for e in self.effects:
                 e.after_static(model, u)

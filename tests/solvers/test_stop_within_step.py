@@ -9,6 +9,7 @@ an uninterrupted run of the same scene (the kernels are deterministic)."""
 from __future__ import annotations
 
 import inspect
+import sys
 import warnings
 
 import numpy as np
@@ -17,6 +18,8 @@ import pytest
 import masonrydam
 from masonrydam.errors import RunStopped
 from masonrydam.results.files import IncompleteResultWarning, open_result
+from masonrydam.cli.main import default_scene_path
+from masonrydam.scene.scene import Scene
 from masonrydam.scene.stopping import StopRequests
 from scenes import sliding_block
 
@@ -47,6 +50,85 @@ def test_stop_within_an_implicit_step_keeps_the_last_converged_step(tmp_path, mo
     assert 0.0 < t_last < 0.4
     assert t_last == pytest.approx(0.002 * round(t_last / 0.002))  # a converged step's time, not a trial's
     ref = masonrydam.run(sliding_block(duration=t_last, dt=0.002, integrator="hht", joint_space="off"))
+    assert ref.sizes["step"] == ds.sizes["step"]
+    np.testing.assert_allclose(ds.displacement.values, ref.displacement.values, rtol=0,
+                               atol=1e-10 * np.abs(ref.displacement.values).max())
+    np.testing.assert_array_equal(ds.joint_state.values, ref.joint_state.values)
+
+
+def _stop_at(count: int, where: str):
+    """A ``StopRequests.requested`` that answers "interrupted" from the ``count``-th time it is asked within a step
+    by ``where`` (the function that called ``_stop_within_step``: ``"_solve_step"`` for the joint-space iteration,
+    ``"tell_progress"`` for a Newton iteration of the static general path), and None otherwise; the number of such
+    calls is in its ``calls``."""
+    calls = {"n": 0}
+
+    def requested(self):
+        caller = sys._getframe(1)
+        if caller.f_code.co_name == "_stop_within_step" and caller.f_back.f_code.co_name == where:
+            calls["n"] += 1
+            if calls["n"] >= count:
+                return "interrupted"
+        return None
+
+    requested.calls = calls
+    return requested
+
+
+def _kept(out):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", IncompleteResultWarning)
+        return open_result(out)
+
+
+@pytest.mark.parametrize("joint_space, where, count", [("auto", "_solve_step", 60), ("off", "tell_progress", 20)])
+def test_stop_within_a_static_step_keeps_the_converged_steps(tmp_path, monkeypatch, default_scene_result, joint_space,
+                                                             where, count):
+    """The default scene (a wall pushed at its top; its static steps are solved in joint space, or with
+    ``joint_space = "off"`` by the general Newton path) stopped within a step: the run raises RunStopped naming the
+    last converged step and the abandoned one; the file keeps the steps converged before, and they are those of
+    the uninterrupted run (bit for bit on the same path; on the general path within 1e-5 of the largest
+    displacement: the two paths solve the same frictional steps to their tolerances, docs/performance.md)."""
+    scene = Scene.from_toml(default_scene_path()).data
+    scene.setdefault("solver", {})["joint_space"] = joint_space
+    requested = _stop_at(count, where)
+    monkeypatch.setattr(StopRequests, "requested", requested)
+    out = tmp_path / "out.nc"
+    with pytest.raises(RunStopped) as err:
+        masonrydam.run(Scene(scene, base_dir=default_scene_path().parent), output=out)
+    monkeypatch.undo()
+    assert requested.calls["n"] == count  # the stop came from within a step, on the path asked for
+    assert "within the next step" in str(err.value) and "abandoned" in str(err.value)
+    ds = _kept(out)
+    full = open_result(default_scene_result)
+    assert ds.attrs["status"] == "interrupted"
+    n = ds.sizes["step"]
+    assert 0 < n < full.sizes["step"]
+    np.testing.assert_array_equal(ds.load_factor.values, full.load_factor.values[:n])
+    if joint_space == "auto":
+        np.testing.assert_array_equal(ds.displacement.values, full.displacement.values[:n])
+        np.testing.assert_array_equal(ds.joint_state.values, full.joint_state.values[:n])
+    else:
+        np.testing.assert_allclose(ds.displacement.values, full.displacement.values[:n], rtol=0,
+                                   atol=1e-5 * np.abs(full.displacement.values[:n]).max())
+
+
+def test_stop_within_a_dynamic_joint_space_attempt(tmp_path, monkeypatch):
+    """The sliding block with its dynamic steps solved in joint space, stopped within a joint-space attempt: the
+    attempt is abandoned and the steps before it kept, equal to an uninterrupted run's."""
+    scene = sliding_block(duration=0.4, dt=0.002, integrator="hht")
+    requested = _stop_at(30, "_solve_step")
+    monkeypatch.setattr(StopRequests, "requested", requested)
+    out = tmp_path / "out.nc"
+    with pytest.raises(RunStopped) as err:
+        masonrydam.run(scene, output=out)
+    monkeypatch.undo()
+    assert requested.calls["n"] == 30
+    assert "within the step after it (abandoned)" in str(err.value)
+    ds = _kept(out)
+    t_last = float(ds.time.values[-1])
+    assert 0.0 < t_last < 0.4
+    ref = masonrydam.run(sliding_block(duration=t_last, dt=0.002, integrator="hht"))
     assert ref.sizes["step"] == ds.sizes["step"]
     np.testing.assert_allclose(ds.displacement.values, ref.displacement.values, rtol=0,
                                atol=1e-10 * np.abs(ref.displacement.values).max())

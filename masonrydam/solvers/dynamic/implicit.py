@@ -53,9 +53,11 @@ class JointSpaces:
     ``max_substeps``.
     """
 
-    def __init__(self, model, settings, equations, effective, stats, extra_levels=0):
+    def __init__(self, model, settings, equations, effective, stats, extra_levels=0, stop_check=None):
         self.model, self.s, self.eq, self.effective, self.stats = model, settings, equations, effective, stats
         self.extra_levels = extra_levels
+        #: asked before every joint-space iteration (:attr:`JointSpace.stop_check`); None: never
+        self.stop_check = stop_check
         self.by_step = {}
 
     def set_up(self, reference):
@@ -75,6 +77,7 @@ class JointSpaces:
         nominal = h == self.s.dt
         js = self.by_step[h] = JointSpace(self.model, reference.fact, store_columns=nominal,
                                           column_memory_share=1.0 if nominal else 0.25)
+        js.stop_check = self.stop_check
         self.stats.joint_space_setup_s += time.perf_counter() - t0
         return js
 

@@ -291,6 +291,9 @@ class JointSpace:
         #: the latch would change the histories of cracking sections (the Koyna section at dt = 0.01 s: the
         #: energy its contact events create, -20 % of the largest term, became a +4 % loss)
         self.static = bool(static)
+        #: called (no arguments) before every iteration of a step; it raises (``StepInterrupted``) where the run
+        #: was asked to stop: the step is then abandoned with the groups' states untouched. None: never asked
+        self.stop_check = None
         self.dim = dim = model.dim
         self.groups = [g for g in model.igroups if g.nonlinear]
         #: the joint law of the points: the one the joint-space kernels carry (``JointLaw.joint_space``, the seed's
@@ -692,6 +695,8 @@ class JointSpace:
                 self.qt[self.law.result_states_of(self.codes) == RESULT_OPEN] = 0.0
             if fixed_point:
                 self.qt[:] = 0.0
+            if self.stop_check is not None:  # a stop asked for: abandon the step (the finally of solve_step
+                self.stop_check()            # lets the held points go; the groups' states are untouched)
             rows, qt_rows = active_components(self.qt)
             st = self._correction(rows, qt_rows)
             if st == STATUS_SINGULAR:

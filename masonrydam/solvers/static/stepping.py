@@ -36,7 +36,7 @@ import scipy.sparse as sp
 from threadpoolctl import threadpool_limits
 
 from ...assembly.elastic import elastic_tangent_data
-from ...errors import ConvergenceError, MechanismError, NumericalError
+from ...errors import ConvergenceError, MechanismError, NumericalError, RunStopped, StepInterrupted
 from ...materials.joint_laws import RESULT_OPEN, RESULT_SLIP
 from ..chatter import ChatterGuard
 from ..diagnostics import find_free_parts
@@ -311,12 +311,21 @@ class StaticSolver:
 
     ``on_step(stage_index, stage, load_factor, u, f_int, f_ext)`` is called after each converged
     step (the recorder writes it to disk there, so a later failure never loses it).
+
+    ``stop_requested()``, when given, is asked between two Newton iterations of a step and before every
+    joint-space iteration; where it returns a status (``"interrupted"``, ``"terminated"``) the step is
+    abandoned, the joints' trial states reverted, and :class:`~masonrydam.errors.RunStopped` raised naming the
+    last converged step (the steps recorded before stay). A stop asked for between steps is the caller's
+    (``on_step``) to act on.
     """
 
-    def __init__(self, model, settings: SolverSettings, on_step=None, progress=None):
+    def __init__(self, model, settings: SolverSettings, on_step=None, progress=None, stop_requested=None):
         self.model, self.s = model, settings
-        self.on_step = on_step or (lambda *a: None)
+        self._on_step = on_step or (lambda *a: None)
         self.progress = progress
+        self.stop_requested = stop_requested
+        #: (stage name, load factor) of the last converged step, None before the first
+        self._committed = None
         self._iterations_before = 0  # Newton iterations before the running stage (its per-stage count)
         self.stats = SolveStats()
         self._fact = None
@@ -331,6 +340,18 @@ class StaticSolver:
         #: where a stage with ``until_failure`` found no equilibrium: dict stage, load_factor (the last
         #: converged), failed_at (the load factor tried), reason; None if none did
         self.limit = None
+
+    def on_step(self, si, st, lam, u, f_int, f_ext):
+        """A converged step: remembered (where a stop within the next step says it stopped) and recorded."""
+        self._committed = (st.name, lam)
+        self._on_step(si, st, lam, u, f_int, f_ext)
+
+    def _stop_within_step(self):
+        """Between two iterations of a step: raise :class:`~masonrydam.errors.StepInterrupted` where a stop was
+        asked for (an iteration of a 166k-DOF dam on the AMG path takes about 12 s, a step minutes)."""
+        status = self.stop_requested()
+        if status is not None:
+            raise StepInterrupted(status)
 
     # -- linear algebra -------------------------------------------------------------------------
     def _factorize(self, K):
@@ -438,6 +459,8 @@ class StaticSolver:
         self.stats.factorizations += 1
         self.stats.analyses += 1
         self._js = JointSpace(m, ref, static=True)
+        if self.stop_requested is not None:
+            self._js.stop_check = self._stop_within_step
         self.stats.joint_space_size = max(self.stats.joint_space_size, joint_space_size(m))
         self.stats.joint_space_setup_s += time.perf_counter() - t0
         return self._js
@@ -490,6 +513,8 @@ class StaticSolver:
 
         def tell_progress(it, rn, ref):
             self._status(f"iteration {it}, residual {rn / ref:.1e}")
+            if self.stop_requested is not None:
+                self._stop_within_step()
 
         result = newton_iterations(step, start, ConvergenceTest(s.force_tolerance, s.energy_tolerance),
                                    s.max_iterations, guard=guard if m.nonlinear else None, on_check=tell_progress)
@@ -600,6 +625,11 @@ class StaticSolver:
             # (LAPACK) must be bitwise reproducible, and on two cores a second thread only waits
             with threadpool_limits(limits=1, user_api="blas"):
                 return self._run(stages, u0)
+        except StepInterrupted as stop:  # within a step: back to the last converged one, which is recorded
+            self.model.revert()
+            last = ("before the first converged step" if self._committed is None
+                    else "after load factor {1:.4g} of stage '{0}'".format(*self._committed))
+            raise RunStopped(stop.status, f"{last}, within the next step ({self._where}; abandoned)") from None
         finally:
             self.stats.wall_time_s = time.perf_counter() - t0
             self._js, self._js_dofmap = None, None  # its factor and columns: not for the dynamic stages

@@ -10,7 +10,9 @@ face during the earthquake and the water has no inertia):
   reservoir, for any face shape and reservoir length), with the load of the reservoir bottom moving
   with a vertical ground motion;
 - ``"acoustic"`` with a sound speed: the compressible reservoir condensed into the dam's implicit step
-  (:class:`masonrydam.solvers.dynamic.fluid.AcousticStep`), which keeps the joint-space fast path.
+  (:class:`masonrydam.solvers.dynamic.fluid.AcousticStep`), which keeps the joint-space fast path, or stepped
+  with the dam's central difference in an explicit stage
+  (:class:`masonrydam.solvers.dynamic.fluid.ExplicitAcoustic`).
 
 In all three the water level is the one the static stages left (the water must be on the dam before
 the earthquake), the reservoir depth ``H`` is measured from the lowest point of the wetted face, and the
@@ -169,7 +171,7 @@ class DynamicWater:
             return (f"Westergaard added mass 7/8 rho sqrt(H z) n n^T on '{self.face.name}' (H = {self.depth:g} m)")
         A = self.acoustic
         what = ("incompressible water: added mass rho Q H^-1 Q^T" if self.incompressible else
-                f"compressible water (c = {self.spec['acoustic']['sound_speed']:g} m/s) condensed into the step")
+                f"compressible water (c = {self.spec['acoustic']['sound_speed']:g} m/s) stepped with the dam")
         return (f"acoustic reservoir of {A.G.shape[0]} pressure unknowns, {self.length:g} m long, on "
                 f"'{self.face.name}' (H = {self.depth:g} m): {what}; bottom reflection "
                 f"{self.spec['acoustic']['bottom_reflection']:g}, Sommerfeld far end")
@@ -184,8 +186,13 @@ def describe(scene, model) -> list[str]:
                 f"'{r['face']}' (Westergaard 1933; Kuo 1982)"]
     a = r["acoustic"]
     c = a["sound_speed"]
-    what = "incompressible water (added mass rho Q H^-1 Q^T)" if c == "incompressible" else \
-        f"compressible water, c = {c:g} m/s, condensed into the implicit step"
+    if c == "incompressible":
+        what = "incompressible water (added mass rho Q H^-1 Q^T)"
+    else:  # how the dynamic stages step it: condensed into an implicit step, or explicitly with the dam
+        integrators = {st.get("integrator") for st in scene.get("stages", []) if st.get("type") == "dynamic"}
+        how = [w for w, used in (("condensed into the implicit step", bool(integrators - {"central_difference"})),
+                                 ("stepped explicitly with the dam", "central_difference" in integrators)) if used]
+        what = f"compressible water, c = {c:g} m/s, " + (" or ".join(how) or "condensed into the implicit step")
     return [f"reservoir in the dynamic and modal stages: acoustic elements on '{r['face']}', {what}, bottom "
             f"reflection {a['bottom_reflection']:g}, Sommerfeld radiation at the far end (Zienkiewicz & Bettess "
             "1978; Fenves & Chopra 1984)"]
@@ -194,7 +201,8 @@ def describe(scene, model) -> list[str]:
 def _effects():
     return [Effect("dynamic_water", "[reservoir] dynamic = \"westergaard\" | \"acoustic\"", __name__,
                    "Westergaard 1933, Trans. ASCE 98; Kuo 1982, UCB/EERC-82/10; Zienkiewicz & Bettess 1978, IJNME 13; "
-                   "Fenves & Chopra 1984, EESD 12", "tests/effects/test_added_mass.py, tests/effects/test_acoustic.py",
+                   "Fenves & Chopra 1984, EESD 12", "tests/effects/test_added_mass.py, tests/effects/test_acoustic.py, "
+                   "tests/effects/test_acoustic_explicit.py",
                    describe)]
 
 

@@ -6,9 +6,10 @@
 supports): the mass ``M`` (lumped diagonal or consistent, with the effects' added masses), the damping ``C``
 (Rayleigh damping of the blocks, ``exclude_joints``, plus the effects' dashpots), the ground load ``-M iota
 a_g`` (with ``M iota`` from the full-DOF mass, supports included), the loads given in time and the state
-forces of :class:`~.stage.DynamicTerms`, and the compressible water condensed into a step as a mass-like block
-on the wetted DOFs (:mod:`.fluid`). Vectors are on the free DOFs (n_eq,) unless said otherwise; matrices are
-values in the model's CSR pattern (nnz,). See docs/dynamics.md.
+forces of :class:`~.stage.DynamicTerms`, and the compressible water condensed into an implicit step as a
+mass-like block on the wetted DOFs (:mod:`.fluid`; an explicit stage steps it with the dam instead). Vectors are
+on the free DOFs (n_eq,) unless said otherwise; matrices are values in the model's CSR pattern (nnz,). See
+docs/dynamics.md.
 """
 from __future__ import annotations
 
@@ -19,6 +20,7 @@ from ...assembly.elastic import elastic_tangent_data
 from ...assembly.sparsity import add_to_pattern
 from ...errors import SceneError
 from ...materials.joint_laws import RESULT_STICK
+from .fluid import ExplicitAcoustic
 from .stage import DynamicTerms
 
 #: effective-matrix values kept per step size before the caches are cleared
@@ -87,10 +89,12 @@ class StageEquations:
             self.damping_free = sp.csr_matrix((self.damping_data, m.indices, m.indptr), shape=(self.n, self.n))
             self.damped = True
         self.fluid = terms.fluid
-        if self.fluid is not None:
-            if s.scheme.explicit:
-                raise SceneError(f"{s.key}integrator", "the acoustic reservoir needs an implicit integrator (its "
-                                                       "pressures are condensed into the implicit step); use hht")
+        #: the compressible water of an explicit stage (:class:`~.fluid.ExplicitAcoustic`), or None
+        self.explicit_water = None
+        if self.fluid is not None and s.scheme.explicit:  # the water stepped with the dam
+            self.fluid.attach(m.dofmap.eq_of_dof)
+            self.explicit_water = ExplicitAcoustic(self.fluid, free)
+        elif self.fluid is not None:  # the water condensed into the implicit step
             self.fluid.attach(m.dofmap.eq_of_dof, s.coefficients())
             n_w = len(self.fluid.wet_eq)
             rows = np.repeat(self.fluid.wet_eq, n_w)

@@ -10,8 +10,11 @@ a product of two vectors; dashpots or a stiffness part a sparse product) plus th
 (``alpha_L |f_int - f_s| sign(v)``, :func:`~masonrydam.assembly.damping.local_damping_coefficient`), which
 damps every mode by the same ratio and leaves the stable step alone. A step costs the blocks' sparse product,
 the joint kernels and two fused passes over the DOFs (:mod:`.explicit_kernels`), which also give the step's
-works: the energy balance of an explicit stage closes to round-off. Vectors on the free DOFs (n_eq,), SI
-units. See docs/dynamics.md and docs/dam_3d.md.
+works: the energy balance of an explicit stage closes to round-off. A compressible reservoir (acoustic
+elements) is stepped with the dam where the stage has one (:class:`~.fluid.ExplicitAcoustic`: its pressures
+advance with the dam's predictor, its force on the dam enters the corrector, its pressure acceleration follows
+the dam's); its work on the dam is ``hydrodynamic``, as in the implicit stages. Vectors on the free DOFs (n_eq,),
+SI units. See docs/dynamics.md, docs/dam_3d.md and docs/dam_reservoir_foundation.md.
 """
 from __future__ import annotations
 
@@ -58,6 +61,12 @@ def run_central_difference(model, settings, equations, energy, stats, stage, st,
     # the damping force of the initial state, as the initial acceleration took it (its viscous part)
     fd0 = eq.damping_force(st.v[free]).copy() if eq.damped else np.zeros(n)
     pg0 = eq.ground_load(st.ag, st.tau).copy()
+    water = eq.explicit_water
+    if water is not None:  # the compressible reservoir, stepped with the dam
+        wet, wet_dofs = eq.fluid.wet_eq, water.wet_dofs
+        st.fluid = water.start(st.fluid, st.a[wet_dofs], eq.frame_at(st.ag), eq.bottom_at(st.tau, st.ag))
+        pg0[wet] += st.fw
+    hydro = 0.0
     works = np.zeros(10)
     for k in range(1, n_steps + 1):
         t_end, h = step_end(k, n_steps, s.dt, stage.duration, st.tau)
@@ -71,6 +80,10 @@ def run_central_difference(model, settings, equations, energy, stats, stage, st,
         kc = m.continuum_force(u)
         ag1 = eq.ground_at(t_end)
         pg1 = eq.ground_load(ag1, t_end).copy()
+        if water is not None:  # the water force of the predicted pressures acts on the dam at the step's end
+            p1, pd_half = water.predict(st.fluid, h)
+            fw1 = water.force(p1)
+            pg1[wet] += fw1
         state_force = eq.update_state_force()
         cv = C @ v_half if viscous_sparse else empty
         v1 = np.zeros(m.n_dof)
@@ -79,14 +92,21 @@ def run_central_difference(model, settings, equations, energy, stats, stage, st,
         status = central_difference_correct(free, h, md, eq.static_load, pg0, pg1, state_force, st.f_int, f_int,
                                             st.Kc_u, kc, st.u, u, st.a, v_half, cv, c_diag, local_alpha, fd0, fd1,
                                             v1, a1, works)
-        if status != STATUS_OK:
+        fluid1 = None
+        if water is not None and status == STATUS_OK:  # the water's acceleration from the dam's
+            fluid1 = water.correct(p1, pd_half, a1[wet_dofs], eq.frame_at(ag1), eq.bottom_at(t_end, ag1), h)
+            # the water's work on the dam (counted in the kernel's input work): hydrodynamic
+            hydro = 0.5 * float((st.fw + fw1) @ (u[wet_dofs] - st.u[wet_dofs]))
+        if status != STATUS_OK or (water is not None and fluid1 is None):
             fail(stage, st, NumericalError(
                 f"dynamic stage '{stage.name}': NaN or infinity at t = {st.t + h:.6g} s (central difference, "
                 f"dt = {h:.4g} s; dt_crit = {stats.dt_critical:.4g} s)"))
         m.commit()
         new = StepState(st.t - st.tau + t_end, t_end, u, v1, a1, f_int, None, ag1)
         new.Kc_u = kc
-        energy.record_works(new, st, works)
+        if water is not None:
+            new.fluid, new.fw = fluid1, fw1
+        energy.record_works(new, st, works, hydro)
         energy.accept(new)
         st = new
         fd0, pg0 = fd1, pg1

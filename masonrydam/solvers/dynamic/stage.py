@@ -141,8 +141,10 @@ class DynamicStats:
     energy_contact: float = 0.0
     energy_bond_break: float = 0.0
     dt_critical: float | None = None
-    #: highest circular frequency (rad/s) with every joint sticking, where a stable step was computed
+    #: highest circular frequency (rad/s) with every joint sticking, where a stable step was computed (of the dam
+    #: and its compressible water together in an explicit stage with one), and what set it (words)
     omega_max: float = 0.0
+    dt_limit: str = ""
     static_residual: float = 0.0
     joint_space_size: int = 0
     joint_space_setup_s: float = 0.0

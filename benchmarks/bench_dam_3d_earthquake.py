@@ -4,6 +4,7 @@ the rock against the dry dam, the example's 20 s, and how converged the answer i
     . .venv/bin/activate
     python benchmarks/bench_dam_3d_earthquake.py step        # ms per explicit step vs one sparse product (~3 min)
     python benchmarks/bench_dam_3d_earthquake.py water       # dry / Westergaard + rock with mass, per simulated s (~4 min)
+    python benchmarks/bench_dam_3d_earthquake.py acoustic    # no water / Westergaard / acoustic water, explicit (~5 min)
     python benchmarks/bench_dam_3d_earthquake.py example     # examples/dam_3d_earthquake.toml as it is (~10 min)
     python benchmarks/bench_dam_3d_earthquake.py large       # element_size 3 (166 000 DOF): gravity, explicit steps (~15 min)
     python benchmarks/bench_dam_3d_earthquake.py accuracy    # dt_auto, dt_auto/2, dt_auto/4 over the strong part (~25 min)
@@ -28,6 +29,12 @@ where marked, about 2.6x slower).
   damping at 2 and 10 Hz (its stiffness part cuts the stable step; the program's step and its reason).
 * ``water``: seconds of wall per simulated second, dry (as ``step``) and with the example's water and rock (the
   issue's "water at most 2x the dry cost").
+* ``acoustic``: seconds of wall per simulated second of the example's shaking (its rock with mass and absorbing
+  boundaries, local damping) with no water in the shaking (``dynamic = "none"``: the static pressure stays),
+  with Westergaard's added mass (the example) and with the acoustic reservoir (compressible water, c = 1440 m/s,
+  3 H long, Sommerfeld far end, rigid bottom) stepped with the dam's central difference
+  (masonrydam/solvers/dynamic/fluid.py, ExplicitAcoustic); the stable step and its reason for each (issue: the
+  water at most 2x the dry cost per simulated second).
 * ``example``: the whole example: wall time per stage, total, peak memory (issue: at most 10 minutes).
 * ``large``: the dry dam at element_size 3 (about 166 000 DOF): the gravity stage's time and the run's peak memory,
   then ``--large-duration`` s (default 0.1) of the shaking: ms per step and the 20 s record projected.
@@ -76,6 +83,15 @@ def dry(scene: dict) -> dict:
     sc["reservoir"]["dynamic"] = "none"
     sc.pop("foundation", None)
     sc["stages"][-1].pop("damping", None)
+    return sc
+
+
+def acoustic(scene: dict) -> dict:
+    """The example's reservoir as acoustic elements (compressible water, c = 1440 m/s, the defaults otherwise:
+    3 H long with a Sommerfeld far end, rigid bottom) instead of Westergaard's added mass."""
+    sc = copy.deepcopy(scene)
+    sc["reservoir"]["dynamic"] = "acoustic"
+    sc["reservoir"]["acoustic"] = {"sound_speed": 1440.0}
     return sc
 
 
@@ -208,6 +224,24 @@ def case_water(a):
               "the dry cost (target: at most 2x)", flush=True)
 
 
+def case_acoustic(a):
+    sc = example_scene()
+    no_water = copy.deepcopy(sc)
+    no_water["reservoir"]["dynamic"] = "none"
+    per_s = {}
+    for label, scene in (("no water in the shaking", no_water), ("Westergaard's added mass", sc),
+                         ("acoustic water (explicit)", acoustic(sc))):
+        r = run(label, shaking(scene, a.duration))
+        if r:
+            ms = step_line(f"{label}, rock with mass, local damping", r)
+            per_s[label] = ms / r["dt"] / 1e3
+    dry_s = per_s.get("no water in the shaking")
+    if dry_s:
+        for label, x in per_s.items():
+            print(f"[acoustic] {label}: {x:.1f} s of wall per simulated s, {x / dry_s:.2f}x the cost without water "
+                  "(target for the water: at most 2x)", flush=True)
+
+
 def case_example(a):
     r = run("example", example_scene())
     if r:
@@ -301,8 +335,8 @@ def case_schemes(a):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("case", nargs="*", help="step, water (the default), example, accuracy, schemes")
-    ap.add_argument("--duration", type=float, default=0.5, help="seconds of shaking for step and water")
+    ap.add_argument("case", nargs="*", help="step, water (the default), acoustic, example, large, accuracy, schemes")
+    ap.add_argument("--duration", type=float, default=0.5, help="seconds of shaking for step, water and acoustic")
     ap.add_argument("--window", type=float, default=4.0, help="seconds of shaking for accuracy")
     ap.add_argument("--large-duration", type=float, default=0.1, help="seconds of shaking for large")
     ap.add_argument("--weak-pga", type=float, default=0.05)
@@ -315,14 +349,14 @@ def main():
         child(json.loads(a.child))
         return
     cases = a.case or ["step", "water"]
-    known = ("step", "water", "example", "large", "accuracy", "schemes")
+    known = ("step", "water", "acoustic", "example", "large", "accuracy", "schemes")
     for c in cases:
         if c not in known:
             ap.error(f"unknown case {c!r}: one of {', '.join(known)}")
     print(f"# 3D dam in an earthquake (issue 33); {cpu_model()}, 1 thread", flush=True)
     for c in cases:
-        {"step": case_step, "water": case_water, "example": case_example, "large": case_large,
-         "accuracy": case_accuracy, "schemes": case_schemes}[c](a)
+        {"step": case_step, "water": case_water, "acoustic": case_acoustic, "example": case_example,
+         "large": case_large, "accuracy": case_accuracy, "schemes": case_schemes}[c](a)
 
 
 if __name__ == "__main__":

@@ -16,7 +16,8 @@ from ..solvers.linear.direct import resolve_backend
 def stats_attrs(solver, t_start, dyn_solvers=()):
     st = solver.stats
     out = {"steps": st.steps, "newton_iterations": st.iterations, "factorizations": st.factorizations,
-           "symbolic_analyses": st.analyses, "joint_space_size": st.joint_space_size,
+           "symbolic_analyses": st.analyses, "preconditioner_reuses": st.preconditioner_reuses,
+           "krylov_iterations": st.krylov_iterations, "joint_space_size": st.joint_space_size,
            "joint_space_steps": st.joint_space_steps, "joint_space_iterations": st.joint_space_iterations,
            "joint_space_splits": st.joint_space_splits,
            "joint_space_setup_s": round(st.joint_space_setup_s, 4),
@@ -151,10 +152,16 @@ def _static_lines(solver, stats, model) -> list[str]:
                      f"{ps['step_cuts']} step cuts"
                      + (f"; in its {ps['dissipation_control_steps']} steps under dissipation control the joints "
                         f"dissipated {ps['joint_dissipation_J']:.4g} J" if "joint_dissipation_J" in ps else ""))
-    lines.append(f"solver     : {solver.s.method}, {stats['factorizations']} factorization(s) "
-                 f"[{resolve_backend(solver.s.linear_solver, n_dof=model.n_dof, dim=model.dim)}; "
-                 f"{stats['symbolic_analyses']} symbolic analyses], {stats['newton_iterations']} general Newton "
-                 "iterations")
+    backend = resolve_backend(solver.s.linear_solver, n_dof=model.n_dof, dim=model.dim)
+    if backend == "amg" and stats["newton_iterations"] and solver.s.method == "newton":
+        lines.append(f"solver     : {solver.s.method}, {stats['newton_iterations']} general Newton iterations solved "
+                     f"by AMG-preconditioned Krylov iterations ({stats['krylov_iterations']} in all, each correction "
+                     f"to its inexact-Newton tolerance), {stats['factorizations']} multigrid set-up(s); "
+                     f"{stats['preconditioner_reuses']} corrections used an earlier iteration's multigrid")
+    else:
+        lines.append(f"solver     : {solver.s.method}, {stats['factorizations']} factorization(s) "
+                     f"[{backend}; {stats['symbolic_analyses']} symbolic analyses], {stats['newton_iterations']} "
+                     "general Newton iterations")
     if stats["arc_length_steps"]:
         lines.append(f"arc length : {stats['arc_length_steps']} steps under path-following control (Crisfield's arc, "
                      "crack opening or joint dissipation)"

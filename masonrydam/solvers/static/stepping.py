@@ -125,6 +125,18 @@ STATIC_COLUMNS_MIN_EQUATIONS = 20_000
 STATIC_JOINT_SPACE_AUTO_MAX_EQUATIONS = 80_000
 
 
+#: the AMG general path (3D models from AUTO_ITERATIVE_MIN_DOF equations) solves each Newton correction inexactly: to
+#: the forcing term of Eisenstat & Walker (1996, SIAM J. Sci. Comput. 17:16-32, choice 2 with gamma = 0.9 and
+#: alpha = 2, and their safeguard), at most this relative residual, and never tighter than a tenth of what the
+#: force tolerance still asks of the step. On the 166k-DOF dam of examples/dam_3d_gravity.toml at element_size 3
+#: every correction was solved to 1e-10 (25 FGMRES iterations, 5.8 s of 12.1 s per Newton iteration); see
+#: docs/performance.md for what the inexact corrections and the reused hierarchies changed
+AMG_FORCING_MAX = 1e-2
+#: a hierarchy set up for one tangent preconditions the next ones (:meth:`AMGSolver.for_matrix`; a setup took 6.3 s
+#: of the 12.1 s above) until a solve converges this many times slower per decade of residual than the first solve
+#: with it; the next correction then sets one up for its own tangent
+AMG_REUSE_SLOWDOWN = 4.0
+
 #: path-following controls (:mod:`.arc_length`), in the order tried where load control stalls: the global arc
 #: first, then the cracks' opening, then the joints' dissipation
 ARC_MODES = ("cylindrical", "opening", "dissipation")
@@ -145,6 +157,10 @@ class SolveStats:
     #: and the seconds they took
     joint_space_flexibility_columns: int = 0
     joint_space_flexibility_s: float = 0.0
+    #: Newton corrections of the AMG general path solved with a hierarchy set up for an earlier tangent, and the
+    #: Krylov iterations of all its corrections
+    preconditioner_reuses: int = 0
+    krylov_iterations: int = 0
     step_cuts: int = 0
     line_searches: int = 0
     stabilized_steps: int = 0
@@ -247,6 +263,8 @@ class LoadStepNewton:
         self.f_ext, self.guard = f_ext, guard
         self.free = solver.model.dofmap.free
         self.r0_norm = None
+        self._last_residual_norm = None  # the residual norm and forcing term of the last inexact correction
+        self._last_forcing = None
 
     def evaluate(self, u) -> LoadStepIterate:
         """The iterate at ``u``; :class:`~masonrydam.solvers.newton.IterationFailed` where a law's return mapping
@@ -281,7 +299,8 @@ class LoadStepNewton:
         return LoadStepIterate(iterate.u, f_int, K, r, iterate.f_ext_norm, iterate.f_int_norm)
 
     def correction(self, iterate):
-        """``K^-1 r`` with the tangent's factorization, or the initial one (modified Newton)."""
+        """``K^-1 r`` with the tangent's factorization, or the initial one (modified Newton); on the AMG path inexactly,
+        with the hierarchy of an earlier tangent while it serves (:meth:`StaticSolver._amg_correction`)."""
         solver = self.solver
         if self.s.method == "modified_newton":
             if solver._initial is None:
@@ -289,11 +308,34 @@ class LoadStepNewton:
                 solver.stats.factorizations += 1
                 solver.stats.analyses += 1
             fact = solver._initial
+        elif solver._iterative(iterate.K):
+            solver.stats.iterations += 1
+            return solver._amg_correction(iterate.K, iterate.r, self._forcing(iterate))
         else:
             fact = solver._factorize(iterate.K)
         du = fact.solve(iterate.r)
         solver.stats.iterations += 1
         return du
+
+    def _forcing(self, iterate) -> float:
+        """The relative residual to which the AMG general path solves this correction (AMG_FORCING_MAX): Eisenstat
+        & Walker's choice 2, ``0.9 (||r_k|| / ||r_k-1||)^2``, safeguarded by ``0.9 eta_k-1^2`` where that exceeds
+        0.1, at most AMG_FORCING_MAX, and at least a tenth of ``force_tolerance * scale / ||r_k||`` (no solve
+        tighter than what the step's convergence test can see)."""
+        rn = iterate.residual_norm
+        if self._last_residual_norm is None or self._last_residual_norm <= 0.0:
+            eta = AMG_FORCING_MAX
+        else:
+            eta = 0.9 * (rn / self._last_residual_norm) ** 2
+            safeguard = 0.9 * self._last_forcing ** 2
+            if safeguard > 0.1:
+                eta = max(eta, safeguard)
+        eta = min(eta, AMG_FORCING_MAX)
+        if rn > 0.0:
+            scale = force_scale(iterate.f_ext_norm, iterate.f_int_norm, self.r0_norm)
+            eta = max(eta, min(0.1, 0.1 * self.s.force_tolerance * scale / rn))
+        self._last_residual_norm, self._last_forcing = rn, eta
+        return eta
 
     def advance(self, iterate, du):
         """The iterate at ``u + s du``, ``s`` from the secant line search (1 without); the work ``|s du . r|``."""
@@ -335,6 +377,9 @@ class StaticSolver:
         self._js_dofmap = None
         self._initial = None  # modified Newton: initial stiffness factorization per constraint set
         self._initial_dofmap = None
+        #: the AMG general path: the hierarchy in use (an AMGSolver), its constraint set, the convergence factor of
+        #: its first solve, and whether it has stopped serving (see _amg_correction)
+        self._amg, self._amg_dofmap, self._amg_factor, self._amg_stale = None, None, 0.5, False
         self._state_load = None  # forces that follow the joint states in the current step (see _newton)
         self._law_failure = None  # the last message of a law that gave up in an attempt of the current step
         #: where a stage with ``until_failure`` found no equilibrium: dict stage, load_factor (the last
@@ -377,6 +422,41 @@ class StaticSolver:
         self._fact_data = K.data.copy()
         self.stats.factorizations += 1
         return fact
+
+    def _iterative(self, K) -> bool:
+        """Whether the general path solves K with the AMG solver (inexact corrections, reused hierarchies)."""
+        return resolve_backend(self.s.linear_solver, n_dof=K.shape[0], dim=self.model.dim) == "amg"
+
+    def _amg_correction(self, K, r, rtol):
+        """``K^-1 r`` to the relative residual ``rtol`` with the AMG solver: preconditioned by the hierarchy of an
+        earlier tangent of the same constraint set while it serves (AMG_REUSE_SLOWDOWN), else by one set up for
+        K (counted as a factorization and a symbolic analysis). A reused hierarchy that fails (stagnation) is
+        replaced at once."""
+        m, stats = self.model, self.stats
+        base = self._amg
+        if base is not None and not self._amg_stale and self._amg_dofmap is m.dofmap and base.K.shape == K.shape:
+            solver = base.for_matrix(K)
+            try:
+                du = solver.solve(r, rtol=rtol)
+            except SingularMatrix:
+                solver = None
+            if solver is not None:
+                stats.preconditioner_reuses += 1
+                stats.krylov_iterations += solver.last_iterations
+                f = solver.convergence_factor
+                self._amg_stale = not f <= self._amg_factor ** (1.0 / AMG_REUSE_SLOWDOWN)
+                return du
+        self._amg = None  # the old hierarchy's memory first
+        solver = self._amg = self._linear_solver(K)
+        self._amg_dofmap = m.dofmap
+        stats.factorizations += 1
+        stats.analyses += 1
+        du = solver.solve(r, rtol=rtol)
+        stats.krylov_iterations += solver.last_iterations
+        f = solver.convergence_factor
+        self._amg_factor = f if 0.0 < f < 1.0 else 0.5
+        self._amg_stale = False
+        return du
 
     def _linear_solver(self, K):
         """make_solver for K; for the AMG backend with the rigid-body modes, positions and nodes of
@@ -633,6 +713,7 @@ class StaticSolver:
         finally:
             self.stats.wall_time_s = time.perf_counter() - t0
             self._js, self._js_dofmap = None, None  # its factor and columns: not for the dynamic stages
+            self._amg = self._amg_dofmap = None
 
     def _run(self, stages, u0):
         m, s = self.model, self.s

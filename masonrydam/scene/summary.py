@@ -139,7 +139,7 @@ def _model_lines(mesh, model, eff) -> list[str]:
         jsets[g.name] = jsets.get(g.name, 0) + g.n_elem
     lines = [f"model      : {mesh.dim}D, {model.n_nodes} nodes, {model.n_dof} DOFs, "
              + ", ".join(f"{n} {t}" for t, n in sorted(types.items())),
-             f"joints     : " + (", ".join(f"{k} {v} el." for k, v in sorted(jsets.items())) or "none")
+             "joints     : " + (", ".join(f"{k} {v} el." for k, v in sorted(jsets.items())) or "none")
              + f" ({n_ip} integration points)",
              "effects    : " + eff[0]]
     return lines + ["             " + e for e in eff[1:]]

@@ -102,3 +102,43 @@ def test_signal_ends_a_3d_earthquake_run_within_ten_seconds(tmp_path, sig, code,
     grid = t_dyn[:-1] - t_dyn[0]
     np.testing.assert_allclose(grid, 0.01 * np.round(grid / 0.01), atol=1e-9)
     assert np.isfinite(ds.displacement.values).all()
+
+
+@pytest.mark.slow
+def test_sigterm_within_a_static_step_of_a_3d_dam(tmp_path):
+    """SIGTERM while the gravity stage of the 8-monolith dam (examples/dam_3d_gravity.toml, 42 021 DOF) iterates
+    on its general Newton path with the AMG solver (the path the 166k-DOF dam takes at element_size 3, where one
+    step takes a minute): the step is abandoned between two Newton iterations and the process ends within 10 s
+    (exit 143), naming the last converged step and the abandoned one, no traceback."""
+    sc = tomllib.loads((ROOT / "examples" / "dam_3d_gravity.toml").read_text())
+    sc.setdefault("solver", {}).update({"linear_solver": "amg", "joint_space": "off"})
+    scene = tmp_path / "dam3d.toml"
+    scene.write_text(toml_text(sc))
+    out = tmp_path / "dam3d.nc"
+    proc = subprocess.Popen([sys.executable, "-m", "masonrydam.cli.main", "run", str(scene), "-o", str(out)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    reader = StderrReader(proc.stderr)
+    try:
+        deadline = time.time() + 300.0
+        while "iteration 2," not in reader.text:  # the second Newton iteration of the first step
+            assert proc.poll() is None, "the run ended by itself: " + reader.text
+            assert time.time() < deadline, "the gravity stage did not iterate within 300 s"
+            time.sleep(0.1)
+        t0 = time.perf_counter()
+        proc.send_signal(signal.SIGTERM)
+        proc.wait(timeout=60)
+        waited = time.perf_counter() - t0
+        reader.thread.join(timeout=10)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    stderr = reader.text
+    assert proc.returncode == 143, stderr
+    assert waited < 10.0, f"the run took {waited:.1f} s to stop"
+    assert "Traceback" not in stderr, stderr
+    line = stderr.strip().splitlines()[-1]
+    assert line.startswith("masonrydam: stopped before the first converged step, within the next step (gravity: "
+                           "load factor 0.25"), line
+    with pytest.warns(IncompleteResultWarning, match="status 'terminated'"):
+        ds = open_result(out)
+    assert ds.attrs["completed"] == "false" and ds.attrs["status"] == "terminated"

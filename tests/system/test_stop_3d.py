@@ -59,23 +59,22 @@ class StderrReader:
         return float(counts[-1]) if counts else 0.0
 
 
-@pytest.mark.slow
-@pytest.mark.parametrize("sig, code, status", [(signal.SIGINT, 130, "interrupted"),
-                                               (signal.SIGTERM, 143, "terminated")])
-def test_signal_ends_a_3d_earthquake_run_within_ten_seconds(tmp_path, sig, code, status):
-    scene = tmp_path / "dam3d.toml"
-    scene.write_text(toml_text(coarse_earthquake_scene()))
+def signal_when(scene: dict, tmp_path: Path, ready, sig, what: str):
+    """Run ``scene`` with ``masonrydam run`` in a subprocess (with its progress bar, which tells how far it got),
+    send ``sig`` once ``ready(reader)`` is true (within 300 s; ``what``: the awaited event, for the message) and
+    wait for the process. Returns (exit code, seconds from the signal to the exit, stderr, output path)."""
+    path = tmp_path / "dam3d.toml"
+    path.write_text(toml_text(scene))
     out = tmp_path / "dam3d.nc"
-    # with its progress bar, which tells when the earthquake stage is under way
-    proc = subprocess.Popen([sys.executable, "-m", "masonrydam.cli.main", "run", str(scene), "-o", str(out)],
+    proc = subprocess.Popen([sys.executable, "-m", "masonrydam.cli.main", "run", str(path), "-o", str(out)],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     reader = StderrReader(proc.stderr)
     try:
         deadline = time.time() + 300.0
-        while reader.stages_done() < DYNAMIC_STAGE + 0.02:  # 2 % of the record shaken
+        while not ready(reader):
             assert proc.poll() is None, "the run ended by itself: " + reader.text
-            assert time.time() < deadline, "the dynamic stage did not start within 300 s"
-            time.sleep(0.2)
+            assert time.time() < deadline, f"{what} did not happen within 300 s"
+            time.sleep(0.1)
         t0 = time.perf_counter()
         proc.send_signal(sig)
         proc.wait(timeout=60)
@@ -84,8 +83,18 @@ def test_signal_ends_a_3d_earthquake_run_within_ten_seconds(tmp_path, sig, code,
     finally:
         if proc.poll() is None:
             proc.kill()
-    stderr = reader.text
-    assert proc.returncode == code, stderr
+    return proc.returncode, waited, reader.text, out
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("sig, code, status", [(signal.SIGINT, 130, "interrupted"),
+                                               (signal.SIGTERM, 143, "terminated")])
+def test_signal_ends_a_3d_earthquake_run_within_ten_seconds(tmp_path, sig, code, status):
+    # 2 % of the record shaken
+    returncode, waited, stderr, out = signal_when(coarse_earthquake_scene(), tmp_path,
+                                                  lambda r: r.stages_done() >= DYNAMIC_STAGE + 0.02, sig,
+                                                  "the dynamic stage")
+    assert returncode == code, stderr
     assert waited < 10.0, f"the run took {waited:.1f} s to stop"
     assert "Traceback" not in stderr, stderr
     line = stderr.strip().splitlines()[-1]  # after the progress bar
@@ -112,28 +121,9 @@ def test_sigterm_within_a_static_step_of_a_3d_dam(tmp_path):
     (exit 143), naming the last converged step and the abandoned one, no traceback."""
     sc = tomllib.loads((ROOT / "examples" / "dam_3d_gravity.toml").read_text())
     sc.setdefault("solver", {}).update({"linear_solver": "amg", "joint_space": "off"})
-    scene = tmp_path / "dam3d.toml"
-    scene.write_text(toml_text(sc))
-    out = tmp_path / "dam3d.nc"
-    proc = subprocess.Popen([sys.executable, "-m", "masonrydam.cli.main", "run", str(scene), "-o", str(out)],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    reader = StderrReader(proc.stderr)
-    try:
-        deadline = time.time() + 300.0
-        while "iteration 2," not in reader.text:  # the second Newton iteration of the first step
-            assert proc.poll() is None, "the run ended by itself: " + reader.text
-            assert time.time() < deadline, "the gravity stage did not iterate within 300 s"
-            time.sleep(0.1)
-        t0 = time.perf_counter()
-        proc.send_signal(signal.SIGTERM)
-        proc.wait(timeout=60)
-        waited = time.perf_counter() - t0
-        reader.thread.join(timeout=10)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-    stderr = reader.text
-    assert proc.returncode == 143, stderr
+    returncode, waited, stderr, out = signal_when(sc, tmp_path, lambda r: "iteration 2," in r.text, signal.SIGTERM,
+                                                  "the second Newton iteration of the first step")
+    assert returncode == 143, stderr
     assert waited < 10.0, f"the run took {waited:.1f} s to stop"
     assert "Traceback" not in stderr, stderr
     line = stderr.strip().splitlines()[-1]

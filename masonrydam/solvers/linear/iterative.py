@@ -477,15 +477,7 @@ class AMGSolver:
         new = copy.copy(self)  # shares the hierarchy, the smoother's data and the preconditioner operator
         new.K = K
         new._normA = float(np.add.reduceat(np.abs(K.data), K.indptr[:-1]).max()) if K.nnz else 0.0
-        if symmetric is not None:
-            sym = bool(symmetric)
-        elif np.array_equal(K.indptr, self.K.indptr) and np.array_equal(K.indices, self.K.indices):
-            # the same pattern (a Newton tangent of the same model): K^T's entries are K's, permuted
-            perm = self._transpose_permutation()
-            sym = perm is not None and float(np.abs(K.data - K.data[perm]).max(initial=0.0)) \
-                <= 1e-12 * float(np.abs(K.data).max(initial=0.0))
-        else:
-            sym = is_symmetric(K)
+        sym = self.is_symmetric_like(K) if symmetric is None else bool(symmetric)
         new.symmetric = sym and self.symmetric
         new.krylov = "cg" if new.symmetric else "fgmres"
         new.iterations, new.solve_times_s = [], []
@@ -496,6 +488,17 @@ class AMGSolver:
     #: a solver built by :meth:`for_matrix` (its hierarchy set up for another matrix)
     reused = False
     _transpose_perm = None
+
+    def is_symmetric_like(self, K) -> bool:
+        """:func:`is_symmetric` for a matrix ``K`` (sorted CSR), by the transpose permutation of this solver's
+        matrix where ``K`` has its pattern (a Newton tangent of the same model: K^T's entries are K's, permuted)."""
+        if K.shape == self.K.shape and np.array_equal(K.indptr, self.K.indptr) \
+                and np.array_equal(K.indices, self.K.indices):
+            perm = self._transpose_permutation()
+            if perm is not None:
+                return float(np.abs(K.data - K.data[perm]).max(initial=0.0)) \
+                    <= 1e-12 * float(np.abs(K.data).max(initial=0.0))
+        return is_symmetric(K)
 
     def _transpose_permutation(self):
         """(nnz,) int: ``K^T.data == K.data[perm]`` for every matrix of K's pattern (sorted CSR), or None where the

@@ -450,8 +450,16 @@ class StaticSolver:
                 f = solver.convergence_factor
                 self._amg_stale = not f <= self._amg_factor ** (1.0 / AMG_REUSE_SLOWDOWN)
                 return du
-        self._amg = None  # the old hierarchy's memory first
-        solver = self._amg = self._linear_solver(K)
+        # a tangent of the pattern of the old hierarchy's: the symmetry test by its transpose permutation (0.05
+        # instead of 0.5 s at 166k DOF), which the new hierarchy keeps
+        same = base is not None and base.K.shape == K.shape and np.array_equal(base.K.indptr, K.indptr) \
+            and np.array_equal(base.K.indices, K.indices)
+        sym = base.is_symmetric_like(K) if same else None
+        perm = base._transpose_perm if same else None
+        self._amg = base = None  # the old hierarchy's memory first
+        solver = self._amg = self._linear_solver(K, symmetric=sym)
+        if perm is not None:
+            solver._transpose_perm = perm
         self._amg_dofmap = m.dofmap
         stats.factorizations += 1
         stats.analyses += 1
@@ -462,7 +470,7 @@ class StaticSolver:
         self._amg_stale = False
         return du
 
-    def _linear_solver(self, K):
+    def _linear_solver(self, K, **amg_options):
         """make_solver for K; for the AMG backend with the rigid-body modes, positions and nodes of
         the free DOFs (computed once per constraint set, only when AMG is used)."""
         m = self.model
@@ -475,7 +483,7 @@ class StaticSolver:
             self._dof_nodes = dm.free // m.dim
             self._modes_dofmap = dm
         return make_solver(K, backend, near_nullspace=self._modes, dof_coords=m.coords[self._dof_nodes],
-                           dof_nodes=self._dof_nodes)
+                           dof_nodes=self._dof_nodes, **amg_options)
 
     # -- one step ---------------------------------------------------------------------------------
     def _newton(self, u, f_ext, can_cut=False, state_load=None):

@@ -119,10 +119,40 @@ def coincidence_keys(dof_coords: np.ndarray, near_nullspace: np.ndarray | None =
     return key.ravel().astype(np.int64)
 
 
+#: the last results of :func:`coincident_entries` (a Newton iteration sets up multigrid for tangents of one pattern:
+#: 0.3 s a call at 166k DOF, twice per set-up)
+_COINCIDENT_CACHE: list = []
+
+
+def clear_pattern_caches() -> None:
+    """Let the kept results of :func:`coincident_entries` go (at the end of a static solve)."""
+    _COINCIDENT_CACHE.clear()
+
+
+def _same_arrays(a, b) -> bool:
+    if a is b:
+        return True
+    if a is None or b is None:
+        return False
+    return a.shape == b.shape and np.array_equal(a, b)
+
+
 def coincident_entries(K, key: np.ndarray, nodes: np.ndarray | None = None) -> np.ndarray:
     """Positions in ``K.data`` (CSR) of the off-diagonal entries that couple two DOFs with the same
     coincidence key (:func:`coincidence_keys`) and, with ``nodes`` (the node of each DOF), of two
-    different nodes: the node-pair springs of zero-thickness interfaces."""
+    different nodes: the node-pair springs of zero-thickness interfaces. They depend on the pattern of K alone:
+    the last two results are kept and returned for the same pattern, keys and nodes."""
+    for entry in _COINCIDENT_CACHE:
+        if all(_same_arrays(a, b) for a, b in zip(entry[:4], (K.indptr, K.indices, key, nodes))):
+            return entry[4]
+    pos = _coincident_entries(K, key, nodes)
+    _COINCIDENT_CACHE.insert(0, (K.indptr.copy(), K.indices.copy(), np.array(key, copy=True),
+                                 None if nodes is None else np.array(nodes, copy=True), pos))
+    del _COINCIDENT_CACHE[2:]
+    return pos
+
+
+def _coincident_entries(K, key, nodes):
     n = K.shape[0]
     dup = np.nonzero(np.bincount(key, minlength=key.max() + 1 if n else 0)[key] > 1)[0]
     if len(dup) == 0:
@@ -164,6 +194,16 @@ def tied_groups(K, near_nullspace: np.ndarray, dof_coords: np.ndarray, threshold
     rank = np.empty(ng, dtype=np.int64)
     rank[np.argsort(first, kind="stable")] = np.arange(ng)
     return int(ng), rank[label]
+
+
+@numba.njit(cache=True)
+def _asymmetric(data, perm, tol):
+    """Whether ``|data[i] - data[perm[i]]| > tol`` for some i (``perm``: the transpose permutation of a CSR
+    pattern); stops at the first such entry (a tangent with sliding joints is not symmetric)."""
+    for i in range(data.shape[0]):
+        if abs(data[i] - data[perm[i]]) > tol:
+            return True
+    return False
 
 
 @numba.njit(cache=True)
@@ -362,7 +402,13 @@ class AMGSolver:
         from pyamg.strength import symmetric_strength_of_connection
 
 
-        opts = {"coarse_solver": "splu", "improve_candidates": None}
+        # one forward Gauss-Seidel sweep before the coarse grid and one backward after it (a symmetric V-cycle, so
+        # still a CG preconditioner) instead of pyamg's symmetric sweeps on both sides: half the smoothing of the
+        # coarse levels per cycle for the same Krylov iterations (14.3-14.5 per Newton correction on the 8-monolith
+        # dam's gravity; docs/performance.md)
+        opts = {"coarse_solver": "splu", "improve_candidates": None,
+                "presmoother": ("gauss_seidel", {"sweep": "forward"}),
+                "postsmoother": ("gauss_seidel", {"sweep": "backward"})}
         self.joint_links_dropped = 0
         if key is not None and "strength" not in self.sa_options:
             A = sp.csr_matrix(A)
@@ -496,8 +542,8 @@ class AMGSolver:
                 and np.array_equal(K.indices, self.K.indices):
             perm = self._transpose_permutation()
             if perm is not None:
-                return float(np.abs(K.data - K.data[perm]).max(initial=0.0)) \
-                    <= 1e-12 * float(np.abs(K.data).max(initial=0.0))
+                amax = max(float(K.data.max(initial=0.0)), -float(K.data.min(initial=0.0)))
+                return not _asymmetric(K.data, perm, 1e-12 * amax)
         return is_symmetric(K)
 
     def _transpose_permutation(self):

@@ -41,7 +41,7 @@ from ...materials.joint_laws import RESULT_OPEN, RESULT_SLIP
 from ..chatter import ChatterGuard
 from ..diagnostics import find_free_parts
 from ..joint_space import MAX_INITIAL_STIFFNESS_ITERATIONS, JointSpace, joint_space_size, lazy_flexibility
-from ..linear.iterative import rigid_body_modes
+from ..linear.iterative import clear_pattern_caches, rigid_body_modes
 from ..linear.direct import SingularMatrix, SymmetricFactorization, make_solver, resolve_backend
 from ..newton import (ConvergenceTest, IterationFailed, StepCutting, force_scale, newton_iterations,
                       secant_line_search)
@@ -726,6 +726,7 @@ class StaticSolver:
             self.stats.wall_time_s = time.perf_counter() - t0
             self._js, self._js_dofmap = None, None  # its factor and columns: not for the dynamic stages
             self._amg = self._amg_dofmap = None
+            clear_pattern_caches()
 
     def _run(self, stages, u0):
         m, s = self.model, self.s

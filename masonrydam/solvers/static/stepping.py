@@ -393,7 +393,7 @@ class StaticSolver:
 
     def _stop_within_step(self):
         """Between two iterations of a step: raise :class:`~masonrydam.errors.StepInterrupted` where a stop was
-        asked for (an iteration of a 166k-DOF dam on the AMG path takes about 12 s, a step minutes)."""
+        asked for (on the AMG path of a 166k-DOF dam an iteration takes a few seconds, a step up to a minute)."""
         status = self.stop_requested()
         if status is not None:
             raise StepInterrupted(status)

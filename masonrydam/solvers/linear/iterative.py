@@ -489,6 +489,9 @@ class AMGSolver:
             dofs = self._members[self._ptr[bad]:self._ptr[bad + 1]].tolist()
             raise SingularMatrix(f"singular diagonal block of tied equations {dofs}")
         self._work = np.empty(int(counts.max()))
+        #: the fine level's entries in single precision for the smoother alone (the sweeps read K once each and are
+        #: bound by memory traffic; the residuals and the Krylov products keep K in double precision)
+        self._smoother_data = K.data.astype(np.float32)
         self.level_sizes = [n] + [lv.A.shape[0] for lv in self._ml.levels]
         self._M = LinearOperator((n, n), matvec=self._two_level, dtype=np.float64)
         self._M @ np.ones(n)  # pyamg sets the coarse solver up at the first cycle: count it in the setup
@@ -497,12 +500,12 @@ class AMGSolver:
         K = self.K
         r = np.ascontiguousarray(np.asarray(r, dtype=np.float64).ravel())
         x = np.zeros_like(r)
-        _block_gauss_seidel(K.indptr, K.indices, K.data, x, r, self._members, self._ptr, self._inv, self._inv_ptr,
-                            True, self._work)
+        _block_gauss_seidel(K.indptr, K.indices, self._smoother_data, x, r, self._members, self._ptr, self._inv,
+                            self._inv_ptr, True, self._work)
         rc = np.bincount(self._label, weights=r - K @ x, minlength=self.n_groups)
         x += (self._Mc @ rc)[self._label]
-        _block_gauss_seidel(K.indptr, K.indices, K.data, x, r, self._members, self._ptr, self._inv, self._inv_ptr,
-                            False, self._work)
+        _block_gauss_seidel(K.indptr, K.indices, self._smoother_data, x, r, self._members, self._ptr, self._inv,
+                            self._inv_ptr, False, self._work)
         return x
 
     def for_matrix(self, K, symmetric: bool | None = None) -> "AMGSolver":

@@ -26,7 +26,7 @@ from typing import Protocol
 
 import numpy as np
 
-from ..errors import NumericalError
+from ..errors import NumericalError, StepInterrupted
 
 #: a force scale is never below this (N): a step with no load and no residual converges at once
 FORCE_SCALE_FLOOR = 1e-30
@@ -160,6 +160,23 @@ class StepCutting:
     def can_cut(self, cuts: int, size: float | None = None) -> bool:
         """Whether a step of ``size`` already cut ``cuts`` times in a row may be halved once more."""
         return cuts + 1 <= self.max_cuts and (self.smallest is None or size / 2.0 >= self.smallest)
+
+
+def within_step_stop(stop_requested):
+    """The check a solver makes between two iterations of a step (Newton or joint-space), for the stop requests
+    ``stop_requested()`` (None: never asked; returns None then): it raises
+    :class:`~masonrydam.errors.StepInterrupted` with the status the requests give (``"interrupted"``,
+    ``"terminated"``); the solver then abandons the step and keeps the last converged one. Shared by the static
+    and the dynamic solvers."""
+    if stop_requested is None:
+        return None
+
+    def _stop_within_step():
+        status = stop_requested()
+        if status is not None:
+            raise StepInterrupted(status)
+
+    return _stop_within_step
 
 
 class IterationFailed(Exception):

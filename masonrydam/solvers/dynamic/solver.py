@@ -21,6 +21,7 @@ from ...assembly.mass import MassMatrix
 from ...errors import RunStopped, SceneError, StepInterrupted
 from ...materials.joint_laws import joint_laws
 from ..linear.direct import Factorization, resolve_backend
+from ..newton import within_step_stop
 from .effective import MAX_CACHED, EffectiveSolver
 from .energy import EnergyBalance
 from .equations import StageEquations
@@ -60,6 +61,9 @@ class DynamicSolver:
             raise ValueError("the mass matrix passed does not match settings.mass")
         self.progress = progress
         self.stop_requested = stop_requested
+        #: raises StepInterrupted between two Newton or joint-space iterations of an implicit step (a step of a large
+        #: 3D model in the general Newton path can take minutes, a joint-space attempt 5-13 s on the 8-monolith dam)
+        self._stop_within_step = within_step_stop(stop_requested)
         self.stats = DynamicStats()
         self.backend = resolve_backend(settings.linear_solver)
         self._elastic_joints = None  # the full-DOF elastic joint stiffness, computed once if needed
@@ -132,8 +136,7 @@ class DynamicSolver:
                                                symmetric=True)
                 self.joint_spaces = JointSpaces(m, s, eq, self.effective, self.stats,
                                                 extra_levels=stage.levels if s.adaptive else 0,
-                                                stop_check=None if self.stop_requested is None
-                                                else self._stop_within_step)
+                                                stop_check=self._stop_within_step)
                 self.joint_spaces.set_up(ref)
                 stepping = (AdaptiveStepping(self, s, eq, self.energy, self.stats) if s.adaptive
                             else FixedSteps(self, s, self.stats))
@@ -237,16 +240,8 @@ class DynamicSolver:
         new_state, why); see :meth:`~.implicit.ImplicitStep.solve`."""
         step = ImplicitStep(self.model, self.s, self.eq, self.effective, self.energy, self.joint_spaces, self.stats,
                             self._count_iterations, st, t_end, h,
-                            stop_check=None if self.stop_requested is None else self._stop_within_step)
+                            stop_check=self._stop_within_step)
         return step.solve(can_split=can_split, error_check=error_check, split_joint_space=split_joint_space)
-
-    def _stop_within_step(self):
-        """Between two Newton or joint-space iterations of an implicit step: raise :class:`StepInterrupted` where a
-        stop was asked for (a step of a large 3D model in the general Newton path can take minutes, a joint-space
-        attempt 5-13 s on the 8-monolith dam)."""
-        status = self.stop_requested()
-        if status is not None:
-            raise StepInterrupted(status)
 
     def refuse_step(self, st):
         """Back to the committed state ``st`` after a step that failed or was refused: the joints' trial states

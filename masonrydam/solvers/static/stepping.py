@@ -44,7 +44,7 @@ from ..joint_space import MAX_INITIAL_STIFFNESS_ITERATIONS, JointSpace, joint_sp
 from ..linear.iterative import clear_pattern_caches, rigid_body_modes
 from ..linear.direct import SingularMatrix, SymmetricFactorization, make_solver, resolve_backend
 from ..newton import (ConvergenceTest, IterationFailed, StepCutting, force_scale, newton_iterations,
-                      secant_line_search)
+                      secant_line_search, within_step_stop)
 from .arc_length import ArcLengthStage
 
 #: tangent factor of open joint points in ordinary Newton iterations: a tiny stiffness in the
@@ -308,7 +308,7 @@ class LoadStepNewton:
                 solver.stats.factorizations += 1
                 solver.stats.analyses += 1
             fact = solver._initial
-        elif solver._iterative(iterate.K):
+        elif solver._amg_path():
             solver.stats.iterations += 1
             return solver._amg_correction(iterate.K, iterate.r, self._forcing(iterate))
         else:
@@ -365,7 +365,9 @@ class StaticSolver:
         self.model, self.s = model, settings
         self._on_step = on_step or (lambda *a: None)
         self.progress = progress
-        self.stop_requested = stop_requested
+        #: raises StepInterrupted between two iterations where a stop was asked for (None without stop requests; an
+        #: iteration of the 166k-DOF dam on the AMG path takes a few seconds, a step up to a minute)
+        self._stop_within_step = within_step_stop(stop_requested)
         #: (stage name, load factor) of the last converged step, None before the first
         self._committed = None
         self._iterations_before = 0  # Newton iterations before the running stage (its per-stage count)
@@ -390,13 +392,6 @@ class StaticSolver:
         """A converged step: remembered (where a stop within the next step says it stopped) and recorded."""
         self._committed = (st.name, lam)
         self._on_step(si, st, lam, u, f_int, f_ext)
-
-    def _stop_within_step(self):
-        """Between two iterations of a step: raise :class:`~masonrydam.errors.StepInterrupted` where a stop was
-        asked for (on the AMG path of a 166k-DOF dam an iteration takes a few seconds, a step up to a minute)."""
-        status = self.stop_requested()
-        if status is not None:
-            raise StepInterrupted(status)
 
     # -- linear algebra -------------------------------------------------------------------------
     def _factorize(self, K):
@@ -423,13 +418,10 @@ class StaticSolver:
         self.stats.factorizations += 1
         return fact
 
-    def _iterative_model(self) -> bool:
-        """Whether the general path of the current constraint set takes the AMG solver."""
+    def _amg_path(self) -> bool:
+        """Whether the general path of the current constraint set takes the AMG solver (inexact corrections, reused
+        hierarchies, a secant predictor)."""
         return resolve_backend(self.s.linear_solver, n_dof=len(self.model.dofmap.free), dim=self.model.dim) == "amg"
-
-    def _iterative(self, K) -> bool:
-        """Whether the general path solves K with the AMG solver (inexact corrections, reused hierarchies)."""
-        return resolve_backend(self.s.linear_solver, n_dof=K.shape[0], dim=self.model.dim) == "amg"
 
     def _amg_correction(self, K, r, rtol):
         """``K^-1 r`` to the relative residual ``rtol`` with the AMG solver: preconditioned by the hierarchy of an
@@ -551,8 +543,7 @@ class StaticSolver:
         self.stats.factorizations += 1
         self.stats.analyses += 1
         self._js = JointSpace(m, ref, static=True)
-        if self.stop_requested is not None:
-            self._js.stop_check = self._stop_within_step
+        self._js.stop_check = self._stop_within_step
         self.stats.joint_space_size = max(self.stats.joint_space_size, joint_space_size(m))
         self.stats.joint_space_setup_s += time.perf_counter() - t0
         return self._js
@@ -605,7 +596,7 @@ class StaticSolver:
 
         def tell_progress(it, rn, ref):
             self._status(f"iteration {it}, residual {rn / ref:.1e}")
-            if self.stop_requested is not None:
+            if self._stop_within_step is not None:
                 self._stop_within_step()
 
         result = newton_iterations(step, start, ConvergenceTest(s.force_tolerance, s.energy_tolerance),
@@ -774,7 +765,7 @@ class StaticSolver:
                 target = lam + dl
                 trial = u.copy()
                 m.time_step = st.duration * dl
-                if last_du is not None and self._iterative_model():
+                if last_du is not None and self._amg_path():
                     # the AMG path starts a step from the last converged increment, scaled to this one (a secant
                     # predictor): on the 8-monolith dam the gravity steps after the first took 4 iterations instead
                     # of 6, and their corrections half the Krylov iterations (docs/performance.md)

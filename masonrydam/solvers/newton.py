@@ -234,7 +234,7 @@ def newton_iterations(step: NewtonStep, start, test: ConvergenceTest, max_iterat
         if guard is not None:
             # cycling: the stabilized iteration; settled: back to the consistent tangent (the guard's module
             # docstring); either way the iteration matrix and residual are evaluated again
-            action = guard.observe()
+            action = guard.observe(rn)
             if action is not None:
                 current = step.after_guard(current, action)
         dx = step.correction(current)

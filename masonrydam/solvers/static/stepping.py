@@ -586,7 +586,7 @@ class StaticSolver:
         transient tension in early iterates does not destroy cohesion.
         """
         m, s = self.model, self.s
-        guard = ChatterGuard(m, OPEN_TANGENT_REGULAR)
+        guard = ChatterGuard(m, OPEN_TANGENT_REGULAR, stagnation=True)
         step = LoadStepNewton(self, f_ext, guard)
         try:
             start = step.evaluate(u)

@@ -7,10 +7,15 @@
 - :mod:`generators.blocks`: named rectangular blocks or boxes, optionally rotated (reference problems);
 - :mod:`generators.extrude`: a 2D jointed model extruded into a 3D slab;
 - :mod:`generators.dams`: gravity dam sections (2D; Koyna preset) and dams of monoliths across a
-  valley (3D), with lift, base and contraction joints, meshed with gmsh.
+  valley (3D), with lift, base and contraction joints, meshed with gmsh;
+- :mod:`generators.arch_dams`: single-centre arch dams of cantilever monoliths (3D) in a trapezoidal
+  valley, with lift, contraction and base joints and an optional foundation (a mapped hexahedral grid
+  built in numpy, no gmsh). Not yet in :data:`GENERATORS`: a scene generator needs its rows in the scene
+  reference (masonrydam/scene/reference.py, docs/scene.md) first.
 
 Every generator returns a :class:`masonrydam.mesh.Mesh` with interfaces already inserted on the joints.
 """
+from .arch_dams import arch_dam_3d
 from .blocks import blocks_2d, blocks_3d
 from .dams import gravity_dam_2d, gravity_dam_3d
 from .extrude import extrude_2d, extruded
@@ -23,4 +28,4 @@ GENERATORS = {"masonry_wall_2d": masonry_wall_2d, "masonry_wall_3d": masonry_wal
               "extruded": extruded, "gravity_dam_2d": gravity_dam_2d, "gravity_dam_3d": gravity_dam_3d}
 
 __all__ = ["Rect", "rectangles_to_mesh", "Box", "boxes_to_mesh", "masonry_wall_2d", "masonry_wall_3d", "blocks_2d", "blocks_3d",
-           "extrude_2d", "extruded", "gravity_dam_2d", "gravity_dam_3d", "GENERATORS"]
+           "extrude_2d", "extruded", "gravity_dam_2d", "gravity_dam_3d", "arch_dam_3d", "GENERATORS"]

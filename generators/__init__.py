@@ -10,8 +10,7 @@
   valley (3D), with lift, base and contraction joints, meshed with gmsh;
 - :mod:`generators.arch_dams`: single-centre arch dams of cantilever monoliths (3D) in a trapezoidal
   valley, with lift, contraction and base joints and an optional foundation (a mapped hexahedral grid
-  built in numpy, no gmsh). Not yet in :data:`GENERATORS`: a scene generator needs its rows in the scene
-  reference (masonrydam/scene/reference.py, docs/scene.md) first.
+  built in numpy, no gmsh).
 
 Every generator returns a :class:`masonrydam.mesh.Mesh` with interfaces already inserted on the joints.
 """
@@ -25,7 +24,8 @@ from .walls import masonry_wall_2d
 from .walls3d import masonry_wall_3d
 
 GENERATORS = {"masonry_wall_2d": masonry_wall_2d, "masonry_wall_3d": masonry_wall_3d, "blocks_2d": blocks_2d, "blocks_3d": blocks_3d,
-              "extruded": extruded, "gravity_dam_2d": gravity_dam_2d, "gravity_dam_3d": gravity_dam_3d}
+              "extruded": extruded, "gravity_dam_2d": gravity_dam_2d, "gravity_dam_3d": gravity_dam_3d,
+              "arch_dam_3d": arch_dam_3d}
 
 __all__ = ["Rect", "rectangles_to_mesh", "Box", "boxes_to_mesh", "masonry_wall_2d", "masonry_wall_3d", "blocks_2d", "blocks_3d",
            "extrude_2d", "extruded", "gravity_dam_2d", "gravity_dam_3d", "arch_dam_3d", "GENERATORS"]

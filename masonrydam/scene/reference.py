@@ -181,6 +181,25 @@ _GENERATOR_PARAMETERS = {
         **{k: v for k, v in _DAM_SECTION.items() if k != "order"},
         "order": ("", "1: hex8, 2: hex20"),
     },
+    "arch_dam_3d": {
+        "height": ("m", "dam height (z from the base, 0, to the crest)"),
+        "crest_radius": ("m", "extrados (upstream face) radius of the crest arch"),
+        "central_angle_deg": ("deg", "full central angle of every horizontal arch, in (0, 180]"),
+        "crest_thickness": ("m", "arch thickness at the crest"),
+        "n_monoliths": ("", "equal-angle cantilever monoliths, separated by radial `contraction_joints`"),
+        "base_thickness": ("m", "arch thickness at the base (default: `crest_thickness`; linear in between)"),
+        "base_radius": ("m", "extrados radius at the base (default: `crest_radius`; linear in between)"),
+        "valley_bottom_width": ("m", "bottom width of a trapezoidal valley whose top width is the crest chord of "
+                                     "the dam axis; the bank monoliths stand on it (default: all full height)"),
+        "lift_spacing": ("m", "horizontal `lift_joints` at every multiple of it above the base"),
+        "foundation_depth": ("m", "depth of a rock block under the valley floor, joined by `base_joint` (0: no "
+                                  "foundation; the base is then the support set `base`)"),
+        "foundation_extent": ("m", "radial widening of the rock block upstream and downstream of the arch"),
+        "element_size": ("m", "element size (default: height / 20)"),
+        "order": ("", "1: hex8, 2: hex20"),
+        "reservoir_level": ("m", "water level above the base: facet set `upstream_wet` and node set `waterline` "
+                                 "there"),
+    },
 }
 _GENERATOR_TEXT = {
     "masonry_wall_2d": "A 2D wall of courses of units, on optional beams. Groups `units`, `lintels`, `base_beam`, "
@@ -204,6 +223,11 @@ _GENERATOR_TEXT = {
     "gravity_dam_3d": "A dam of monoliths across a trapezoidal valley (x along the axis, y downstream, z up): the "
                       "section of `gravity_dam_2d` extruded into hexahedra, with `lift_joints`, "
                       "`contraction_joints` and `base_joint`; facet set `dam_ends` at the banks.",
+    "arch_dam_3d": "A single-centre arch dam of cantilever monoliths (x across the valley, symmetric about 0; y "
+                   "downstream; z up; the crown's upstream face on x = y = 0), a mapped grid of hexahedra with "
+                   "`lift_joints`, `contraction_joints` and `base_joint`; facet sets `upstream_face`, "
+                   "`downstream_face`, `crest`, `dam_ends` (the two ends of the arch), `upstream_wet`, `base` or "
+                   "`foundation_bottom`, `foundation_sides`, `foundation_top`; node set `crest_upstream`.",
 }
 _GENERATOR_CHOICES = {"bond": BONDS, "preset": tuple(PRESETS),
                       "generator": tuple(sorted(g for g in GENERATORS if g.endswith("_2d")))}

@@ -235,6 +235,9 @@ def _scenes_3d():
                     "reservoir": {"level": 90.0, "dynamic": "westergaard"},
                     "foundation": {"mass": False, "absorbing": False}}),
         ("3d wall", _minimal({"generator": "masonry_wall_3d", "parameters": wall3d}, 3)),
+        ("3d arch", _minimal({"generator": "arch_dam_3d", "parameters": {
+            "height": 30.0, "crest_radius": "50 m", "central_angle_deg": "100 deg", "crest_thickness": 4.0,
+            "n_monoliths": 3, "valley_bottom_width": 20.0, "element_size": 10.0}}, 3)),
         ("3d boxes", _minimal({"generator": "blocks_3d", "parameters": {
             "blocks": [{"x0": 0, "y0": 0, "z0": 0, "x1": 1, "y1": 1, "z1": 1, "group": "base"}],
             "element_size": 0.5, "order": 2, "rotation_deg": [0.0, 0.0, 10.0], "joint_name": "joints"}}, 3)),

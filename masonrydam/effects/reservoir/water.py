@@ -450,7 +450,9 @@ _RESERVOIR = Section("[reservoir]", "Water on a dam. A static stage applies it w
 def _effects():
     return [Effect("reservoir", "[reservoir] with a { type = \"reservoir\" } load in a static stage", __name__,
                    "hydrostatics (White, Fluid Mechanics, ch. 2); USBR Design of Small Dams (1987) sec. 5.6; "
-                   "USACE EM 1110-2-2200 (1995) ch. 3", "tests/effects/test_reservoir.py, tests/effects/test_hydrostatics.py",
+                   "USACE EM 1110-2-2200 (1995) ch. 3",
+                   "tests/effects/test_reservoir.py, tests/effects/test_hydrostatics.py, "
+                   "tests/effects/test_curved_face_water.py",
                    describe, activate=_activate, stage_loads={"reservoir": _add_reservoir_load},
                    finish_stage=_finish_stage, check_scene=_check_scene, scene_keys=(_RESERVOIR,),
                    section_meanings={"reservoir": "water on a dam: reservoir, tailwater, silt, uplift, water in "

@@ -3,6 +3,7 @@
     . .venv/bin/activate
     python benchmarks/bench_dam_3d_reservoir_fill.py                 # the 8-monolith dam, then the 20-monolith one
     python benchmarks/bench_dam_3d_reservoir_fill.py --only fill8    # one of them
+    python benchmarks/bench_dam_3d_reservoir_fill.py --only fill8_large   # fill8 at element_size 3 (~9 min)
 
 ``fill8``: ``examples/dam_3d_gravity.toml`` (8 monoliths, about 42 000 DOF, 8 096 joint points) with the
 ``[reservoir]`` of ``examples/dam_3d_reservoir.toml`` (level 57 m, tailwater 3 m, uplift with drains, full head in
@@ -10,7 +11,8 @@ cracks) and its second stage (``reservoir``, 2 steps). Before issue 33 it stoppe
 convergence" while every joint line held with margin (lowest sliding factor 5.3): points at the tip of the crack
 in the cohesive dam-rock joint flipped between open (bond broken, no shear) and closed (bond intact, shear up to
 c) from one joint-space iteration to the next. ``reservoir20``: ``examples/dam_3d_reservoir.toml`` as it is (20
-monoliths, about 63 000 DOF). Target: the water reaches 57 m (or a physical limit), the reservoir stage costs at
+monoliths, about 63 000 DOF). ``fill8_large`` (asked for by name only): ``fill8`` at element_size 3 (166 068 DOF,
+22 488 joint points), whose static stages take the general Newton path with AMG (no joint space). Target: the water reaches 57 m (or a physical limit), the reservoir stage costs at
 most 1.5x the gravity stage.
 
 Printed per run (each in a subprocess of its own, one thread for numba, OpenMP, MKL and OpenBLAS, after an
@@ -50,6 +52,8 @@ BEFORE = {
               "a26e3bd: level 57 m; gravity 28.5 s; reservoir 101.5 s, 9 steps, 807 it, 8 cuts, 8 joint-space splits "
               "(ratio 3.57)"],
     "reservoir20": ["main before issue 33: gravity 192 s, reservoir 515 s (ratio 2.68)"],
+    "fill8_large": ["5c902af: the reservoir's first step cut at 30 iterations, its halves converging by 10-25 % an "
+                    "iteration: not at the shaking after 13 minutes (gravity 119.5-122.6 s)"],
 }
 #: solver settings of the tight-tolerance reference runs, tightest first (the first that converges is used)
 REFERENCE_SOLVERS = [{"force_tolerance": 1e-9, "energy_tolerance": 1e-14, "max_iterations": 100, "max_step_cuts": 8},
@@ -59,13 +63,15 @@ RESERVOIR = ROOT / "examples" / "dam_3d_reservoir.toml"
 
 
 def scene_of(name: str) -> dict:
-    """The scene ``fill8`` or ``reservoir20`` (see the module docstring)."""
+    """The scene ``fill8``, ``fill8_large`` or ``reservoir20`` (see the module docstring)."""
     wet = tomllib.loads(RESERVOIR.read_text())
     if name == "reservoir20":
         return wet
     scene = tomllib.loads(GRAVITY.read_text())
     scene["reservoir"] = wet["reservoir"]
     scene["stages"].append({"name": "reservoir", "steps": 2, "loads": [{"type": "reservoir"}]})
+    if name == "fill8_large":
+        scene["mesh"]["parameters"]["element_size"] = 3.0
     return scene
 
 
@@ -166,7 +172,7 @@ def run_child(name: str, solver: dict | None = None, arrays: str | None = None) 
 
 def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--only", choices=("fill8", "reservoir20"))
+    p.add_argument("--only", choices=("fill8", "reservoir20", "fill8_large"))
     p.add_argument("--reference", action="store_true", help="also run (or read) the tight-tolerance reference and compare")
     p.add_argument("--reference-dir", default=None, help="keep the reference results here and reuse them")
     p.add_argument("--child", help=argparse.SUPPRESS)

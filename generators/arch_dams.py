@@ -1,4 +1,5 @@
-"""Arch dam generator: a single-centre arch of cantilever monoliths, meshed with hexahedra (3D).
+"""Arch dam generator: a single-centre arch of cantilever monoliths, meshed with hexahedra (3D),
+optionally double-curvature (a crown cantilever curved in the vertical plane, overhanging upstream).
 
 Coordinates (m), the generators' convention (docs/architecture.md): x along the dam axis, across
 the valley (the dam is symmetric about x = 0); y from upstream to downstream; z up, with z = 0 at the
@@ -14,15 +15,31 @@ through the arch centre (0, y_c(z)):
   z = H (``base_radius`` defaults to ``crest_radius``: a constant-radius arch);
 - thickness t(z), linear from ``base_thickness`` to ``crest_thickness`` (default: uniform);
   intrados (downstream face) radius R_i = R_e - t, mean radius R_m = R_e - t/2 (the dam axis);
-- centre y_c(z) = R_e(z): the crown's extrados is the vertical line x = y = 0 (a vertical upstream
-  face at the crown), and the arch centres lie in the plane x = 0, at y = R_e(z) downstream. A
-  constant-radius arch thus has the one vertical axis x = 0, y = R;
+- centre y_c(z) = y_u(z) + R_e(z), in the plane x = 0, where y_u(z) is the crown's extrados: the
+  arch sits with its crown's upstream face at (0, y_u(z)). Without an overhang (``crown_overhang``
+  a = 0, the default) y_u = 0: the crown's extrados is the vertical line x = y = 0 and y_c = R_e (a
+  constant-radius arch has the one vertical axis x = 0, y = R). With a > 0 (double curvature) the
+  crown's upstream face is the parabola with its vertex at z_o = ``overhang_height`` (default
+  0.45 H, strictly between 0 and H):
+  y_u(z) = -a (1 - ((z - z_o) / (H - z_o))^2),
+  so y_u(H) = 0 at the crest, the largest upstream offset y_u(z_o) = -a, and at the base
+  y_u(0) = -a (1 - (z_o / (H - z_o))^2) (for z_o < H/2 the base lies downstream of the overhang: the
+  crown cantilever's upstream face undercuts towards the base). Every horizontal arch keeps its radii
+  and thickness; only its centre moves with the crown;
 - a point at angle phi (-theta/2 <= phi <= theta/2, phi = 0 at the crown, phi > 0 towards +x) and
   radius r is at x = r sin(phi), y = y_c(z) - r cos(phi).
 
 Exact closed forms the tests use: the annular sector at z has the area theta R_m(z) t(z), so the
 dam's volume over a rectangular valley is V = theta H [R_m0 t0 + (R_m0 dt + dR t0)/2 + dR dt/3]
 (R_m = R_m0 + dR z/H, t = t0 + dt z/H); the crest arc along the extrados is R_e(H) theta long.
+The overhang changes none of these: it moves each horizontal section by y_u(z) along y, a shear
+(x, y, z) -> (x, y + y_u(z), z) of unit determinant, so every section's area and the volume are
+unchanged. The mesh keeps this exactly: every node of an elevation layer moves by the same y_u(z), and
+within an element z depends on the elevation coordinate zeta alone, so the shift only adds to
+dy/dzeta and the Jacobian determinant dz/dzeta (dx/dxi dy/deta - dx/deta dy/dxi) is the same at every
+point as without the overhang (the meshed volume too, hex8 and hex20). No overhang can therefore
+invert an element; the generator still checks every hexahedron's Jacobian at its nodes (an arc
+segment spanning a half circle makes a flat hex8: that error names ``element_size``).
 
 Valley. ``valley_bottom_width`` b (optional) makes the valley trapezoidal and symmetric: its walls
 are the vertical-strike planes |x| = b/2 + (L - b)/2 z/H, with L = 2 R_m(H) sin(theta/2) the crest
@@ -45,7 +62,9 @@ Foundation (``foundation_depth`` D > 0): rock from z = -D up to the valley floor
 plan, widened by ``foundation_extent`` e radially (upstream of the extrados and downstream of the
 intrados, measured along the radius; not beyond the dam ends), plus, under each bank monolith, the
 bank rock up to the monolith's base over the same radial width (a stepped valley, as in
-gravity_dam_3d). Below z = 0 the rock's node columns are vertical, with the plan of the base arch.
+gravity_dam_3d). Below z = 0 the rock's node columns are vertical, with the plan of the base arch
+(including its overhang offset y_u(0)); the bank rock above z = 0 shares the dam's grid and follows
+the arch centre y_c(z) up to each monolith's base, so the base joints stay conformal.
 
 Mesh. A mapped (structured) hexahedral grid in (through-thickness, angle, height) coordinates
 built with numpy: each node is placed on the exact geometry (mid-edge nodes of the 20-node
@@ -71,7 +90,9 @@ References: the geometry is elementary (circular annular sectors). The parameter
 and central angle of the crest arch, crest and base thickness, height) are those a preliminary
 arch layout is given by in Boggs, H.L., "Guide for Preliminary Design of Arch Dams", USBR
 Engineering Monograph 36 (1966; reprinted 1977), whose empirical thickness formulas are not
-implemented here.
+implemented here. The same monograph lays out the crown cantilever of a double-curvature arch with an
+upstream overhang of its upstream face near 0.45 H above the base, the shape (not the numbers) that
+``crown_overhang`` and the default ``overhang_height`` follow; the parabola is this generator's choice.
 
 Bad input raises :class:`masonrydam.errors.SceneError` naming ``<key>.<parameter>`` and the bound.
 """
@@ -82,7 +103,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from masonrydam.elements.shapes import ELEMENT_TYPES, reference_nodes
+from masonrydam.elements.shapes import ELEMENT_TYPES, reference_nodes, shape_functions
 from masonrydam.errors import MeshError
 from masonrydam.mesh.interfaces import insert_interfaces
 from masonrydam.mesh.model import CellBlock, FacetSet, Mesh
@@ -107,6 +128,8 @@ class _Arch:
     ReH: float
     t0: float
     tH: float
+    overhang: float = 0.0  # crown_overhang a (m)
+    z_o: float = 0.0  # overhang_height (m above the base)
 
     def extrados(self, z):
         return self.Re0 + (self.ReH - self.Re0) * np.asarray(z) / self.H
@@ -120,9 +143,20 @@ class _Arch:
     def mean_radius(self, z):
         return self.extrados(z) - 0.5 * self.thickness(z)
 
+    def upstream_y(self, z):
+        """y of the crown's extrados at elevation z: the parabola y_u = -a (1 - ((z - z_o) / (H - z_o))^2)
+        (0 at the crest, -a at z_o); 0 at every elevation without an overhang."""
+        if self.overhang == 0.0:
+            return np.zeros_like(np.asarray(z, dtype=np.float64))
+        s = (np.asarray(z) - self.z_o) / (self.H - self.z_o)
+        return -self.overhang * (1.0 - s * s)
+
     def centre_y(self, z):
-        """y of the arch centre at elevation z: the crown's extrados stays at y = 0."""
-        return self.extrados(z)
+        """y of the arch centre at elevation z: y_c = y_u + R_e (without an overhang the crown's extrados
+        stays at y = 0, and y_c = R_e bit for bit)."""
+        if self.overhang == 0.0:
+            return self.extrados(z)
+        return self.upstream_y(z) + self.extrados(z)
 
     @property
     def scale(self) -> float:
@@ -135,7 +169,8 @@ def _int_at_least(value, name, key, low):
     return int(value)
 
 
-def _check_arch(height, crest_radius, central_angle_deg, crest_thickness, base_thickness, base_radius, key) -> _Arch:
+def _check_arch(height, crest_radius, central_angle_deg, crest_thickness, base_thickness, base_radius, key,
+                crown_overhang=0.0, overhang_height=None) -> _Arch:
     H = _number(height, "height", key, positive=True)
     ReH = _number(crest_radius, "crest_radius", key, positive=True)
     Re0 = ReH if base_radius is None else _number(base_radius, "base_radius", key, positive=True)
@@ -150,7 +185,36 @@ def _check_arch(height, crest_radius, central_angle_deg, crest_thickness, base_t
     if t0 >= Re0:
         raise _err(key, "base_thickness", f"must be smaller than the base extrados radius ({Re0:g} m: the intrados "
                                           f"radius R_e - t must stay > 0), got {t0:g} m")
-    return _Arch(H, math.radians(ang), Re0, ReH, t0, tH)
+    a = _number(crown_overhang, "crown_overhang", key, nonneg=True)
+    z_o = 0.45 * H
+    if overhang_height is not None:
+        z_o = _number(overhang_height, "overhang_height", key)
+        if not 0.0 < z_o < H:
+            raise _err(key, "overhang_height", f"must be strictly between 0 and height = {H:g} m (the crown's "
+                                               f"upstream-face parabola has its vertex there), got {z_o:g} m")
+    return _Arch(H, math.radians(ang), Re0, ReH, t0, tH, a, z_o)
+
+
+def _check_jacobians(points, cells, etype, key) -> None:
+    """Every hexahedron's Jacobian determinant at its nodes must be > 0 (none inverted or flat).
+
+    The crown overhang never fails this: it moves every node of an elevation layer by the same
+    y-shift y_u(z), and within an element z depends on the elevation coordinate zeta alone (the grid is
+    mapped), so the shift only adds to dy/dzeta and det J = dz/dzeta (dx/dxi dy/deta - dx/deta dy/dxi)
+    is unchanged. What can fail is an arc segment spanning (nearly) a half circle: its chord element
+    is flat (hex8 at d = 180 degrees) or its parabolic edges fold (hex20)."""
+    _, dN = shape_functions(etype, reference_nodes(etype))  # (nen, 3, nen)
+    nen = dN.shape[0]
+    J = (dN.reshape(3 * nen, nen) @ points[cells]).reshape(len(cells), nen, 3, 3)  # J[e, q, a, b] = dx_b / dxi_a
+    det = (J[..., 0, 0] * (J[..., 1, 1] * J[..., 2, 2] - J[..., 1, 2] * J[..., 2, 1])
+           - J[..., 0, 1] * (J[..., 1, 0] * J[..., 2, 2] - J[..., 1, 2] * J[..., 2, 0])
+           + J[..., 0, 2] * (J[..., 1, 0] * J[..., 2, 1] - J[..., 1, 1] * J[..., 2, 0]))
+    bad = det <= 1e-12 * np.abs(det).max()
+    if bad.any():
+        e = int(np.nonzero(bad.any(axis=1))[0][0])
+        raise _err(key, "element_size", f"gives arc segments too wide for {etype} elements: {int(bad.any(axis=1).sum())} "
+                                        f"hexahedra have a Jacobian determinant <= 0 at a node (element {e}, smallest "
+                                        f"{det.min():.3g}); use a smaller element_size or more monoliths")
 
 
 def _lift_levels(arch: _Arch, lift_spacing, key) -> np.ndarray:
@@ -235,6 +299,8 @@ def arch_dam_3d(
     element_size: float | None = None,
     order: int = 1,
     reservoir_level: float | None = None,
+    crown_overhang: float = 0.0,
+    overhang_height: float | None = None,
     key: str = "mesh.parameters",
 ) -> Mesh:
     """A single-centre arch dam of ``n_monoliths`` cantilever monoliths (see the module docstring).
@@ -246,10 +312,14 @@ def arch_dam_3d(
     monoliths full height): a trapezoidal valley whose top width is the crest chord of the dam axis;
     lift_spacing (m): horizontal ``lift_joints``; foundation_depth, foundation_extent (m): the rock
     block below the valley floor and its radial widening; element_size (m; default height / 20);
-    order 1 (hex8) or 2 (hex20); reservoir_level (m above the base): the ``upstream_wet`` set.
+    order 1 (hex8) or 2 (hex20); reservoir_level (m above the base): the ``upstream_wet`` set;
+    crown_overhang (m, >= 0; default 0: the vertical crown) and overhang_height (m above the base, in
+    (0, height); default 0.45 height): the double curvature, the crown's upstream face the parabola
+    through the crest's extrados with its largest upstream offset crown_overhang at overhang_height.
     Returns a :class:`masonrydam.mesh.Mesh` (points (n, 3) m) with the interfaces inserted.
     """
-    arch = _check_arch(height, crest_radius, central_angle_deg, crest_thickness, base_thickness, base_radius, key)
+    arch = _check_arch(height, crest_radius, central_angle_deg, crest_thickness, base_thickness, base_radius, key,
+                       crown_overhang, overhang_height)
     H, theta = arch.H, arch.theta
     n = _int_at_least(n_monoliths, "n_monoliths", key, 1)
     h = H / 20.0 if element_size is None else _number(element_size, "element_size", key, positive=True)
@@ -324,6 +394,7 @@ def arch_dam_3d(
     zg = np.clip(zz, 0.0, H)
     r = arch.intrados(zg) + a_f[gr] * arch.thickness(zg) + b_f[gr]
     points = np.column_stack([r * np.sin(phi_f[gp]), arch.centre_y(zg) - r * np.cos(phi_f[gp]), zz])
+    _check_jacobians(points, cells, etype, key)
 
     # facets: joints between bodies and labelled boundary facets, by their grid plane
     f = _facets(cells, etype)

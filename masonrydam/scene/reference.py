@@ -199,6 +199,12 @@ _GENERATOR_PARAMETERS = {
         "order": ("", "1: hex8, 2: hex20"),
         "reservoir_level": ("m", "water level above the base: facet set `upstream_wet` and node set `waterline` "
                                  "there"),
+        "crown_overhang": ("m", "double curvature: the largest upstream offset (towards -y) of the crown's upstream "
+                                "face from the crest's, >= 0 (0: a vertical crown); the crown's upstream face is the parabola "
+                                "y = -crown_overhang (1 - ((z - z_o) / (H - z_o))^2) (z_o: `overhang_height`, H: "
+                                "`height`), each horizontal arch's centre moving with it"),
+        "overhang_height": ("m", "elevation z_o of the largest overhang above the base, strictly between 0 and "
+                                 "`height` (default: 0.45 `height`)"),
     },
 }
 _GENERATOR_TEXT = {
@@ -224,7 +230,8 @@ _GENERATOR_TEXT = {
                       "section of `gravity_dam_2d` extruded into hexahedra, with `lift_joints`, "
                       "`contraction_joints` and `base_joint`; facet set `dam_ends` at the banks.",
     "arch_dam_3d": "A single-centre arch dam of cantilever monoliths (x across the valley, symmetric about 0; y "
-                   "downstream; z up; the crown's upstream face on x = y = 0), a mapped grid of hexahedra with "
+                   "downstream; z up; the crown's upstream face on x = y = 0, or overhanging upstream on a parabola "
+                   "with `crown_overhang`: a double-curvature arch), a mapped grid of hexahedra with "
                    "`lift_joints`, `contraction_joints` and `base_joint`; facet sets `upstream_face`, "
                    "`downstream_face`, `crest`, `dam_ends` (the two ends of the arch), `upstream_wet`, `base` or "
                    "`foundation_bottom`, `foundation_sides`, `foundation_top`; node set `crest_upstream`.",

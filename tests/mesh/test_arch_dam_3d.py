@@ -14,7 +14,12 @@ arch centre at (0, R_e(z)), angle phi from the crown towards +x):
   hex8  k = sin(d) / d                                      = 1 - d^2/6 + ...  (chords),
   hex20 k = (2/d) [sin(d)/2 + (4/3) sin(d/2) (1 - cos(d/2))] = 1 + O(d^4)      (parabolic segment
   2/3 chord x rise added to the chord polygon);
-- the crest arc of radius R and angle theta cut into n equal chords has the length 2 R n sin(theta/2n).
+- the crest arc of radius R and angle theta cut into n equal chords has the length 2 R n sin(theta/2n);
+- double curvature (crown_overhang a, overhang_height z_o): the crown's extrados is the parabola
+  y_u(z) = -a (1 - ((z - z_o) / (H - z_o))^2) and each arch's centre is at (0, y_u + R_e). The shift
+  y_u(z) along y is a shear of unit determinant, so every closed form above holds unchanged; in the mesh
+  z depends on the elevation coordinate alone within an element, so det J (hence the meshed volume,
+  kappa V) is the same as without the overhang at every point.
 """
 from __future__ import annotations
 
@@ -28,7 +33,7 @@ from scipy.sparse.csgraph import connected_components
 import generators
 import masonrydam
 from generators.arch_dams import arch_dam_3d
-from masonrydam.elements.shapes import shape_functions
+from masonrydam.elements.shapes import reference_nodes, shape_functions
 from masonrydam.errors import SceneError
 
 G = 9.80665
@@ -101,6 +106,28 @@ def bodies(mesh):
         node_body[b.cells] = lab[off:off + len(b.cells)][:, None]
         off += len(b.cells)
     return n, node_body
+
+
+def assert_joints_conformal(mesh):
+    """Every interface joins coincident node pairs, each side's nodes in one body, the two sides in two."""
+    _, node_body = bodies(mesh)
+    for j in mesh.joints:
+        half = j.cells.shape[1] // 2
+        bot, top = j.cells[:, :half], j.cells[:, half:]
+        assert np.allclose(mesh.points[bot], mesh.points[top], atol=1e-12), j.name
+        assert (node_body[bot] != node_body[top]).all(), j.name
+        assert (node_body[bot] == node_body[bot][:, :1]).all() and (node_body[top] == node_body[top][:, :1]).all()
+
+
+def crown_upstream_y(z, a, z_o, H):
+    """The crown's extrados y_u(z) = -a (1 - ((z - z_o) / (H - z_o))^2) (m)."""
+    return -a * (1.0 - ((np.asarray(z) - z_o) / (H - z_o)) ** 2)
+
+
+def nodal_jacobians(points, block):
+    """det J of every hexahedron at its own nodes: (e, nen)."""
+    _, dN = shape_functions(block.type, reference_nodes(block.type))
+    return np.linalg.det(np.einsum("qan,enb->eqab", dN, points[block.cells]))
 
 
 def face_normals(points, facets):
@@ -185,14 +212,9 @@ def test_joints_are_matching_facets_with_counts_areas_and_normals_of_the_grid():
     theta = math.radians(100.0)
     mesh = arch_dam_3d(height=H, crest_radius=R, central_angle_deg=100.0, crest_thickness=t, n_monoliths=n,
                        lift_spacing=15.0, element_size=h)
-    nb, node_body = bodies(mesh)
+    nb, _ = bodies(mesh)
     assert nb == n * 3
-    for j in mesh.joints:
-        half = j.cells.shape[1] // 2
-        bot, top = j.cells[:, :half], j.cells[:, half:]
-        assert np.allclose(mesh.points[bot], mesh.points[top], atol=1e-12), j.name
-        assert (node_body[bot] != node_body[top]).all(), j.name
-        assert (node_body[bot] == node_body[bot][:, :1]).all() and (node_body[top] == node_body[top][:, :1]).all()
+    assert_joints_conformal(mesh)
     joints = {j.name: j for j in mesh.joints}
     assert set(joints) == {"lift_joints", "contraction_joints"}
     m = segments_per_monolith(R, theta, n, h)
@@ -349,11 +371,20 @@ BASE = dict(height=30.0, crest_radius=50.0, central_angle_deg=100.0, crest_thick
     (dict(element_size=0.01), "element_size"),
     (dict(order=3), "order"),
     (dict(reservoir_level=31.0), "reservoir_level"),
+    (dict(crown_overhang=-1.0), "crown_overhang"),
+    (dict(crown_overhang="x"), "crown_overhang"),
+    (dict(crown_overhang=3.0, overhang_height=0.0), "overhang_height"),
+    (dict(crown_overhang=3.0, overhang_height=30.0), "overhang_height"),
+    (dict(crown_overhang=3.0, overhang_height=-5.0), "overhang_height"),
+    (dict(overhang_height=31.0), "overhang_height"),
+    # one hex8 across a half circle: a flat element (det J = 0 at its nodes)
+    (dict(central_angle_deg=180.0, n_monoliths=1, element_size=200.0), "element_size"),
 ])
 def test_bad_input_names_the_parameter(change, key):
     with pytest.raises(SceneError) as exc:
         arch_dam_3d(**{**BASE, **change})
     assert exc.value.key == f"mesh.parameters.{key}"
+    assert f"mesh.parameters.{key}" in str(exc.value)
 
 
 def test_generation_is_deterministic():
@@ -393,3 +424,101 @@ def test_a_scene_runs_self_weight_on_a_tiny_arch(monkeypatch):
     V = kappa(theta / (2 * m), 1) * sector_volume(theta, 37.5, 38.5, 5.0, 3.0, 20.0)
     Rz = ds.reaction.sel(component="z").values[-1]
     assert Rz.sum() == pytest.approx(rho * G * V, rel=1e-6)
+
+
+# ---------------------------------------------------------------------------------------------
+# double curvature: the crown overhang
+# ---------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("order", [1, 2])
+def test_overhang_is_a_shear_volume_and_jacobians_unchanged(order):
+    """With an overhang a every node moves by exactly y_u(z) along y (x and z bit for bit the same), the
+    meshed volume is still kappa(d) V, and det J at every element node equals the vertical arch's to
+    round-off, also for an overhang as large as the height (crest slope 2a / (H - z_o) = 3.6): an
+    overhang cannot invert an element, so the generator accepts it."""
+    theta, n, h, H = math.radians(120.0), 4, 8.0, 60.0
+    V = sector_volume(theta, 80.0 - 6.0, 100.0 - 2.5, 12.0, 5.0, H)
+    d = theta / (n * segments_per_monolith(100.0, theta, n, h))
+    plain = arch_dam_3d(**VARYING, n_monoliths=n, lift_spacing=20.0, element_size=h, order=order)
+    det0 = nodal_jacobians(plain.points, dam_block(plain))
+    assert det0.min() > 0
+    for a in (8.0, H):
+        mesh = arch_dam_3d(**VARYING, n_monoliths=n, lift_spacing=20.0, element_size=h, order=order, crown_overhang=a)
+        x, x0 = mesh.points, plain.points
+        assert np.array_equal(x[:, [0, 2]], x0[:, [0, 2]])
+        assert np.allclose(x[:, 1] - x0[:, 1], crown_upstream_y(x[:, 2], a, 0.45 * H, H), rtol=0, atol=1e-12 * H)
+        vol, det_min = element_volumes(x, dam_block(mesh))
+        assert det_min > 0
+        assert vol.sum() == pytest.approx(kappa(d, order) * V, rel=1e-11)
+        det = nodal_jacobians(x, dam_block(mesh))
+        assert np.allclose(det, det0, rtol=0, atol=1e-12 * np.abs(det0).max() * a / 8.0)
+
+
+def test_crown_upstream_nodes_lie_on_the_parabola():
+    """Even n: the crown joint is at phi = 0, so the upstream crown nodes (x = 0) sample the extrados
+    y_u(z) = -a (1 - ((z - z_o) / (H - z_o))^2) at every node layer: 0 at the crest, -a at z_o (a node
+    layer here: z_o = 0.45 x 60 = 27 m, a multiple of the 3 m element size), and
+    -a (1 - (z_o / (H - z_o))^2) = -a (1 - (27/33)^2) at the base; the crest arc is where it was."""
+    H, a, z_o = 60.0, 6.0, 27.0
+    for order, extra in ((1, {}), (2, dict(overhang_height=z_o))):
+        mesh = arch_dam_3d(height=H, crest_radius=100.0, base_radius=80.0, central_angle_deg=120.0,
+                           crest_thickness=5.0, base_thickness=12.0, n_monoliths=4, element_size=3.0, order=order,
+                           crown_overhang=a, **extra)
+        up = unique_points(mesh.points[mesh.node_sets["upstream_face"]])
+        crown = up[np.abs(up[:, 0]) < 1e-9]
+        crown = crown[np.argsort(crown[:, 2])]
+        assert len(crown) == order * 20 + 1
+        assert np.allclose(crown[:, 1], crown_upstream_y(crown[:, 2], a, z_o, H), rtol=0, atol=1e-12 * H)
+        assert crown[-1, 2] == H and crown[-1, 1] == pytest.approx(0.0, abs=1e-12 * H)
+        k = int(np.argmin(crown[:, 1]))
+        assert crown[k, 2] == pytest.approx(z_o, abs=1e-12 * H) and crown[k, 1] == pytest.approx(-a, rel=1e-12)
+        assert crown[0, 2] == 0.0 and crown[0, 1] == pytest.approx(-a * (1 - (z_o / (H - z_o)) ** 2), rel=1e-12)
+        assert crown[0, 1] > crown[k, 1]  # the base lies downstream of the overhang
+        # every upstream node is on its arch's extrados, about the moved centre (0, y_u + R_e)
+        Re = 80.0 + 20.0 * up[:, 2] / H
+        r = np.hypot(up[:, 0], up[:, 1] - (crown_upstream_y(up[:, 2], a, z_o, H) + Re))
+        assert np.allclose(r, Re, rtol=1e-12)
+        x = unique_points(mesh.points[mesh.node_sets["crest_upstream"]])
+        assert np.allclose(np.hypot(x[:, 0], x[:, 1] - 100.0), 100.0, rtol=1e-12)
+
+
+def test_default_overhang_gives_todays_nodes_bit_for_bit():
+    """crown_overhang omitted, 0 or 0.0 (with or without an overhang_height) gives the same arrays, and
+    the crown's extrados is exactly y = 0 as before the overhang existed."""
+    kw = dict(BASE, valley_bottom_width=20.0, lift_spacing=10.0, foundation_depth=10.0, foundation_extent=5.0,
+              reservoir_level=25.0, n_monoliths=4)
+    ref = arch_dam_3d(**kw)
+    for extra in (dict(crown_overhang=0.0), dict(crown_overhang=0), dict(crown_overhang=0.0, overhang_height=5.0)):
+        m = arch_dam_3d(**kw, **extra)
+        assert np.array_equal(m.points, ref.points)
+        for x, y in zip(m.blocks + m.joints, ref.blocks + ref.joints):
+            assert (x.name, x.type) == (y.name, y.type) and np.array_equal(x.cells, y.cells)
+        assert all(np.array_equal(m.node_sets[k], ref.node_sets[k]) for k in ref.node_sets)
+    up = ref.points[ref.node_sets["upstream_face"]]
+    assert (up[up[:, 0] == 0.0, 1] == 0.0).all() and (up[:, 0] == 0.0).sum() > 0
+
+
+@pytest.mark.parametrize("order", [1, 2])
+def test_overhanging_arch_on_a_benched_valley_keeps_its_joints_conformal(order):
+    """An overhanging arch with lifts, a benched valley and a widened foundation: the joints join
+    coincident nodes of different bodies; the dam's and the rock's volumes and the bodies are those of
+    the vertical arch; the rock below the valley floor is at the base arch's plan: its nodes lie between
+    the radii R - t - e and R + e about (0, y_u(0) + R)."""
+    R, t, H, D, e, a = 60.0, 6.0, 40.0, 15.0, 8.0, 5.0
+    kw = dict(height=H, crest_radius=R, central_angle_deg=110.0, crest_thickness=t, n_monoliths=6,
+              valley_bottom_width=30.0, lift_spacing=12.0, foundation_depth=D, foundation_extent=e, element_size=5.0,
+              reservoir_level=35.0, order=order)
+    mesh = arch_dam_3d(**kw, crown_overhang=a)
+    plain = arch_dam_3d(**kw)
+    assert_joints_conformal(mesh)
+    assert {j.name: len(j.cells) for j in mesh.joints} == {j.name: len(j.cells) for j in plain.joints}
+    assert bodies(mesh)[0] == bodies(plain)[0] == 2 * 2 + 2 * 3 + 2 * 4 + 1
+    for b, b0 in zip(mesh.blocks, plain.blocks):
+        vol, det_min = element_volumes(mesh.points, b)
+        assert det_min > 0 and vol.sum() == pytest.approx(element_volumes(plain.points, b0)[0].sum(), rel=1e-12)
+    x = mesh.points
+    below = x[x[:, 2] < 0.0]
+    r = np.hypot(below[:, 0], below[:, 1] - (crown_upstream_y(0.0, a, 0.45 * H, H) + R))
+    assert r.min() == pytest.approx(R - t - e, rel=1e-12) and r.max() == pytest.approx(R + e, rel=1e-12)
+    assert np.allclose(x[mesh.node_sets["foundation_bottom"], 2], -D)

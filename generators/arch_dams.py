@@ -108,7 +108,7 @@ from masonrydam.errors import MeshError
 from masonrydam.mesh.interfaces import insert_interfaces
 from masonrydam.mesh.model import CellBlock, FacetSet, Mesh
 
-from .dams import _err, _estimate, _facets, _number
+from .dams import _err, _estimate, _facets, _number, _snap_bases
 
 __all__ = ["arch_dam_3d"]
 
@@ -250,21 +250,7 @@ def _monolith_bases(arch: _Arch, n, valley_bottom_width, lift_levels, h, key):
     f0 = 0.5 * b - arch.mean_radius(0.0) * s
     fH = 0.5 * L - arch.mean_radius(H) * s
     rise = np.where(f0 >= 0.0, 0.0, H * (-f0) / (fH - f0))
-    known = [0.0] + list(lift_levels)
-    zb = np.empty(n)
-    for i, z in enumerate(rise):
-        d = [abs(z - k) for k in known]
-        j = int(np.argmin(d))
-        if d[j] < 0.25 * h:
-            zb[i] = known[j]
-        else:
-            zb[i] = z
-            known.append(z)
-    if np.any(H - zb < 0.5 * h):
-        i = int(np.argmax(zb))
-        raise _err(key, "n_monoliths", f"monolith {i} on the bank would be only {H - zb[i]:.3g} m high (less than half "
-                                       "an element): use fewer monoliths, a wider valley bottom or a smaller element_size")
-    return phi, zb
+    return phi, _snap_bases(rise, [0.0] + list(lift_levels), H, h, key)
 
 
 def _divide(breaks, h):

@@ -911,6 +911,29 @@ def _assemble(points, etype, cells, is_dam, body, f: _Facets, sec: _Section, seg
     return out
 
 
+def _snap_bases(rise, known, height, h, key) -> np.ndarray:
+    """Base elevations (n,) m of monoliths whose centre lines meet the valley at ``rise`` (n,) m above the
+    floor: each within a quarter element ``h`` of a level in ``known`` (the floor and the lift joints, m above
+    the floor) or of another monolith's base is snapped to it, so no sliver lift is meshed; the error names
+    ``<key>.n_monoliths`` where a bank monolith would be less than half an element high under ``height``."""
+    known = list(known)
+    zb = np.empty(len(rise))
+    for i, z in enumerate(rise):
+        d = [abs(z - k) for k in known]
+        j = int(np.argmin(d))
+        if d[j] < 0.25 * h:
+            zb[i] = known[j]
+        else:
+            zb[i] = z
+            known.append(z)
+    if np.any(height - zb < 0.5 * h):
+        i = int(np.argmax(zb))
+        raise _err(key, "n_monoliths", f"monolith {i} on the bank would be only {height - zb[i]:.3g} m high (less than "
+                                       "half an element): use fewer monoliths, a wider valley bottom or a smaller "
+                                       "element_size")
+    return zb
+
+
 def _valley_bases(sec: _Section, lift_levels, B_b, B_t, n, h, key):
     """Monolith boundaries along x and the base elevation of each monolith."""
     X = np.linspace(0.0, B_t, n + 1)
@@ -921,21 +944,7 @@ def _valley_bases(sec: _Section, lift_levels, B_b, B_t, n, h, key):
         rise = np.clip((np.abs(xc - 0.5 * B_t) - 0.5 * B_b) / bank, 0.0, 1.0) * H
     else:
         rise = np.zeros(n)
-    snap = 0.25 * h
-    known = [0.0] + list(np.asarray(lift_levels) - sec.y0)
-    zb = np.empty(n)
-    for i, z in enumerate(rise):
-        d = [abs(z - k) for k in known]
-        j = int(np.argmin(d))
-        if d[j] < snap:
-            zb[i] = known[j]
-        else:
-            zb[i] = z
-            known.append(z)
-    if np.any(H - zb < 0.5 * h):
-        i = int(np.argmax(zb))
-        raise _err(key, "n_monoliths", f"monolith {i} on the bank would be only {H - zb[i]:.3g} m high (less than half an "
-                                       "element): use fewer monoliths, a wider valley bottom or a smaller element_size")
+    zb = _snap_bases(rise, [0.0] + list(np.asarray(lift_levels) - sec.y0), H, h, key)
     return X, sec.y0 + zb
 
 

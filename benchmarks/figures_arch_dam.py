@@ -30,15 +30,11 @@ import matplotlib  # noqa: E402
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+from figures_dam_3d import plot_crest, stage_steps  # noqa: E402  (benchmarks/ is sys.path[0] when run as a script)
 from masonrydam.results.files import open_result  # noqa: E402
 
 FIG = ROOT / "docs" / "figures"
 G = 9.80665
-
-
-def stage_steps(ds, name):
-    names = json.loads(ds.stage.attrs["stage_names"])
-    return np.nonzero(ds.stage.values == names.index(name))[0]
 
 
 def contraction_joints(ds, lift):
@@ -77,22 +73,7 @@ def main():
     u = ds.displacement.values[dyn][:, crown, :]  # (step, node, component)
     ux, uy = u[:, :, 0].mean(axis=1), u[:, :, 1].mean(axis=1)
     ux, uy = ux - ux[0], uy - uy[0]
-    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(8, 5.5), sharex=True)
-    ax1.plot(t, 1e3 * uy, lw=0.8, label="along the stream (y)")
-    ax1.plot(t, 1e3 * ux, lw=0.8, label="across the valley (x)")
-    ax1.set_ylabel("crown crest displacement (mm)\nrelative to the static state")
-    ax1.legend(loc="upper right", fontsize=8)
-    ax1.grid(alpha=0.3)
-    if "ground_acceleration" in ds:
-        ag = ds.ground_acceleration.values[dyn]
-        for c, lab in ((1, "y"), (0, "x"), (2, "z")):
-            ax2.plot(t, ag[:, c] / G, lw=0.6, label=lab)
-        ax2.legend(loc="upper right", fontsize=8)
-    ax2.set_ylabel("ground acceleration (g)")
-    ax2.set_xlabel("time (s)")
-    ax2.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(out / "arch_dam_crest.png", dpi=130)
+    plot_crest(ds, dyn, t, ux, uy, "across the valley (x)", "crown crest displacement (mm)", out / "arch_dam_crest.png")
     k = int(np.argmax(np.abs(uy)))
     print(f"crown crest: peak {1e3 * abs(uy[k]):.2f} mm along the stream at t = {t[k]:.2f} s, "
           f"{1e3 * np.abs(ux).max():.2f} mm across the valley; at the end {1e3 * uy[-1]:.2f} mm / {1e3 * ux[-1]:.2f} mm")

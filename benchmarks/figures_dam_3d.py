@@ -44,6 +44,28 @@ def stage_steps(ds, name):
     return np.nonzero(ds.stage.values == names.index(name))[0]
 
 
+def plot_crest(ds, dyn, t, ux, uy, x_label, ylabel, path):
+    """Crest displacements ``ux``, ``uy`` (step,) m relative to the static state against ``t`` (step,) s, over the
+    ground accelerations of the steps ``dyn``; written to ``path`` (also used by figures_arch_dam.py)."""
+    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(8, 5.5), sharex=True)
+    ax1.plot(t, 1e3 * uy, lw=0.8, label="along the stream (y)")
+    ax1.plot(t, 1e3 * ux, lw=0.8, label=x_label)
+    ax1.set_ylabel(f"{ylabel}\nrelative to the static state")
+    ax1.legend(loc="upper right", fontsize=8)
+    ax1.grid(alpha=0.3)
+    if "ground_acceleration" in ds:
+        ag = ds.ground_acceleration.values[dyn]
+        for c, lab in ((1, "y"), (0, "x"), (2, "z")):
+            ax2.plot(t, ag[:, c] / G, lw=0.6, label=lab)
+        ax2.legend(loc="upper right", fontsize=8)
+    ax2.set_ylabel("ground acceleration (g)")
+    ax2.set_xlabel("time (s)")
+    ax2.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=130)
+    plt.close(fig)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("result", help="result file of examples/dam_3d_earthquake.toml")
@@ -62,22 +84,8 @@ def main():
     ux0, uy0 = ux[0], uy[0]
 
     # -- crest -----------------------------------------------------------------------------------
-    fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(8, 5.5), sharex=True)
-    ax1.plot(t, 1e3 * (uy - uy0), lw=0.8, label="along the stream (y)")
-    ax1.plot(t, 1e3 * (ux - ux0), lw=0.8, label="along the axis (x)")
-    ax1.set_ylabel("crest displacement (mm)\nrelative to the static state")
-    ax1.legend(loc="upper right", fontsize=8)
-    ax1.grid(alpha=0.3)
-    if "ground_acceleration" in ds:
-        ag = ds.ground_acceleration.values[dyn]
-        for c, lab in ((1, "y"), (0, "x"), (2, "z")):
-            ax2.plot(t, ag[:, c] / G, lw=0.6, label=lab)
-        ax2.legend(loc="upper right", fontsize=8)
-    ax2.set_ylabel("ground acceleration (g)")
-    ax2.set_xlabel("time (s)")
-    ax2.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(out / "dam_3d_crest.png", dpi=130)
+    plot_crest(ds, dyn, t, ux - ux0, uy - uy0, "along the axis (x)", "crest displacement (mm)",
+               out / "dam_3d_crest.png")
     print(f"crest: peak {1e3 * np.abs(uy - uy0).max():.2f} mm along the stream at t = {t[np.argmax(np.abs(uy - uy0))]:.2f} s, "
           f"{1e3 * np.abs(ux - ux0).max():.2f} mm along the axis; permanent {1e3 * (uy[-1] - uy0):.2f} mm / "
           f"{1e3 * (ux[-1] - ux0):.2f} mm")

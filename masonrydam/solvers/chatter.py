@@ -10,7 +10,9 @@ that broke stay broken (``Model.latch_broken_bonds``): with cohesion the shear t
 to 0 when a point opens, and letting iterations "un-break" a bond cycles across that jump. Once the pattern
 has stayed the same for two iterations, the consistent tangent comes back (quadratic convergence; where many
 points are open the initial stiffness stalled Newton at 1-4 % per iteration), at most
-:data:`MAX_STABILIZATIONS` times a step.
+:data:`MAX_STABILIZATIONS` times a step. In static steps a residual that stagnates while the pattern keeps
+moving, never exactly as before, has the broken bonds latched too, with the consistent tangent kept
+(:class:`ChatterGuard`, ``stagnation``).
 """
 from __future__ import annotations
 

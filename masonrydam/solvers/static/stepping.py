@@ -582,8 +582,11 @@ class StaticSolver:
 
         Chatter guard (:class:`~masonrydam.solvers.chatter.ChatterGuard`, shared with the dynamic solver):
         where the joint-state pattern cycles, open points get their initial stiffness in the tangent and bonds
-        that break stay broken, until the pattern settles. Bonds are not latched before chatter is seen, so
-        transient tension in early iterates does not destroy cohesion.
+        that break stay broken, until the pattern settles. Where the residual stagnates (not halved over
+        STAGNATION_WINDOW iterations) while the pattern keeps moving without an exact repeat, the bonds broken in
+        the iterate are latched and the consistent tangent kept (the guard's ``stagnation`` trigger). Bonds are
+        not latched before chatter or stagnation is seen, so transient tension in early iterates does not
+        destroy cohesion.
         """
         m, s = self.model, self.s
         guard = ChatterGuard(m, OPEN_TANGENT_REGULAR, stagnation=True)

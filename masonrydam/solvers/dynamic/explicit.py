@@ -3,7 +3,8 @@
     v_{n+1/2} = v_n + h/2 a_n,   u_{n+1} = u_n + h v_{n+1/2},
     M a_{n+1} = p_{n+1} - f_int(u_{n+1}) - f_d(v_{n+1/2}),   v_{n+1} = v_{n+1/2} + h/2 a_{n+1}
 
-(Hughes 2000, sec. 9.1.2; Belytschko, Liu & Moran 2000, Box 6.1): lumped (diagonal) mass only, dt below the
+(Hughes 2000, sec. 9.1.2; Belytschko, Liu & Moran 2000, Box 6.1): lumped mass only (diagonal, or node blocks:
+:func:`node_mass_blocks`), dt below the
 critical step (:mod:`.stability`; dt = "auto" takes the largest stable step that divides the output interval).
 The damping force, lagged half a step, is the viscous ``C v_{n+1/2}`` (a diagonal C, mass-proportional, costs
 a product of two vectors; dashpots or a stiffness part a sparse product) plus the local damping of Cundall
@@ -40,6 +41,60 @@ def _diagonal_damping(equations):
     return np.ascontiguousarray(d) if off.nnz == 0 else None
 
 
+def node_mass_blocks(mass_free, free, dim):
+    """The node blocks of a mass that couples the DOFs of one node only: Westergaard's added mass ``m_a n n^T``
+    lumped at the nodes of a curved face (an arch dam's extrados, where the normal is off the axes), the only
+    non-diagonal mass an explicit stage takes. ``mass_free`` (n, n) CSR kg on the free DOFs ``free`` (n,)
+    (model DOF ``node * dim + component``).
+
+    Returns a list of ``(idx, M_b, M_b_inv)`` per block size s: ``idx`` (n_b, s) the free-equation indices of
+    the DOFs of each coupled node, ``M_b`` (n_b, s, s) kg its block and ``M_b_inv`` its inverse (empty for a
+    diagonal mass); None where the mass couples DOFs of different nodes (a consistent added mass, the
+    incompressible acoustic water). The explicit step then solves ``M_b a_b = r_b`` at each coupled node: the
+    scheme stays explicit (Belytschko, Liu & Moran 2000, sec. 6.2: a block-diagonal mass is inverted node by
+    node)."""
+    M = sp.csr_matrix(mass_free)
+    coo = M.tocoo()
+    off = (coo.row != coo.col) & (coo.data != 0.0)
+    node = np.asarray(free) // dim
+    rows, cols = coo.row[off], coo.col[off]
+    if np.any(node[rows] != node[cols]):
+        return None
+    if not len(rows):
+        return []
+    coupled = np.isin(node, np.unique(node[rows]))
+    eqs = np.flatnonzero(coupled)
+    order = np.argsort(node[eqs], kind="stable")
+    eqs = eqs[order]
+    starts = np.flatnonzero(np.r_[True, np.diff(node[eqs]) != 0])
+    groups = np.split(eqs, starts[1:])
+    out = []
+    for size in sorted({len(g) for g in groups}):
+        idx = np.array([g for g in groups if len(g) == size], dtype=np.int64)
+        Mb = np.asarray(M[idx.ravel()][:, idx.ravel()].todense()).reshape(len(idx), size, len(idx), size)
+        Mb = np.ascontiguousarray(Mb[np.arange(len(idx)), :, np.arange(len(idx)), :])  # (n_b, s, s)
+        out.append((idx, Mb, np.linalg.inv(Mb)))
+    return out
+
+
+def _solve_node_blocks(blocks, md, free, h, v_half, u0, u1, a0, a1, v1, works):
+    """After the fused correction, which divided each DOF's force by the diagonal ``md`` (n,) kg: the
+    accelerations and velocities of the coupled nodes from their blocks (``M_b a = r``, r = md a_diag), and the
+    kinetic energy and inertia work of the step (``works[4]``, ``works[5]``) with the blocks instead of their
+    diagonals. a0, a1, v1, u0, u1 (n_dof,); v_half (n,)."""
+    for idx, Mb, Minv in blocks:
+        dofs = free[idx]  # (n_b, s) model DOFs
+        m_d = md[idx]
+        a_diag, v_diag = a1[dofs], v1[dofs]
+        a = np.einsum("bij,bj->bi", Minv, m_d * a_diag)
+        v = v_half[idx] + 0.5 * h * a
+        du = u1[dofs] - u0[dofs]
+        works[4] += 0.5 * (np.einsum("bi,bij,bj->", v, Mb, v) - float(np.sum(m_d * v_diag * v_diag)))
+        works[5] += 0.5 * (np.einsum("bi,bij,bj->", a0[dofs] + a, Mb, du) - float(np.sum(m_d * (a0[dofs] + a_diag) * du)))
+        a1[dofs] = a
+        v1[dofs] = v
+
+
 def run_central_difference(model, settings, equations, energy, stats, stage, st, record_step, fail):
     """Integrate ``stage`` from the state ``st`` (a :class:`~.stage.StepState`) by central difference; returns
     the last state. Every step's joint states are committed; ``record_step(stage, k, st, n_steps)`` is called
@@ -48,6 +103,10 @@ def run_central_difference(model, settings, equations, energy, stats, stage, st,
     free = eq.free
     n = eq.n
     md = eq.mass_diagonal
+    blocks = []
+    if md is None:  # a mass that couples the DOFs of single nodes (stability.check_time_step refused any other)
+        blocks = node_mass_blocks(eq.mass_free, free, m.dim)
+        md = np.ascontiguousarray(eq.mass_free.diagonal())
     n_steps = stage.n_steps
     local_alpha = local_damping_coefficient(s.local_damping) if s.local_damping > 0.0 else 0.0
     empty = np.zeros(0)
@@ -92,6 +151,8 @@ def run_central_difference(model, settings, equations, energy, stats, stage, st,
         status = central_difference_correct(free, h, md, eq.static_load, pg0, pg1, state_force, st.f_int, f_int,
                                             st.Kc_u, kc, st.u, u, st.a, v_half, cv, c_diag, local_alpha, fd0, fd1,
                                             v1, a1, works)
+        if blocks and status == STATUS_OK:
+            _solve_node_blocks(blocks, md, free, h, v_half, st.u, u, st.a, a1, v1, works)
         fluid1 = None
         if water is not None and status == STATUS_OK:  # the water's acceleration from the dam's
             fluid1 = water.correct(p1, pd_half, a1[wet_dofs], eq.frame_at(ag1), eq.bottom_at(t_end, ag1), h)

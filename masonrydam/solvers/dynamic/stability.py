@@ -19,6 +19,7 @@ import scipy.sparse.linalg as spla
 from ...assembly.damping import RayleighDamping
 from ...errors import SceneError
 from ..linear.direct import Factorization
+from .explicit import node_mass_blocks
 
 
 def critical_time_step(K: sp.csr_matrix, mass_diag: np.ndarray | None = None, M: sp.csr_matrix | None = None,
@@ -128,13 +129,17 @@ def check_time_step(equations, settings, backend, stats):
     Oc = scheme.stability_bound
     model, mass = equations.model, equations.mass
     K = sp.csr_matrix((equations.elastic_data, model.indices, model.indptr), shape=(equations.n, equations.n))
+    node_blocks = False  # a mass coupling only the DOFs of single nodes (Westergaard's on a curved face, lumped)
     if scheme.explicit and not mass.diagonal:
-        raise SceneError(f"{s.key}integrator", f"{scheme.name} needs a diagonal mass matrix; the reservoir's "
-                                               "added mass couples DOFs (Westergaard's m_a n n^T on an inclined "
-                                               "face, or the acoustic water's rho Q H^-1 Q^T over the whole "
-                                               "face): use an implicit integrator (e.g. hht)")
-    if mass.diagonal:
-        md = mass.free_diag
+        node_blocks = node_mass_blocks(equations.mass_free, equations.free, model.dim) is not None
+        if not node_blocks or equations.explicit_water is not None:
+            raise SceneError(f"{s.key}integrator", f"{scheme.name} needs a lumped mass (diagonal, or coupling "
+                                                   "only the DOFs of one node); the reservoir's added mass couples "
+                                                   "DOFs of different nodes (a consistent added mass, or the "
+                                                   "incompressible acoustic water's rho Q H^-1 Q^T over the whole "
+                                                   "face): use an implicit integrator (e.g. hht)")
+    if mass.diagonal or node_blocks:
+        md = mass.free_diag if mass.diagonal else equations.mass_free.diagonal()
         if not (md > 0).all():
             bad = int(equations.free[np.nonzero(~(md > 0))[0][0]])
             node = bad // model.dim
@@ -145,7 +150,11 @@ def check_time_step(equations, settings, backend, stats):
             raise SceneError(key, f"{s.integrator} (explicit) needs a positive mass at every free DOF: {where} has "
                                   "none (density 0, or [foundation] mass = false); give the region a density > 0 "
                                   "(for rock under a dam: [foundation] mass = true), or use an implicit integrator")
-        dtc, w = critical_time_step(K, mass_diag=md, damping=s.damping, omega_crit=Oc)
+        if mass.diagonal:
+            dtc, w = critical_time_step(K, mass_diag=md, damping=s.damping, omega_crit=Oc)
+        else:
+            dtc, w = critical_time_step(K, M=equations.mass_free, damping=s.damping, omega_crit=Oc,
+                                        linear_solver=backend)
     else:
         dtc, w = critical_time_step(K, M=equations.mass_free, damping=s.damping, omega_crit=Oc,
                                     linear_solver=backend)

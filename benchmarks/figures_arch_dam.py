@@ -10,6 +10,9 @@ Writes, in docs/figures/:
   accelerations;
 * ``arch_dam_contraction_joints.png``: the opening of each contraction joint in the top lift (the largest over
   its points) in time, the joints ordered along the crest (by x);
+* ``arch_dam_joint_stresses.png``: the arch stress (mean normal traction of each contraction joint of the top
+  lift) in time, and the cantilever stress (normal tractions of the lift joints within ``--crown`` m of x = 0)
+  over the height after the reservoir and its range over the shaking;
 
 and prints the numbers the page quotes. Reads the file only: no analysis is run here.
 """
@@ -58,6 +61,7 @@ def main():
     ap.add_argument("result", help="result file of examples/arch_dam_earthquake.toml")
     ap.add_argument("--stage", default="el_centro")
     ap.add_argument("--lift", type=float, default=10.0, help="lift spacing (m): the top lift's height")
+    ap.add_argument("--crown", type=float, default=10.0, help="half-width (m) of the crown cantilever's band in x")
     ap.add_argument("--out", default=str(FIG))
     a = ap.parse_args()
     out = Path(a.out)
@@ -95,6 +99,41 @@ def main():
     print(f"contraction joints (top lift): largest opening {1e3 * per_joint[k]:.2f} mm at x = {xs[k[1]]:.1f} m, "
           f"t = {t[k[0]]:.2f} s; at the start of the shaking {1e3 * max(np.nanmax(static[g]) for g in groups):.3f} mm; "
           f"open at the end: {int((per_joint[-1] > 1e-5).sum())} of {len(xs)} joints (> 0.01 mm)")
+    # -- arch and cantilever stresses, from the joints they cross ---------------------------------------
+    # the radial contraction joints carry the arch's horizontal thrust and the lift joints the cantilevers'
+    # vertical force: their normal tractions (Pa, tension positive) are the arch and cantilever stresses
+    tn = ds.joint_traction_normal.values[dyn]  # (step, point)
+    arch = np.stack([tn[:, g].mean(axis=1) for g in groups], axis=1)  # (step, joint): the top lift's mean
+    set_names = json.loads(ds.joint_set.attrs["set_names"])
+    lj = np.nonzero((ds.joint_set.values == set_names.index("lift_joints")) & (np.abs(ds.joint_x.values) < a.crown))[0]
+    zl = np.round(ds.joint_z.values[lj], 3)
+    levels = np.unique(zl)
+    rows = [lj[zl == z] for z in levels]
+    static = np.array([tn[0, r].min() for r in rows]), np.array([tn[0, r].max() for r in rows])
+    lo = np.array([tn[:, r].min() for r in rows])
+    hi = np.array([tn[:, r].max() for r in rows])
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 4.2), gridspec_kw={"width_ratios": [1.6, 1]})
+    v = np.abs(arch).max() / 1e6
+    im = ax1.pcolormesh(t, np.arange(len(xs)), arch.T / 1e6, shading="nearest", cmap="RdBu_r", vmin=-v, vmax=v)
+    ax1.set_yticks(np.arange(len(xs)), [f"{x:.0f}" for x in xs], fontsize=7)
+    fig.colorbar(im, ax=ax1, label="arch stress: mean normal traction (MPa, tension +)")
+    ax1.set_xlabel("time (s)")
+    ax1.set_ylabel("contraction joint, top lift: x (m)")
+    ax2.fill_betweenx(levels, lo / 1e6, hi / 1e6, color="0.85", label="range over the shaking")
+    ax2.plot(static[0] / 1e6, levels, "b-", lw=1, label="after the reservoir: least")
+    ax2.plot(static[1] / 1e6, levels, "r-", lw=1, label="after the reservoir: largest")
+    ax2.set_xlabel("cantilever stress: lift-joint normal traction (MPa)")
+    ax2.set_ylabel("z (m)")
+    ax2.legend(loc="lower left", fontsize=7)
+    ax2.grid(alpha=0.3)
+    ax2.set_title(f"crown cantilever (|x| < {a.crown:g} m)", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(out / "arch_dam_joint_stresses.png", dpi=130)
+    plt.close(fig)
+    print(f"arch stress (top lift, mean normal traction of each contraction joint): after the reservoir "
+          f"{arch[0].min() / 1e6:.2f} to {arch[0].max() / 1e6:.2f} MPa, over the shaking {arch.min() / 1e6:.2f} to "
+          f"{arch.max() / 1e6:.2f} MPa; cantilever (crown, lift joints): after the reservoir {static[0].min() / 1e6:.2f} "
+          f"to {static[1].max() / 1e6:.2f} MPa, over the shaking {lo.min() / 1e6:.2f} to {hi.max() / 1e6:.2f} MPa")
     for key in ("energy_error_relative", "dynamic_dt_smallest"):
         if key in ds.attrs:
             print(f"{key}: {ds.attrs[key]}")

@@ -27,14 +27,13 @@ import math
 
 import numpy as np
 import pytest
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 
 import generators
 import masonrydam
 from generators.arch_dams import arch_dam_3d
 from masonrydam.elements.shapes import reference_nodes, shape_functions
 from masonrydam.errors import SceneError
+from test_dams import bodies as element_bodies  # tests/mesh is on sys.path (pytest's rootdir-relative import)
 
 G = 9.80665
 #: a constant-angle arch whose radius and thickness both vary with height (R 80 -> 100 m, t 12 -> 5 m)
@@ -90,16 +89,9 @@ def unique_points(x, tol=1e-9):
 
 
 def bodies(mesh):
-    """Connected components of the continuum elements through shared nodes (interfaces excluded),
-    and the body of each node."""
-    rows, cols, off = [], [], 0
-    for b in mesh.blocks:
-        rows.append(np.repeat(np.arange(len(b.cells)) + off, b.cells.shape[1]))
-        cols.append(b.cells.ravel())
-        off += len(b.cells)
-    rows, cols = np.concatenate(rows), np.concatenate(cols)
-    inc = coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(off, mesh.n_nodes)).tocsr()
-    n, lab = connected_components(inc @ inc.T, directed=False)
+    """Connected components of the continuum elements through shared nodes (interfaces excluded, as
+    tests/mesh/test_dams.py finds them), and the body of each node."""
+    n, lab = element_bodies(mesh)
     node_body = np.full(mesh.n_nodes, -1)
     off = 0
     for b in mesh.blocks:

@@ -28,7 +28,6 @@ import math
 import numpy as np
 import pytest
 
-import generators
 import masonrydam
 from generators.arch_dams import arch_dam_3d
 from masonrydam.elements.shapes import reference_nodes, shape_functions
@@ -389,7 +388,7 @@ def test_generation_is_deterministic():
     assert all(np.array_equal(a.node_sets[k], b.node_sets[k]) for k in a.node_sets)
 
 
-def test_a_scene_runs_self_weight_on_a_tiny_arch(monkeypatch):
+def test_a_scene_runs_self_weight_on_a_tiny_arch():
     """(The generator is registered for this test: its scene-reference rows come with its registration.)
     Two monoliths of two lifts on a fixed base, linear joints, self-weight in 3 steps: the run
     converges, the result holds the joints' points (4 per quad4 interface) and the vertical reactions sum
@@ -397,7 +396,6 @@ def test_a_scene_runs_self_weight_on_a_tiny_arch(monkeypatch):
     params = {"height": 20.0, "crest_radius": 40.0, "central_angle_deg": 100.0, "crest_thickness": 3.0,
               "base_thickness": 5.0, "n_monoliths": 2, "lift_spacing": 10.0, "element_size": 10.0}
     rho = 2400.0
-    monkeypatch.setitem(generators.GENERATORS, "arch_dam_3d", arch_dam_3d)
     scene = {
         "model": {"name": "arch", "dimension": 3},
         "mesh": {"generator": "arch_dam_3d", "parameters": params},

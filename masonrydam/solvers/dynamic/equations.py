@@ -20,6 +20,7 @@ from ...assembly.elastic import elastic_tangent_data
 from ...assembly.sparsity import add_to_pattern
 from ...errors import SceneError
 from ...materials.joint_laws import RESULT_STICK
+from .explicit import node_mass_blocks
 from .fluid import ExplicitAcoustic
 from .stage import DynamicTerms
 
@@ -109,6 +110,11 @@ class StageEquations:
         else:
             self.mass_diagonal = None
             self.mass_free = self.mass.free_matrix(m)
+        #: an explicit stage's mass that couples only the DOFs of single nodes, as node blocks
+        #: (:func:`~.explicit.node_mass_blocks`, found once for the stability check and the steps); [] for a
+        #: diagonal mass or an implicit scheme, None where the mass couples DOFs of different nodes
+        self.mass_blocks = ([] if self.mass.diagonal or not s.scheme.explicit
+                            else node_mass_blocks(self.mass_free, free, m.dim))
         Miota = self.mass.influence(m.dim)  # (dim, n_dof)
         #: (dim, n_eq) kg, ``M iota_c`` on the free DOFs
         self.mass_influence_free = np.ascontiguousarray(Miota[:, free])

@@ -105,7 +105,7 @@ def run_central_difference(model, settings, equations, energy, stats, stage, st,
     md = eq.mass_diagonal
     blocks = []
     if md is None:  # a mass that couples the DOFs of single nodes (stability.check_time_step refused any other)
-        blocks = node_mass_blocks(eq.mass_free, free, m.dim)
+        blocks = eq.mass_blocks
         md = np.ascontiguousarray(eq.mass_free.diagonal())
     n_steps = stage.n_steps
     local_alpha = local_damping_coefficient(s.local_damping) if s.local_damping > 0.0 else 0.0

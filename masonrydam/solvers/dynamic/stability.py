@@ -19,7 +19,6 @@ import scipy.sparse.linalg as spla
 from ...assembly.damping import RayleighDamping
 from ...errors import SceneError
 from ..linear.direct import Factorization
-from .explicit import node_mass_blocks
 
 
 def critical_time_step(K: sp.csr_matrix, mass_diag: np.ndarray | None = None, M: sp.csr_matrix | None = None,
@@ -131,7 +130,7 @@ def check_time_step(equations, settings, backend, stats):
     K = sp.csr_matrix((equations.elastic_data, model.indices, model.indptr), shape=(equations.n, equations.n))
     node_blocks = False  # a mass coupling only the DOFs of single nodes (Westergaard's on a curved face, lumped)
     if scheme.explicit and not mass.diagonal:
-        node_blocks = node_mass_blocks(equations.mass_free, equations.free, model.dim) is not None
+        node_blocks = equations.mass_blocks is not None
         if not node_blocks or equations.explicit_water is not None:
             raise SceneError(f"{s.key}integrator", f"{scheme.name} needs a lumped mass (diagonal, or coupling "
                                                    "only the DOFs of one node); the reservoir's added mass couples "

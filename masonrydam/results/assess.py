@@ -68,13 +68,14 @@ class SectionAssessment:
         # anything there
         self.cohesion = np.where(self.cohesion > 1e200, np.inf, self.cohesion)
         scale = float(L.length.max()) if L.n_lines else 1.0
-        tol = 1e-6 * max(scale, 1.0)
+        # (n_lines,) m: points this close in s are one row; wider on a curved line, whose centre is fitted
+        tol = np.where(L.curved, L.end_tolerance, 1e-6 * max(scale, 1.0))
         smin = np.full(L.n_lines, np.inf)
         smax = np.full(L.n_lines, -np.inf)
         np.minimum.at(smin, L.line, L.s)
         np.maximum.at(smax, L.line, L.s)
-        self.heel = L.s <= smin[L.line] + tol
-        self.toe = L.s >= smax[L.line] - tol
+        self.heel = L.s <= smin[L.line] + tol[L.line]
+        self.toe = L.s >= smax[L.line] - tol[L.line]
         # what does not change from step to step: the points' shear axes (n_points, dim-1, dim), the line
         # areas, their friction coefficient and the number of heel and toe points
         self.shear_axes = np.concatenate([g.frame[:, :, : dim - 1, :].reshape(-1, dim - 1, dim) for g in L.groups]) \

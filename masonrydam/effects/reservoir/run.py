@@ -32,7 +32,7 @@ def assessed_lines(model, reservoir):
         return reservoir.uplift.lines
     if not model.igroups:
         return None
-    return JointLines(model, model.igroups, reservoir.downstream, reservoir.vertical)
+    return JointLines(model, model.igroups, reservoir.downstream, reservoir.vertical, reservoir.face_nodes)
 
 
 class ReservoirRun(EffectRun):

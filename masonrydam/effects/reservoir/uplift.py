@@ -59,9 +59,12 @@ class Uplift:
     """Pore pressures in the joint sets named by ``spec`` (normalised ``uplift`` table) of ``model``.
 
     unit_weight: rho_w g (N/m3); vertical_axis; downstream: horizontal unit vector (dim,); key: the
-    scene key of the table (for errors)."""
+    scene key of the table (for errors); upstream_face: the upstream face's nodes and horizontal normals
+    in 3D, from which each joint line takes its own frame (:class:`JointLines`; an arch's cantilevers
+    are measured radially), or None."""
 
-    def __init__(self, spec: dict, model, unit_weight: float, vertical_axis: int, downstream, key: str):
+    def __init__(self, spec: dict, model, unit_weight: float, vertical_axis: int, downstream, key: str,
+                 upstream_face=None):
         names = sorted({g.name for g in model.igroups})
         for j in spec["joints"]:
             if j not in names:
@@ -69,7 +72,8 @@ class Uplift:
         self.spec = spec
         self.gamma = float(unit_weight)
         self.group_index = [i for i, g in enumerate(model.igroups) if g.name in spec["joints"]]
-        self.lines = JointLines(model, [model.igroups[i] for i in self.group_index], downstream, vertical_axis)
+        self.lines = JointLines(model, [model.igroups[i] for i in self.group_index], downstream, vertical_axis,
+                                upstream_face)
         self._samples(model)
         self.pressure = np.zeros(self.lines.n_points)  # the last computed pore pressures at the joint points (Pa)
         self.sample_pressure = np.zeros(len(self.samples["s"]))  # and at the samples
@@ -85,10 +89,6 @@ class Uplift:
         n`` on the top face, minus that on the bottom face), and the samples' ``s``, ``elevation``,
         ``line``, ``strip`` and ``weight`` (m2)."""
         L, dim = self.lines, model.dim
-        d = L.downstream
-        up = np.zeros(dim)
-        up[L.vertical_axis] = 1.0
-        across = np.cross(d, up) if dim == 3 else None
         drains = self.spec["drains"]
         rows, cols, vals = [], [], []
         parts = {k: [] for k in ("s", "elevation", "line", "strip", "weight")}
@@ -99,10 +99,10 @@ class Uplift:
             face = INTERFACE_FACE_TYPE[g.type]
             X = model.coords[g.conn[:, :ns]]  # (ne, ns, dim) bottom face
             pts_line = L.line[sl].reshape(g.n_elem, g.nip)
-            pts_s = L.s[sl].reshape(g.n_elem, g.nip)
             pts_x = L.x[sl].reshape(g.n_elem, g.nip, dim)
-            s0 = (pts_x[:, 0] @ d) - pts_s[:, 0]  # (ne,) offset of s along each element's line
-            s_nodes = X @ d - s0[:, None]
+            # the nodes' s in their line's frame (a curved line's s is radial: the split along the drain line
+            # is then linear between the nodes, as the element's own geometry)
+            s_nodes = L.coordinates(X.reshape(-1, dim), np.repeat(pts_line[:, 0], ns))[0].reshape(g.n_elem, ns)
             if drains is None:
                 pieces = [region_points(face, s_nodes, float(s_nodes.max()) + 1.0)]
             else:
@@ -126,15 +126,17 @@ class Uplift:
                             rows.append((side * dim + k)[keep])
                             cols.append(idx[keep])
                             vals.append(v[keep])
-                parts["s"].append(x @ d - s0[e])
+                s_x, across_x = L.coordinates(x, pts_line[e, 0])
+                parts["s"].append(s_x)
                 parts["elevation"].append(x[:, L.vertical_axis])
                 parts["line"].append(pts_line[e, 0])
                 parts["weight"].append(wt)
-                if across is None:
+                if dim == 2:
                     parts["strip"].append(L.strip[sl].reshape(g.n_elem, g.nip)[e, 0])
                 else:  # the strip of the element's point nearest across the line
-                    t_pts = pts_x[e] @ across  # (P, nip)
-                    near = np.argmin(np.abs(t_pts - (x @ across)[:, None]), axis=1)
+                    t_pts = L.coordinates(pts_x[e].reshape(-1, dim), np.repeat(pts_line[e, 0], g.nip))[1]
+                    t_pts = t_pts.reshape(len(e), g.nip)  # (P, nip)
+                    near = np.argmin(np.abs(t_pts - across_x[:, None]), axis=1)
                     parts["strip"].append(L.strip[sl].reshape(g.n_elem, g.nip)[e, near])
         self.samples = {k: np.concatenate(v) for k, v in parts.items()}
         self.matrix = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),

@@ -185,35 +185,49 @@ class Reservoir:
         self.silt = None if spec["silt"] is None else \
             _Face(mesh, spec["silt"]["face"], "reservoir.silt.face", ax, spec["silt"]["level"], "reservoir.silt.level",
                   "remove the silt if there is none")
-        self.downstream = self._downstream(mesh)
+        normals = self._facet_normals(mesh)
+        total = normals.sum(axis=0)
+        norm = float(np.linalg.norm(total))
+        if norm == 0.0:
+            raise SceneError("reservoir.face", f"the face '{self.face.name}' has no horizontal extent to push on (is it "
+                                               "the upstream face of the dam?)")
+        #: horizontal unit vector pointing downstream: minus the area-weighted horizontal part of the upstream
+        #: face's outward normal
+        self.downstream = -total / norm
+        #: the upstream face's nodes (m, dim) and their horizontal outward unit normals (m, dim), area-weighted
+        #: over the facets around each node (zero where the face is horizontal there): where each joint line's
+        #: heel is and which way it faces (3D; JointLines, for a curved face such as an arch's)
+        self.face_nodes = None
+        if mesh.dim == 3:
+            nodes, inv = np.unique(self.face.facets, return_inverse=True)
+            at_node = np.zeros((len(nodes), mesh.dim))
+            np.add.at(at_node, inv.reshape(self.face.facets.shape), normals[:, None, :])
+            length = np.linalg.norm(at_node, axis=1)
+            at_node /= np.where(length > 0, length, 1.0)[:, None]
+            self.face_nodes = (mesh.points[nodes, : mesh.dim], at_node)
         self.uplift = None
         if spec["uplift"] is not None:
             self.uplift = _uplift.Uplift(spec["uplift"], model, self.unit_weight, ax, self.downstream,
-                                         "reservoir.uplift")
+                                         "reservoir.uplift", upstream_face=self.face_nodes)
 
-    def _downstream(self, mesh):
-        """Horizontal unit vector pointing downstream: minus the area-weighted horizontal part of the
-        upstream face's outward normal."""
+    def _facet_normals(self, mesh):
+        """The horizontal part of the outward area normal of each facet of the upstream face, (n_facets, dim)
+        (m2 in 3D, m in 2D)."""
         f = self.face
-        X = mesh.points[f.facets]
+        X = mesh.points[f.facets][..., : mesh.dim]
         dim = mesh.dim
         if dim == 2:
             t = X[:, 1] - X[:, 0]
             n = np.stack([t[:, 1], -t[:, 0]], axis=1)
         elif f.type.startswith("tri"):
-            n = np.cross(X[:, 1] - X[:, 0], X[:, 2] - X[:, 0])
-        else:  # quadrilaterals: the cross product of the diagonals of the corners
-            n = np.cross(X[:, 2] - X[:, 0], X[:, 3] - X[:, 1])
+            n = 0.5 * np.cross(X[:, 1] - X[:, 0], X[:, 2] - X[:, 0])
+        else:  # quadrilaterals: half the cross product of the diagonals of the corners
+            n = 0.5 * np.cross(X[:, 2] - X[:, 0], X[:, 3] - X[:, 1])
         mid = X.mean(axis=1)
         flip = np.einsum("nk,nk->n", f.inward - mid, n) > 0
         n[flip] *= -1
         n[:, self.vertical] = 0.0
-        total = n.sum(axis=0)
-        norm = float(np.linalg.norm(total))
-        if norm == 0.0:
-            raise SceneError("reservoir.face", f"the face '{f.name}' has no horizontal extent to push on (is it the "
-                                               "upstream face of the dam?)")
-        return -total / norm
+        return n
 
     def face_force(self, level: float, tail: float | None, silt: float | None) -> np.ndarray:
         """Nodal forces (n_dof,) N of the water at ``level``, the tailwater at ``tail`` and the silt at

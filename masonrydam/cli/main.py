@@ -22,16 +22,11 @@ import warnings
 from importlib import resources
 from pathlib import Path
 
-import xarray as xr
-
 from .._version import __version__
-from ..checks import check_output_path
 from ..errors import MasonrydamError, RunStopped
-from ..mesh.io import check_mesh_output, write_mesh
-from ..results.files import open_result
-from ..scene import Scene, build_mesh, build_model, build_stages, effects, run
-from ..scene.scene import with_overrides
-from ..solvers.static.stepping import check_mechanisms
+
+# Each command imports what it needs (numpy, xarray, numba, the solvers, the scene) inside its function, so that
+# `masonrydam --version` and `--help` answer in the interpreter's start-up time instead of a second or more.
 
 
 def default_scene_path() -> Path:
@@ -45,6 +40,10 @@ def _scene_arg(args):
 
 
 def _cmd_run(args):
+    from ..checks import check_output_path
+    from ..scene import run
+    from ..scene.scene import with_overrides
+
     scene = _scene_arg(args)
     out = check_output_path(args.output or (scene.stem + ".nc"), "-o")
     run(with_overrides(scene, args.set), output=out, progress=not args.no_progress, summary=True)
@@ -52,6 +51,9 @@ def _cmd_run(args):
 
 
 def _cmd_check(args):
+    from ..scene import Scene, build_mesh, build_model, build_stages, effects
+    from ..solvers.static.stepping import check_mechanisms
+
     sc = Scene.from_toml(_scene_arg(args))
     mesh = build_mesh(sc.normalized, sc.base_dir)
     model = build_model(sc.normalized, mesh)
@@ -65,6 +67,9 @@ def _cmd_check(args):
 
 
 def _cmd_export(args):
+    from ..mesh.io import check_mesh_output, write_mesh
+    from ..scene import Scene, build_mesh
+
     check_mesh_output(args.output, "-o")  # an extension meshio writes, an existing folder: before any work
     sc = Scene.from_toml(_scene_arg(args))
     mesh = build_mesh(sc.normalized, sc.base_dir)
@@ -77,7 +82,9 @@ def _cmd_export_results(args):
     """A result file as a ParaView time series: ``.xdmf`` (+ ``.h5``) or ``.pvd`` (+ one ``.vtu`` per step),
     with ``OUT.units.json`` beside it (:func:`masonrydam.results.paraview.export_results`)."""
     # the ParaView export (meshio, h5py) only for this command: keeps 'masonrydam run' start-up short
+    from ..checks import check_output_path
     from ..results import paraview
+    from ..results.files import open_result
 
     path = Path(args.result)
     out = check_output_path(args.output or f"{path.stem}.xdmf", "-o")
@@ -103,6 +110,7 @@ def _cmd_export_results(args):
 def _cmd_records(args):
     # obspy only for the records command: keeps 'masonrydam run' start-up short
     from .. import records as rec
+    from ..checks import check_output_path
     from ..records.plotting import plot_record
 
     if args.records_command == "list":
@@ -150,6 +158,9 @@ def _cmd_plot(args):
     pushover curve; with ``--mode N`` the mode shape N of a result with a modal stage
     (:func:`masonrydam.results.mode_plot.mode_figure`); with ``--deformed`` the deformed blocks and joint
     states of one step (:func:`masonrydam.results.deformed.deformed_figure`)."""
+    from ..checks import check_output_path
+    from ..results.files import open_result
+
     path = Path(args.result)
     quantity, select = getattr(args, "quantity", None), getattr(args, "select", None)
     chosen = [opt for opt, given in (("deformed", args.deformed), ("pushover", args.pushover),
@@ -231,6 +242,7 @@ def _cmd_ensemble(args):
     """Run an ensemble file on dask (:func:`masonrydam.ensemble.runner.run_ensemble`): members already in the
     store beside the output are not run again."""
     # the ensemble room only for the ensemble commands: keeps 'masonrydam run' start-up short
+    from ..checks import check_output_path
     from ..ensemble.runner import run_ensemble
 
     path = Path(args.ensemble)
@@ -250,6 +262,8 @@ def _cmd_ensemble_report(args):
     """IDA curves and lognormal fragility curves of an ensemble dataset, as figures and a table
     (:func:`masonrydam.ensemble.report.ensemble_report`)."""
     # scipy.stats (a second to import) only for the ensemble report: keeps 'masonrydam run' start-up short
+    import xarray as xr
+
     from ..ensemble.fragility import fragility_table
     from ..ensemble.report import ensemble_report, write_table_csv
 
@@ -283,7 +297,9 @@ def _cmd_assess(args):
     of a load condition (:func:`masonrydam.results.assess.assessment_report`); exit code 0 whether or not
     the sections meet them."""
     # the stability assessment only for this command: keeps 'masonrydam run' start-up short
+    from ..checks import check_output_path
     from ..results import assess
+    from ..results.files import open_result
 
     path = Path(args.result)
     csv_out = check_output_path(args.csv, "--csv") if args.csv else None

@@ -317,6 +317,37 @@ def test_version(capsys):
     assert capsys.readouterr().out.strip() == f"masonrydam {masonrydam.__version__}"
 
 
+@pytest.mark.parametrize("flag", ["--version", "--help"])
+def test_version_and_help_import_no_numerics(flag):
+    """``masonrydam --version`` and ``--help`` answer without importing numpy, numba, scipy, xarray or any room
+    below the command line (issue 35: under 0.3 s on any machine; the start-up is timed by
+    benchmarks/bench_default_scene.py, not here). Before, --version imported the solvers and took 1.1-2.2 s."""
+    heavy = ("numpy", "numba", "scipy", "xarray", "obspy", "gmsh", "masonrydam.scene", "masonrydam.solvers")
+    code = ("import sys\n"
+            "from masonrydam.cli.main import main\n"
+            "try:\n"
+            f"    main([{flag!r}])\n"
+            "except SystemExit as e:\n"
+            "    assert e.code == 0, e.code\n"
+            f"print('LOADED', sorted(m for m in sys.modules if m.split('.')[0] in {heavy!r} or m in {heavy!r}))\n")
+    p = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    loaded = p.stdout.rsplit("LOADED", 1)[1].strip()
+    assert loaded == "[]", f"masonrydam {flag} imported {loaded}"
+    assert ("masonrydam" in p.stdout.splitlines()[0]) if flag == "--version" else ("usage: masonrydam" in p.stdout)
+
+
+def test_package_entry_points_load_on_first_use():
+    """``masonrydam.run``, ``masonrydam.Scene`` and ``masonrydam.open_result`` are the scene's and the results'
+    own objects, loaded when first asked for (PEP 562); an unknown name is an AttributeError naming it."""
+    from masonrydam.results.files import open_result as files_open_result
+    from masonrydam.scene import Scene, run
+
+    assert masonrydam.run is run and masonrydam.Scene is Scene and masonrydam.open_result is files_open_result
+    assert {"run", "Scene", "open_result"} <= set(dir(masonrydam))
+    with pytest.raises(AttributeError, match="no_such_thing"):
+        masonrydam.no_such_thing  # noqa: B018
+
+
 def test_open_result_of_a_completed_run_is_silent(tmp_path):
     out = tmp_path / "out.nc"
     write_earlier_result(out)

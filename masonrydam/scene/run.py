@@ -41,7 +41,8 @@ from .summary import print_summary, stats_attrs
 LOAD_IN_MEMORY_MAX = 256 * 2**20
 
 
-def run(scene, output: str | os.PathLike | None = None, progress: bool = False, summary: bool = False):
+def run(scene, output: str | os.PathLike | None = None, progress: bool = False, summary: bool = False,
+        started: float | None = None):
     """Run ``scene`` (a :class:`Scene`, a dict or a TOML path) and return the results as an
     ``xarray.Dataset``.
 
@@ -58,8 +59,12 @@ def run(scene, output: str | os.PathLike | None = None, progress: bool = False, 
     The dataset is loaded in memory, except a kept file larger than :data:`LOAD_IN_MEMORY_MAX` bytes,
     which is opened lazily (values read when used; close it with ``ds.close()`` before writing the
     same file again), so that the memory of a long time history does not grow with the record.
+
+    ``started``: a ``time.perf_counter()`` value from which the run's wall time counts (default: the
+    call). The command line passes its process's start, so that the summary's wall time is what
+    ``time masonrydam run`` shows, imports and reading the result back included.
     """
-    t_start = time.perf_counter()
+    t_start = time.perf_counter() if started is None else started
     target = None if output is None else check_output_path(output, "output")
     sc = as_scene(scene)
     job = _Run(sc, t_start)
@@ -74,7 +79,7 @@ def run(scene, output: str | os.PathLike | None = None, progress: bool = False, 
         os.unlink(work)
     if summary:
         print_summary(sc, job.mesh, job.model, job.effect_lines, job.solver, stats, target, ds,
-                      dyn_solvers=job.dyn_solvers, effects=job.effects)
+                      dyn_solvers=job.dyn_solvers, effects=job.effects, t_start=t_start)
     for text in filter(None, (stats.get("energy_warnings", "") + " | " + stats.get("joint_slip_warnings", "")).split(" | ")):
         warnings.warn(text, AccuracyWarning, stacklevel=2)
     return ds

@@ -30,27 +30,23 @@ from ..errors import MasonrydamError, RunStopped
 # `masonrydam --version` and `--help` answer in the interpreter's start-up time instead of a second or more.
 
 
-def process_start() -> float:
+def _process_start() -> float:
     """The ``time.perf_counter()`` value at this process's start: Linux's /proc gives its age to a clock tick
-    (10 ms), elsewhere it is the first call of this function (this module's import, right after the
-    interpreter's start)."""
-    global _PROCESS_START
-    if _PROCESS_START is None:
-        now = time.perf_counter()
-        try:
-            with open("/proc/self/stat") as f:  # field 22 (starttime, in clock ticks after boot); comm may hold ' '
-                start_ticks = int(f.read().rsplit(")", 1)[1].split()[19])
-            with open("/proc/uptime") as f:
-                uptime = float(f.read().split()[0])
-            age = uptime - start_ticks / os.sysconf("SC_CLK_TCK")
-        except (OSError, ValueError, IndexError, AttributeError):
-            age = 0.0
-        _PROCESS_START = now - max(age, 0.0)
-    return _PROCESS_START
+    (10 ms); elsewhere it is now (this module's import, right after the interpreter's start)."""
+    now = time.perf_counter()
+    try:
+        with open("/proc/self/stat") as f:  # field 22 (starttime, in clock ticks after boot); comm may hold ' '
+            start_ticks = int(f.read().rsplit(")", 1)[1].split()[19])
+        with open("/proc/uptime") as f:
+            uptime = float(f.read().split()[0])
+        age = uptime - start_ticks / os.sysconf("SC_CLK_TCK")
+    except (OSError, ValueError, IndexError, AttributeError):
+        age = 0.0
+    return now - max(age, 0.0)
 
 
-_PROCESS_START = None
-process_start()
+#: when this process started (perf_counter seconds): the clock of a command-line run's summary
+PROCESS_START = _process_start()
 
 
 def default_scene_path() -> Path:
@@ -497,7 +493,7 @@ def main(argv=None) -> int:
     a.set_defaults(func=_cmd_assess)
     args = p.parse_args(argv)
     # the console script: the clock of the summary starts with the process; a call from Python: with this call
-    args.started = process_start() if argv is None else time.perf_counter()
+    args.started = PROCESS_START if argv is None else time.perf_counter()
     code = _dispatch(args)
     if argv is None and args.command in QUICK_EXIT_COMMANDS:
         _quick_exit(code)

@@ -41,16 +41,20 @@ class RecentProducts:
         self.size = size
         self.items = []
 
+    @staticmethod
+    def _key(x) -> bytes:
+        return x if isinstance(x, bytes) else x.tobytes()
+
     def get(self, x):
         """``y`` of an ``x`` (an array, or its bytes) among the last ``size``, else None."""
-        key = x if isinstance(x, bytes) else x.tobytes()
+        key = self._key(x)
         for kc, yc in self.items:
             if kc == key:
                 return yc
         return None
 
     def put(self, x, y):
-        self.items = [(x if isinstance(x, bytes) else x.tobytes(), y), *self.items[:self.size - 1]]
+        self.items = [(self._key(x), y), *self.items[:self.size - 1]]
 
 
 class StageEquations:

@@ -66,6 +66,8 @@ def stats_attrs(solver, t_start, dyn_solvers=()):
             "dynamic_joint_space_flexibility_columns": sum(x.joint_space_flexibility_columns for x in d),
             "dynamic_joint_space_flexibility_s": round(sum(x.joint_space_flexibility_s for x in d), 4),
             "dynamic_joint_space_store_full": sum(x.joint_space_store_full for x in d),
+            "dynamic_joint_space_compiled_steps": sum(x.joint_space_compiled_steps for x in d),
+            "dynamic_joint_space_python_steps": sum(x.joint_space_python_steps for x in d),
             "dynamic_wall_time_s": round(wall, 4),
             "dynamic_output_time_s": round(sum(x.output_time_s for x in d), 4),
             "dynamic_ms_per_step": round(1e3 * wall / max(steps, 1), 4),
@@ -103,6 +105,17 @@ def _energy_warnings(dyn_solvers):
     s = last.s
     dt = f"auto (tolerance {s.tolerance:g}, dt_min {s.dt_min:g} s)" if s.adaptive else f"{s.dt:g} s"
     return dynamic_energy_warnings(stats, s.integrator, dt)
+
+
+def _kernel_note(compiled: int, python: int) -> str:
+    """Which code solved the joint-space steps: the compiled step (one call a step) or the Python loop."""
+    if not compiled and not python:
+        return ""
+    if not python:
+        return "; every step compiled (one call a step)"
+    if not compiled:
+        return "; every step in the Python loop"
+    return f"; {compiled} steps compiled (one call a step), {python} in the Python loop"
 
 
 def _columns_note(columns, seconds, store_full=0):
@@ -210,6 +223,8 @@ def _dynamic_lines(dyn_solvers, stats, model) -> list[str]:
                          f"{stats['dynamic_joint_space_column_memory_MB']:.3g} MB of stored columns), "
                          f"{stats['dynamic_joint_space_splits']} halved, "
                          f"{stats['dynamic_joint_space_fallbacks']} finished by the general path"
+                         + _kernel_note(stats['dynamic_joint_space_compiled_steps'],
+                                        stats['dynamic_joint_space_python_steps'])
                          + _columns_note(stats['dynamic_joint_space_flexibility_columns'],
                                          stats['dynamic_joint_space_flexibility_s'],
                                          stats['dynamic_joint_space_store_full']))

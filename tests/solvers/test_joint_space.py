@@ -411,7 +411,7 @@ def test_no_point_stays_held_after_a_step():
         fake.held[1:3] = 1
         raise FloatingPointError("NaN in the joint-space residual")
 
-    fake = SimpleNamespace(held=np.ones(4, dtype=np.int8), _solve_step=failing_step,
+    fake = SimpleNamespace(held=np.ones(4, dtype=np.int8), _solve_step=failing_step, compiled=False, python_steps=0,
                            columns=SimpleNamespace(new_step=lambda: None))
     with pytest.raises(FloatingPointError):
         JointSpace.solve_step(fake, None, None, 1.0)

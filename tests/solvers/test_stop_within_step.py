@@ -48,7 +48,8 @@ def test_stop_within_an_implicit_step_keeps_the_last_converged_step(tmp_path, mo
 
 def _stop_at(count: int, where: str | None = None):
     """A ``StopRequests.requested`` that answers "interrupted" from the ``count``-th time it is asked within a step
-    (by ``_stop_within_step``), called from ``where`` (``"_solve_step"`` for the joint-space iteration,
+    (by ``_stop_within_step``), called from ``where`` (``"_solve_step"`` for the joint-space iteration in Python,
+    ``"solve_step"`` before a compiled joint-space step,
     ``"tell_progress"`` for a Newton iteration of the static general path; None: from anywhere), and None
     otherwise; the number of such calls is in its ``calls``."""
     calls = {"n": 0}
@@ -104,10 +105,11 @@ def test_stop_within_a_static_step_keeps_the_converged_steps(tmp_path, monkeypat
 
 
 def test_stop_within_a_dynamic_joint_space_attempt(tmp_path, monkeypatch):
-    """The sliding block with its dynamic steps solved in joint space, stopped within a joint-space attempt: the
-    attempt is abandoned and the steps before it kept, equal to an uninterrupted run's."""
+    """The sliding block with its dynamic steps solved in joint space, stopped at the start of a joint-space attempt
+    (the compiled step, masonrydam.solvers.joint_space.step_kernel, is one call of microseconds: the stop is asked
+    for before it): the attempt is abandoned and the steps before it kept, equal to an uninterrupted run's."""
     scene = sliding_block(duration=0.4, dt=0.002, integrator="hht")
-    requested = _stop_at(30, "_solve_step")
+    requested = _stop_at(30, "solve_step")
     monkeypatch.setattr(StopRequests, "requested", requested)
     out = tmp_path / "out.nc"
     with pytest.raises(RunStopped) as err:

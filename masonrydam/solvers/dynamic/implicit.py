@@ -109,6 +109,8 @@ class JointSpaces:
             self.stats.joint_space_column_recoveries += js.column_recoveries
             self.stats.joint_space_flexibility_columns += js.columns.computed
             self.stats.joint_space_flexibility_s += js.columns.seconds
+            self.stats.joint_space_compiled_steps += js.compiled_steps
+            self.stats.joint_space_python_steps += js.python_steps
         self.stats.joint_space_column_bytes = max(
             self.stats.joint_space_column_bytes,
             sum(js.XT.nbytes for js in self.by_step.values() if js.XT is not None))

@@ -165,6 +165,10 @@ class DynamicStats:
     joint_space_flexibility_s: float = 0.0
     #: step attempts that needed more flexibility columns than the store holds (general path instead)
     joint_space_store_full: int = 0
+    #: joint-space step attempts solved by the compiled kernel (masonrydam.solvers.joint_space.step_kernel) and by
+    #: the Python loop (static-style latching, flexibility columns computed as needed, another factorization)
+    joint_space_compiled_steps: int = 0
+    joint_space_python_steps: int = 0
     #: the solvers of the all-stick effective matrices: "ldlt", "pardiso" or "superlu"
     reference_solvers: set = field(default_factory=set)
     per_stage: list = field(default_factory=list)

@@ -22,6 +22,8 @@ from scipy.linalg.lapack import dgetrf
 from ...errors import STATUS_NAN, STATUS_OK
 from ...materials.joint_laws import RESULT_OPEN
 from ..linear.dense_lu import STATUS_SINGULAR
+from ..linear.common import SingularMatrix
+from . import step_kernel
 from .kernels import (active_components, add_flexibility_product, apply_correction, capacitance_assemble,
                                   capacitance_update_solve, condensed_residual, joint_points_evaluate,
                                   joint_space_correction, joint_space_reevaluate_points, state_key,
@@ -79,6 +81,10 @@ RECOVERY_COLUMNS_MIN = 64
 
 #: a pivot of the capacitance LU below this fraction of max |J| is a singular matrix
 SINGULAR_PIVOT = 1e-14
+#: a dynamic step is solved by the compiled kernel (:mod:`.step_kernel`) where it applies (every column of the
+#: flexibility stored, an ``L D L^T`` reference factorization); False: always the Python loop of
+#: :meth:`JointSpace._solve_step` (the reference the kernel is tested against)
+COMPILED_DYNAMIC_STEP = True
 
 
 def capacitance_lu(ST, slot, rows, qt):
@@ -162,6 +168,12 @@ def joint_operator(model) -> tuple[sp.csr_matrix, np.ndarray, np.ndarray, np.nda
     B.eliminate_zeros()
     return (B, np.ascontiguousarray(np.concatenate(weights)), np.ascontiguousarray(np.concatenate(tables)),
             np.ascontiguousarray(np.concatenate(index), dtype=np.int64))
+
+
+#: the compiled step's arguments where there is no reference LU (a Fortran-order matrix, as getrf's)
+_NO_LU = np.zeros((2, 2), order="F")
+_NO_PIVOTS = np.zeros(0, dtype=np.int64)
+_NO_ROWS = np.zeros(0, dtype=np.int64)
 
 
 class ColumnStoreFull(Exception):
@@ -368,6 +380,39 @@ class JointSpace:
             k0 = self.law.elastic_stiffness(self.params_table[self.param_index], dim)
         #: (m,) N/m: elastic stiffness times area of every component (a displacement error to a force)
         self.wk = (k0 * self.weight[:, None]).ravel()
+        #: steps solved by the compiled kernel (:mod:`.step_kernel`) and by the Python loop (statistics)
+        self.compiled_steps = 0
+        self.python_steps = 0
+        self._kernel_args = None
+        if self.compiled:
+            self._prepare_kernel()
+
+    @property
+    def compiled(self) -> bool:
+        """Whether :meth:`solve_step` runs the compiled kernel (:data:`COMPILED_DYNAMIC_STEP`): a dynamic step,
+        every column of the flexibility stored and an ``L D L^T`` reference factorization."""
+        return (COMPILED_DYNAMIC_STEP and not self.static and not self.columns.lazy and self.law is not None
+                and getattr(self.fact, "factor_arrays", None) is not None)
+
+    def _prepare_kernel(self):
+        """The arrays :func:`.step_kernel.joint_space_step` takes that do not change from step to step."""
+        B, Bf_T, free = self.B, self.Bf_T, self.model.dofmap.free
+        law = self.law
+        # (codes,) bool: the law's state codes whose result state is open
+        open_code = law.result_states_of(np.arange(len(law.result_state_map), dtype=np.int8)) == RESULT_OPEN
+        self._kernel_args = (
+            *self.fact.factor_arrays, B.indptr.astype(np.int64), B.indices.astype(np.int64), B.data,
+            Bf_T.indptr.astype(np.int64), Bf_T.indices.astype(np.int64), Bf_T.data, np.asarray(free, dtype=np.int64),
+            self.XT if self.XT is not None else np.zeros((0, len(free))), int(self.recovery_columns_max))
+        self._open_code = open_code
+        self._latch_column = int(law.bond_column) if (law.latches_bonds and law.bond_column is not None) else -1
+        self._counts = np.zeros(step_kernel.N_COUNTS, dtype=np.int64)
+        self._dq_out = np.zeros(self.m)
+        self._err_out = np.zeros(1)
+        # relative displacements at the step's start, of the iterate and of the start guess: flat, and (P, dim)
+        # views of the same memory
+        work = [np.zeros((self.n_points, self.dim)) for _ in range(3)]
+        self._work = tuple(x for w in work for x in (w.reshape(-1), w))
 
     # ------------------------------------------------------------------------------------------
     def _load_base(self):
@@ -532,6 +577,11 @@ class JointSpace:
         self.columns.new_step()
         self.store_full = False
         try:
+            if self.compiled:
+                if self.stop_check is not None:  # (the kernel cannot ask within the step: asked before it)
+                    self.stop_check()
+                return self._solve_step_compiled(u_n, R_n, force_tolerance, initial_stiffness_iterations)
+            self.python_steps += 1
             return self._solve_step(u_n, R_n, force_tolerance, initial_stiffness_iterations)
         except ColumnStoreFull as exc:  # the groups' states are untouched until a u is returned
             self._lu_key, self._ref, self._dq_last = None, None, None
@@ -539,6 +589,58 @@ class JointSpace:
             return None, 0, False, str(exc)
         finally:
             self.held[:] = 0
+
+    def _solve_step_compiled(self, u_n, R_n, force_tolerance, initial_stiffness_iterations=None):
+        """:meth:`_solve_step` for a dynamic step in one call of :func:`.step_kernel.joint_space_step` (the same
+        arithmetic, bit for bit); the same returns and exceptions."""
+        self._load_base()
+        n_fixed = MAX_INITIAL_STIFFNESS_ITERATIONS if initial_stiffness_iterations is None else initial_stiffness_iterations
+        has_dq = self._dq_last is not None
+        if self._ref is not None:
+            J, piv, (ref_rows, ref_qt), has_ref = self.J, self.piv, self._ref, True
+        else:
+            J, piv, ref_rows, ref_qt, has_ref = _NO_LU, _NO_PIVOTS, _NO_ROWS, np.zeros((0, self.dim)), False
+        u = np.empty_like(u_n)
+        status, JT, piv, ref_rows, ref_qt, has_ref = step_kernel.joint_space_step(
+            *self._kernel_args, self.params_table, self.param_index, self.weight, self.base, self.trial,
+            self.traction, self.q, self.qt, self.codes, self.info, self.held, self.ST, self.slot, self.wk,
+            np.ascontiguousarray(u_n, dtype=np.float64), np.ascontiguousarray(R_n, dtype=np.float64),
+            float(force_tolerance), self._dq_last if has_dq else self._dq_out, has_dq, J.T, piv, ref_rows, ref_qt,
+            has_ref, MAX_JOINT_SPACE_ITERATIONS, int(n_fixed), FLIPS_BEFORE_HOLD, UPDATE_MIN_CHANGES,
+            UPDATE_CHANGE_FRACTION, SINGULAR_PIVOT, self._latch_column, self._open_code, *self._work, u, self._dq_out,
+            self._counts, self._err_out)
+        c = self._counts
+        it = int(c[0])
+        self.factorizations += int(c[1])
+        self.updates += int(c[2])
+        self.hold_events += int(c[3])
+        self.column_recoveries += int(c[4])
+        self.compiled_steps += 1
+        if has_ref:
+            self.J, self.piv, self._ref = JT.T, piv, (ref_rows, ref_qt)
+            self._lu_key = ref_rows.tobytes() + ref_qt.tobytes()
+        else:
+            self._ref, self._lu_key = None, None
+        if status == step_kernel.STEP_FACTOR_NAN:
+            raise SingularMatrix("solution contains NaN or infinity")
+        if status == step_kernel.STEP_LAW_NAN:
+            self._raise_on(STATUS_NAN)
+        if status == step_kernel.STEP_SINGULAR:
+            return None, it, False, f"singular joint-space iteration matrix ({int(c[6])} active components)"
+        if status == step_kernel.STEP_CORRECTION_NAN:
+            return None, it, False, "NaN in the joint-space correction"
+        if status == step_kernel.STEP_RECOVERY_NAN:
+            return None, it, False, "NaN in the recovered displacements"
+        if c[5]:  # the predictor is the solution
+            self._dq_last = None
+            return u, 0, True, ""
+        why = ""
+        if status == step_kernel.STEP_NOT_CONVERGED:
+            why = (f"joint-space iteration: force error {self._err_out[0]:.3g} N after {it} iterations "
+                   f"({MAX_JOINT_SPACE_ITERATIONS} Newton, {n_fixed} with the initial stiffness)")
+        self._dq_last = self._dq_out.copy() if not why else None
+        self._store_latched_bonds()
+        return u, it, not why, why
 
     def _solve_step(self, u_n, R_n, force_tolerance, initial_stiffness_iterations=None):
         """Solve one step in joint space.

@@ -341,6 +341,12 @@ class SymmetricFactorization:
         self._w = np.empty(K.shape[0])
         self._supernodes = None  # (starts, offsets, panels), built at the first large block solve
 
+    @property
+    def factor_arrays(self):
+        """``(Lp, Li, Lx, d, perm)``: the factor as :func:`.ldlt_kernels.ldlt_solve_vector` takes it, for kernels
+        that substitute inside a compiled loop."""
+        return self._Lp, self._Li, self._Lx, self._d, self._perm
+
     def solve(self, b: np.ndarray) -> np.ndarray:
         b = np.asarray(b, dtype=np.float64)
         if b.ndim == 1:

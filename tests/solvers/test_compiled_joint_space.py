@@ -6,8 +6,8 @@ search): the kernel performs the Python loop's floating-point operations in the 
 kernels and LAPACK routine, so a whole run must give the same dataset bit for bit, energies and statistics
 included, with fixed steps and with dt = "auto" (where a step refused by the error control is retried: any
 difference of one bit would change the step sizes). Checked on a sliding block (Newmark 1965, every step of the
-pulse slides), a rocking block (Housner 1963: opening, impact, re-closure, points held) and the Koyna section
-(cracking lift joints, El Centro 1940 at 0.5 g).
+pulse slides), a rocking block (Housner 1963: opening, impact, re-closure, points held), the Koyna section
+(cracking lift joints, El Centro 1940 at 0.5 g) and a 3D block sliding along an oblique direction.
 """
 from __future__ import annotations
 
@@ -52,7 +52,25 @@ def _sliding(dt):
     return sliding_block(duration=0.4, dt=dt, joint_space="on")
 
 
-CASES = {"sliding block": _sliding, "rocking block": _rocking, "Koyna section": _koyna}
+def _sliding_3d(dt):
+    """A 1 x 1 x 0.5 m block on a 1 x 1 x 0.25 m base (hex8 of 0.25 m), a Coulomb joint of mu = 0.2, a rectangular
+    ground pulse of 0.4 g along x and 0.3 g along y: the block slides along an oblique direction (two shear
+    components at every point)."""
+    stage = {"name": "pulse", "type": "dynamic", "duration": 0.3, "integrator": "hht", "joint_space": "on",
+             "ground_motion": {"x": {"pulse": {"shape": "rectangular", "amplitude": 0.4 * G, "duration": 0.2}},
+                               "y": {"pulse": {"shape": "rectangular", "amplitude": 0.3 * G, "duration": 0.2}}}}
+    stage.update({"dt": "auto", "dt_max": 4e-3} if dt == "auto" else {"dt": dt})
+    return {"model": {"name": "slide3d", "dimension": 3},
+            "mesh": {"generator": "blocks_3d", "parameters": {"element_size": 0.25, "blocks": [
+                {"x0": 0.0, "y0": 0.0, "z0": -0.25, "x1": 1.0, "y1": 1.0, "z1": 0.0, "group": "base"},
+                {"x0": 0.0, "y0": 0.0, "z0": 0.0, "x1": 1.0, "y1": 1.0, "z1": 0.5, "group": "block"}]}},
+            "materials": {g: {"youngs_modulus": 3e10, "poisson_ratio": 0.2, "density": 2000.0} for g in ("base", "block")},
+            "joints": {"joints": {"normal_stiffness": 1e10, "shear_stiffness": 1e10, "friction_angle": 11.309932474}},
+            "supports": [{"set": "base"}],
+            "stages": [{"name": "gravity", "loads": [{"type": "self_weight"}]}, stage]}
+
+
+CASES = {"sliding block": _sliding, "rocking block": _rocking, "Koyna section": _koyna, "3D sliding block": _sliding_3d}
 
 
 def _run(scene, compiled, monkeypatch):
@@ -66,7 +84,7 @@ def _run(scene, compiled, monkeypatch):
 @pytest.mark.parametrize("case", list(CASES))
 def test_compiled_step_gives_the_python_loops_run_bit_for_bit(case, dt, monkeypatch):
     make = CASES[case]
-    fixed = {"sliding block": 2e-3, "rocking block": 1e-3, "Koyna section": 0.0025}[case]
+    fixed = {"sliding block": 2e-3, "rocking block": 1e-3, "Koyna section": 0.0025, "3D sliding block": 2e-3}[case]
     scene_dt = "auto" if dt == "auto" else fixed
     compiled = _run(make(scene_dt), True, monkeypatch)
     python = _run(make(scene_dt), False, monkeypatch)

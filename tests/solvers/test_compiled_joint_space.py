@@ -109,6 +109,13 @@ def test_rocking_block_holds_points_in_the_compiled_step(monkeypatch):
     assert ds.attrs["dynamic_joint_space_holds"] > 0
 
 
+def test_the_compiled_step_is_available():
+    """numba's LAPACK binding is found (else every dynamic step would take the Python loop, silently slower)."""
+    from masonrydam.solvers.joint_space import step_kernel
+
+    assert step_kernel.AVAILABLE
+
+
 def test_capacitance_getrf_equals_the_python_factorization():
     """The compiled capacitance LU (numba's binding of LAPACK dgetrf) gives the factors, row swaps and status of
     :func:`~masonrydam.solvers.joint_space.condensation.capacitance_lu` (scipy's binding of the same routine),

@@ -391,8 +391,8 @@ class JointSpace:
     def compiled(self) -> bool:
         """Whether :meth:`solve_step` runs the compiled kernel (:data:`COMPILED_DYNAMIC_STEP`): a dynamic step,
         every column of the flexibility stored and an ``L D L^T`` reference factorization."""
-        return (COMPILED_DYNAMIC_STEP and not self.static and not self.columns.lazy and self.law is not None
-                and getattr(self.fact, "factor_arrays", None) is not None)
+        return (COMPILED_DYNAMIC_STEP and step_kernel.AVAILABLE and not self.static and not self.columns.lazy
+                and self.law is not None and getattr(self.fact, "factor_arrays", None) is not None)
 
     def _prepare_kernel(self):
         """The arrays :func:`.step_kernel.joint_space_step` takes that do not change from step to step."""

@@ -27,7 +27,6 @@ import math
 import numba
 import numpy as np
 from numba import types
-from numba.np.linalg import _LAPACK, ensure_lapack
 
 from ...errors import STATUS_NAN, STATUS_OK
 from ..linear.dense_lu import STATUS_SINGULAR
@@ -36,10 +35,20 @@ from .kernels import (add_flexibility_product, add_point_force_changes, apply_co
                       capacitance_update_solve, condensed_residual, joint_law_at_points, joint_space_correction,
                       state_key, subtract_columns_product)
 
-ensure_lapack()
-#: LAPACK's dgetrf through numba's binding (the scipy.linalg.cython_lapack routine that
-#: scipy.linalg.lapack.dgetrf calls: the same factors bit for bit, and a kernel that numba can cache)
-_dgetrf = _LAPACK().numba_xxgetrf(types.float64)
+try:
+    # LAPACK's dgetrf through numba's own binding, the one np.linalg.inv uses inside numba: it calls the
+    # scipy.linalg.cython_lapack routine that scipy.linalg.lapack.dgetrf calls (the same factors bit for bit),
+    # and a kernel that uses it can be cached (a ctypes function pointer cannot). It is numba's internal API:
+    # where a numba release moves it, AVAILABLE is False and the joint space keeps its Python loop
+    from numba.np.linalg import _LAPACK, ensure_lapack
+
+    ensure_lapack()
+    _dgetrf = _LAPACK().numba_xxgetrf(types.float64)
+    #: the compiled step can run (numba's LAPACK binding found)
+    AVAILABLE = True
+except (ImportError, AttributeError, TypeError):  # pragma: no cover - depends on the numba release
+    _dgetrf = None
+    AVAILABLE = False
 
 #: the step converged (``u`` written)
 STEP_CONVERGED = 0

@@ -383,16 +383,13 @@ class JointSpace:
         #: steps solved by the compiled kernel (:mod:`.step_kernel`) and by the Python loop (statistics)
         self.compiled_steps = 0
         self.python_steps = 0
-        self._kernel_args = None
+        #: :meth:`solve_step` runs the compiled kernel (:data:`COMPILED_DYNAMIC_STEP`), decided once: a dynamic
+        #: step, every column of the flexibility stored and an ``L D L^T`` reference factorization. A joint space
+        #: never mixes the two codes, so the Python loop's LU key (``_lu_key``) is not kept by the compiled one
+        self.compiled = (COMPILED_DYNAMIC_STEP and step_kernel.AVAILABLE and not self.static and not self.columns.lazy
+                         and self.law is not None and getattr(self.fact, "factor_arrays", None) is not None)
         if self.compiled:
             self._prepare_kernel()
-
-    @property
-    def compiled(self) -> bool:
-        """Whether :meth:`solve_step` runs the compiled kernel (:data:`COMPILED_DYNAMIC_STEP`): a dynamic step,
-        every column of the flexibility stored and an ``L D L^T`` reference factorization."""
-        return (COMPILED_DYNAMIC_STEP and step_kernel.AVAILABLE and not self.static and not self.columns.lazy
-                and self.law is not None and getattr(self.fact, "factor_arrays", None) is not None)
 
     def _prepare_kernel(self):
         """The arrays :func:`.step_kernel.joint_space_step` takes that do not change from step to step."""
@@ -618,9 +615,8 @@ class JointSpace:
         self.compiled_steps += 1
         if has_ref:
             self.J, self.piv, self._ref = JT.T, piv, (ref_rows, ref_qt)
-            self._lu_key = ref_rows.tobytes() + ref_qt.tobytes()
         else:
-            self._ref, self._lu_key = None, None
+            self._ref = None
         if status == step_kernel.STEP_FACTOR_NAN:
             raise SingularMatrix("solution contains NaN or infinity")
         if status == step_kernel.STEP_LAW_NAN:

@@ -405,21 +405,18 @@ def joint_space_step(Lp, Li, Lx, d, perm, Bp, Bi, Bx, BTp, BTi, BTx, free, XT, r
                     if e <= force_tolerance:
                         continue  # the held problem is solved already: let the true law decide
                     state_key(codes, traction, key)
-        if not stabilized and not (has_prev_sig and _same_key(key, prev_sig)):
-            for k in range(n_seen):
-                if _same_key(key, seen[k]):
-                    stabilized = True
-                    break
-            if stabilized:  # a state pattern came back: latch broken bonds, open points get the initial stiffness
-                if latch_column >= 0:
-                    for p in range(P):
-                        if trial[p, latch_column] != 0 and base[p, latch_column] == 0:
-                            base[p, latch_column] = 1.0
-                if _evaluate(delta, delta2, delta_y, q_n, params_table, param_index, weight, base, trial, traction, q, qt,
-                             codes, info, held, ST, slot, wk, F, err) != STATUS_OK:
-                    return STEP_LAW_NAN, J.T, piv, ref_rows, ref_qt, has_ref
-                e = err[0]
-        if not _seen_before(key, seen, n_seen):
+        found = _seen_before(key, seen, n_seen)
+        if not stabilized and found and not (has_prev_sig and _same_rows(key, prev_sig)):
+            stabilized = True  # a state pattern came back: latch broken bonds, open points get the initial stiffness
+            if latch_column >= 0:
+                for p in range(P):
+                    if trial[p, latch_column] != 0 and base[p, latch_column] == 0:
+                        base[p, latch_column] = 1.0
+            if _evaluate(delta, delta2, delta_y, q_n, params_table, param_index, weight, base, trial, traction, q, qt,
+                         codes, info, held, ST, slot, wk, F, err) != STATUS_OK:
+                return STEP_LAW_NAN, J.T, piv, ref_rows, ref_qt, has_ref
+            e = err[0]
+        if not found:
             for p in range(P):
                 seen[n_seen, p] = key[p]
             n_seen += 1
@@ -497,17 +494,9 @@ def joint_space_step(Lp, Li, Lx, d, perm, Bp, Bi, Bx, BTp, BTi, BTx, free, XT, r
 
 
 @numba.njit(cache=True)
-def _same_key(a, b):
-    for i in range(a.shape[0]):
-        if a[i] != b[i]:
-            return False
-    return True
-
-
-@numba.njit(cache=True)
 def _seen_before(key, seen, n_seen):
     for k in range(n_seen):
-        if _same_key(key, seen[k]):
+        if _same_rows(key, seen[k]):
             return True
     return False
 

@@ -12,10 +12,10 @@ the stored columns of ``K_ref^-1 B^T``. Every floating-point operation is the on
 same order, with the same kernels (:mod:`.kernels`) and the same LAPACK ``getrf``: the two give the same step bit
 for bit (``tests/solvers/test_compiled_joint_space.py``).
 
-Why it is written out: the Python loop costs about 60 microseconds of interpreter per step in some hundred calls
-of a few microseconds each (benchmarks/bench_koyna_seismic.py, the coarse section: two iterations a step, 0.3 ms a
-step of 0.67), where its arithmetic takes a few microseconds. The theory and its references are in
-:mod:`.condensation` and docs/dynamics.md ("The joint-space step in equations").
+Why it is written out: the Python loop drives some hundred calls of a few microseconds each per step. On the coarse
+Koyna section (benchmarks/bench_step_kernel.py, about two iterations a step) it took 0.36-0.41 ms a step against
+0.15 ms for this one call, which is then mostly the capacitance LU and its updates. The theory and its references
+are in :mod:`.condensation` and docs/dynamics.md ("The joint-space step in equations").
 
 Statuses (:data:`STEP_CONVERGED` ...): the kernel does not raise; :meth:`~.condensation.JointSpace.solve_step`
 turns a status into the result or the exception the Python loop gives.

@@ -23,6 +23,7 @@ import warnings
 from importlib import resources
 from pathlib import Path
 
+from .. import IMPORTED_AT
 from .._version import __version__
 from ..errors import MasonrydamError, RunStopped
 
@@ -30,23 +31,9 @@ from ..errors import MasonrydamError, RunStopped
 # `masonrydam --version` and `--help` answer in the interpreter's start-up time instead of a second or more.
 
 
-def _process_start() -> float:
-    """The ``time.perf_counter()`` value at this process's start: Linux's /proc gives its age to a clock tick
-    (10 ms); elsewhere it is now (this module's import, right after the interpreter's start)."""
-    now = time.perf_counter()
-    try:
-        with open("/proc/self/stat") as f:  # field 22 (starttime, in clock ticks after boot); comm may hold ' '
-            start_ticks = int(f.read().rsplit(")", 1)[1].split()[19])
-        with open("/proc/uptime") as f:
-            uptime = float(f.read().split()[0])
-        age = uptime - start_ticks / os.sysconf("SC_CLK_TCK")
-    except (OSError, ValueError, IndexError, AttributeError):
-        age = 0.0
-    return now - max(age, 0.0)
-
-
-#: when this process started (perf_counter seconds): the clock of a command-line run's summary
-PROCESS_START = _process_start()
+#: when this run started (perf_counter seconds): the package's first import, the clock of a command-line run's
+#: summary (:data:`masonrydam.IMPORTED_AT`)
+PROCESS_START = IMPORTED_AT
 
 
 def default_scene_path() -> Path:

@@ -13,7 +13,9 @@ Theory: docs/dynamics.md, section "The joint-space step in equations" (under "Fa
 """
 from __future__ import annotations
 
+import signal
 import time
+from contextlib import contextmanager
 
 import numpy as np
 import scipy.sparse as sp
@@ -174,6 +176,27 @@ def joint_operator(model) -> tuple[sp.csr_matrix, np.ndarray, np.ndarray, np.nda
 _NO_LU = np.zeros((2, 2), order="F")
 _NO_PIVOTS = np.zeros(0, dtype=np.int64)
 _NO_ROWS = np.zeros(0, dtype=np.int64)
+
+
+#: the signals a run's stop handler answers (masonrydam.scene.stopping): held while the compiled step runs
+_STOP_SIGNALS = {signal.SIGINT, signal.SIGTERM}
+
+
+@contextmanager
+def _stop_signals_held():
+    """SIGINT and SIGTERM held pending (POSIX ``pthread_sigmask``) for the duration, then delivered. A second stop
+    request raises KeyboardInterrupt from its handler at once; arriving while the compiled step runs, the handler
+    ran inside numba's boxing of the step's returned arrays (a callback into Python) and the run ended with a
+    SystemError traceback instead of its one-line stop. The step takes microseconds to milliseconds, so the stop
+    is not delayed noticeably. Elsewhere (no ``pthread_sigmask``) nothing is held."""
+    if not hasattr(signal, "pthread_sigmask"):
+        yield
+        return
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, _STOP_SIGNALS)
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
 
 
 class ColumnStoreFull(Exception):
@@ -598,14 +621,15 @@ class JointSpace:
         else:
             J, piv, ref_rows, ref_qt, has_ref = _NO_LU, _NO_PIVOTS, _NO_ROWS, np.zeros((0, self.dim)), False
         u = np.empty_like(u_n)
-        status, JT, piv, ref_rows, ref_qt, has_ref = step_kernel.joint_space_step(
-            *self._kernel_args, self.params_table, self.param_index, self.weight, self.base, self.trial,
-            self.traction, self.q, self.qt, self.codes, self.info, self.held, self.ST, self.slot, self.wk,
-            np.ascontiguousarray(u_n, dtype=np.float64), np.ascontiguousarray(R_n, dtype=np.float64),
-            float(force_tolerance), self._dq_last if has_dq else self._dq_out, has_dq, J.T, piv, ref_rows, ref_qt,
-            has_ref, MAX_JOINT_SPACE_ITERATIONS, int(n_fixed), FLIPS_BEFORE_HOLD, UPDATE_MIN_CHANGES,
-            UPDATE_CHANGE_FRACTION, SINGULAR_PIVOT, self._latch_column, self._open_code, *self._work, u, self._dq_out,
-            self._counts, self._err_out)
+        with _stop_signals_held():
+            status, JT, piv, ref_rows, ref_qt, has_ref = step_kernel.joint_space_step(
+                *self._kernel_args, self.params_table, self.param_index, self.weight, self.base, self.trial,
+                self.traction, self.q, self.qt, self.codes, self.info, self.held, self.ST, self.slot, self.wk,
+                np.ascontiguousarray(u_n, dtype=np.float64), np.ascontiguousarray(R_n, dtype=np.float64),
+                float(force_tolerance), self._dq_last if has_dq else self._dq_out, has_dq, J.T, piv, ref_rows,
+                ref_qt, has_ref, MAX_JOINT_SPACE_ITERATIONS, int(n_fixed), FLIPS_BEFORE_HOLD, UPDATE_MIN_CHANGES,
+                UPDATE_CHANGE_FRACTION, SINGULAR_PIVOT, self._latch_column, self._open_code, *self._work, u,
+                self._dq_out, self._counts, self._err_out)
         c = self._counts
         it = int(c[0])
         self.factorizations += int(c[1])

@@ -106,7 +106,7 @@ class EnergyBalance:
             self._weight = [np.ascontiguousarray(g.jw * g.thickness[:, None]) for g in self.model.igroups]
         return self._weight
 
-    def record(self, st, prev):
+    def record(self, st, prev, pg0=None, pg1=None):
         """Accumulate the works of the step prev -> st (Hughes 2000, sec. 9.1.4) and the balance error.
 
         Terms (J, cumulative): the trapezoidal works of the loads, damping and joints; kinetic, strain and
@@ -125,15 +125,21 @@ class EnergyBalance:
         tolerance and round-off."""
         eq = self.eq
         free = eq.free
-        v0f, v1f = prev.v[free], st.v[free]
-        cv0, cv1 = (eq.damping_force(v0f), eq.damping_force(v1f)) if eq.damped else (eq.zeros_free, eq.zeros_free)
+        _, v0f, a0f = prev.free_values(free)
+        _, v1f, a1f = st.free_values(free)
+        if eq.damped:  # the products the steps computed where they kept them
+            cv0 = prev.cv if prev.cv is not None else eq.damping_force(v0f)
+            cv1 = st.cv if st.cv is not None else eq.damping_force(v1f)
+        else:
+            cv0 = cv1 = eq.zeros_free
         if eq.mass_diagonal is not None:
             mv1 = ma0 = ma1 = eq.zeros_free
         else:
-            mv1, ma0, ma1 = eq.mass_times(v1f), eq.mass_times(prev.a[free]), eq.mass_times(st.a[free])
+            mv1, ma0, ma1 = eq.mass_times(v1f), eq.mass_times(a0f), eq.mass_times(a1f)
         w = np.empty(10)
-        pg0 = eq.ground_load(prev.ag, prev.tau) + eq.step_state_force
-        pg1 = eq.ground_load(st.ag, st.tau) + eq.step_state_force
+        if pg0 is None:  # (the step passes the loads it summed: the same sums)
+            pg0 = eq.ground_load(prev.ag, prev.tau) + eq.step_state_force
+            pg1 = eq.ground_load(st.ag, st.tau) + eq.step_state_force
         hydro = 0.0
         if eq.fluid is not None:
             wet = eq.fluid.wet_eq

@@ -61,13 +61,15 @@ class GroundMotion:
         if t1 <= t0:
             return 0.0
         t_end = self._times[-1] * (1 + 1e-12)
-        a0, a1 = self.at(t0), self.at(t1)
         # breakpoints of a_g inside the step: samples, and the record's end (a jump to zero)
         i0 = int(math.floor(t0 / self.dt)) + 1
         i1 = min(int(math.ceil(t1 / self.dt)) - 1, len(self.values) - 1)
+        jump = t0 <= t_end < t1 and self.values[-1] != 0.0
+        if i1 < i0 and not jump:  # no sample inside the step (most steps): the chord is the record
+            return 0.0
+        a0, a1 = self.at(t0), self.at(t1)
         t_in = np.arange(i0, i1 + 1) * self.dt if i1 >= i0 else np.zeros(0)
         t_in = t_in[(t_in > t0) & (t_in < t1)]
-        jump = t0 <= t_end < t1 and self.values[-1] != 0.0
         if len(t_in) == 0 and not jump:
             return 0.0
         tt = np.concatenate(([t0], t_in, [t1]))

@@ -29,7 +29,7 @@ from ..joint_space import (MAX_INITIAL_STIFFNESS_ITERATIONS, SPLIT_INITIAL_STIFF
 from ..linear.direct import SingularMatrix
 from ..newton import ConvergenceTest, CycleDamping, backtracking_line_search, force_scale, newton_iterations
 from .energy import energy_growth
-from .kernels import newmark_kinematics, newmark_residual
+from .kernels import newmark_kinematics, newmark_residual, step_constant, step_loads
 from .settings import OPEN_TANGENT_DYNAMIC
 from .stage import StepState
 
@@ -120,17 +120,28 @@ class JointSpaces:
 class Iterate:
     """A Newton iterate of the step: ``u`` (n_dof,) m, ``f_int`` (n_dof,) N, ``Kdata`` the tangent's values (None:
     the all-stick tangent), the residual ``R`` (n_eq,) N, ``a1`` (n_eq,) m/s2 and ``v1`` (n_eq,) m/s at the step's
-    end, and ``ma_norm`` the norm of the inertia force (N)."""
+    end, ``Cv`` (n_eq,) N the damping force ``C v1`` (kept with the state the step ends in: the energy balance
+    and the next step's constant part use it), and ``ma_norm`` the norm of the inertia force (N)."""
 
-    __slots__ = ("u", "f_int", "Kdata", "R", "a1", "v1", "ma_norm")
+    __slots__ = ("u", "f_int", "Kdata", "R", "a1", "v1", "Cv", "ma_norm", "_f_norm", "_r_norm")
 
-    def __init__(self, u, f_int, Kdata, R, a1, v1, ma_norm):
+    def __init__(self, u, f_int, Kdata, R, a1, v1, Cv, ma_norm):
         self.u, self.f_int, self.Kdata = u, f_int, Kdata
-        self.R, self.a1, self.v1, self.ma_norm = R, a1, v1, ma_norm
+        self.R, self.a1, self.v1, self.Cv, self.ma_norm = R, a1, v1, Cv, ma_norm
+        self._f_norm = self._r_norm = None
+
+    def internal_force_norm(self, free) -> float:
+        """The norm of the internal forces on the free DOFs ``free`` (N), computed once."""
+        if self._f_norm is None:
+            self._f_norm = float(np.linalg.norm(self.f_int[free]))
+        return self._f_norm
 
     @property
     def residual_norm(self) -> float:
-        return float(np.linalg.norm(self.R))
+        """``||R||`` (N), computed once (an iterate is not changed after its evaluation)."""
+        if self._r_norm is None:
+            self._r_norm = float(np.linalg.norm(self.R))
+        return self._r_norm
 
 
 class ImplicitStep:
@@ -158,9 +169,13 @@ class ImplicitStep:
         self.w_m = (1.0 - am) / (1.0 - af)
         ag1 = self.ag1 = eq.ground_at(t_end)
         sf = eq.update_state_force()
-        p1 = eq.static_load + eq.ground_load(ag1, t_end) + sf
-        pn = eq.static_load + eq.ground_load(st.ag, st.tau) + sf
-        un, vn, an = st.u[free], st.v[free], st.a[free]
+        n = eq.n
+        p1, pn = np.empty(n), np.empty(n)
+        #: the earthquake loads (ground, time-given and state forces) at the step's ends, for the energy balance
+        self.pg1, self.pg0 = np.empty(n), np.empty(n)
+        step_loads(eq.static_load, eq.ground_load(ag1, t_end), eq.ground_load(st.ag, st.tau), sf, p1, pn,
+                   self.pg1, self.pg0)
+        un, vn, an = st.free_values(free)
         self.un, self.vn, self.an = un, vn, an
         fluid = self.fluid = eq.fluid
         if fluid is not None:
@@ -169,15 +184,14 @@ class ImplicitStep:
             g_w, self.fluid_context = fluid.start(st.fluid, h, an[wet], eq.frame_at(st.ag), eq.frame_at(ag1),
                                                   eq.bottom_at(st.tau, st.ag), eq.bottom_at(t_end, ag1))
             self.water_mass = fluid.mass_block(h)
-            p1 = p1.copy()
             p1[wet] += g_w
-            pn = pn.copy()
             pn[wet] += st.fw
-        const = -p1
-        if am != 0.0:
-            const = const + (am / (1.0 - af)) * eq.mass_times(an)
-        if af != 0.0:
-            const = const + (af / (1.0 - af)) * (eq.damping_force(vn) + st.f_int[free] - pn)
+        const = np.empty(n)
+        weight_m, weight_f = am / (1.0 - af), af / (1.0 - af)
+        step_constant(p1, pn, eq.kernel_mass_diagonal,
+                      eq.mass_free @ an if am != 0.0 and eq.mass_diagonal is None else eq.zeros_free, an, weight_m,
+                      self._damping_force_at_start() if af != 0.0 else eq.zeros_free, st.f_int, free, weight_f,
+                      const)
         self.const = const
         self.inertia_damping = eq.inertia_damping(h)
         self.nonlinear = m.nonlinear
@@ -192,9 +206,14 @@ class ImplicitStep:
         self.kind_prev, self.rn_prev, self.allow_modified = None, math.inf, s.modified_newton
         self.damping = CycleDamping()
 
+    def _damping_force_at_start(self):
+        """``C v_n`` (n_eq,) N: the one the step that ended in the start state computed, else the product."""
+        cv = self.st.cv
+        return cv if cv is not None else self.eq.damping_force(self.vn)
+
     # -- the step's equations -----------------------------------------------------------------------
     def residual(self, u, f_int):
-        """(R, a1, v1, ||M a1||) at the displacements ``u`` with internal forces ``f_int``."""
+        """(R, a1, v1, C v1, ||M a1||) at the displacements ``u`` with internal forces ``f_int``."""
         eq, free = self.eq, self.free
         n = len(self.un)
         R, a1, v1, Ma = (np.empty(n) for _ in range(4))
@@ -204,14 +223,13 @@ class ImplicitStep:
             Ma = eq.mass_free @ a1
         if self.fluid is not None:
             Ma[self.wet] += self.water_mass @ a1[self.wet]
-        if eq.damped:  # a new velocity: the product without looking it up, then remembered
+        if eq.damped:  # a new velocity: the product, kept with the iterate
             Cv = eq.damping_free @ v1
-            eq.remember_damping_force(v1, Cv)
         else:
             Cv = eq.zeros_free
         if newmark_residual(Ma, self.w_m, Cv, f_int, free, self.const, R) != 0:
             raise NumericalError("NaN or infinity in the dynamic residual")
-        return R, a1, v1, float(np.linalg.norm(Ma))
+        return R, a1, v1, Cv, float(np.linalg.norm(Ma))
 
     def evaluate(self, u):
         """(f_int, tangent values or None for the all-stick tangent) at ``u``."""
@@ -234,8 +252,8 @@ class ImplicitStep:
         """The :class:`Iterate` at ``u``, evaluated there unless its forces ``f_int`` (and tangent) are given."""
         if f_int is None:
             f_int, Kdata = self.evaluate(u)
-        R, a1, v1, ma_norm = self.residual(u, f_int)
-        return Iterate(u, f_int, Kdata, R, a1, v1, ma_norm)
+        R, a1, v1, Cv, ma_norm = self.residual(u, f_int)
+        return Iterate(u, f_int, Kdata, R, a1, v1, Cv, ma_norm)
 
     # -- the attempt ----------------------------------------------------------------------------------
     def solve(self, can_split=True, error_check=None, split_joint_space=True):
@@ -334,7 +352,7 @@ class ImplicitStep:
     def force_scale(self, iterate, iteration=0):
         """Force scale of the convergence test (N): the inertia, internal and end-of-step external forces and,
         after the first iteration, the step's first residual."""
-        return force_scale(iterate.ma_norm, float(np.linalg.norm(iterate.f_int[self.free])), self.p1_norm,
+        return force_scale(iterate.ma_norm, iterate.internal_force_norm(self.free), self.p1_norm,
                            self.r0 if iteration > 0 else 0.0)
 
     def after_guard(self, iterate, action):
@@ -393,11 +411,13 @@ class ImplicitStep:
                         current.f_int, Kdata.copy() if Kdata is not None else None, self.ag1)
         new.v[free] = current.v1
         new.a[free] = current.a1
+        new.keep_free_values(free, None, current.v1, current.a1)
+        new.cv = current.Cv
         new.Kc_u = m.continuum_force(u)
         if self.fluid is not None:
             new.fluid = self.fluid.finish(self.fluid_context, current.a1[self.wet])
             new.fw = self.fluid.force(new.fluid)
-        self.energy.record(new, st)
+        self.energy.record(new, st, self.pg0, self.pg1)
         if can_split and self.nonlinear and s.energy_growth_tolerance > 0:
             # the trapezoidal work of a joint point that opens or closes within the step is not the
             # change of its stored energy (Armero & Petocz 1998, Comput. Methods Appl. Mech. Eng. 158;

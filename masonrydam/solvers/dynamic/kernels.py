@@ -52,6 +52,47 @@ def newmark_residual(Ma, w_m, Cv, f_int, free, const, R):
 
 
 @numba.njit(cache=True)
+def step_loads(static_load, ground_end, ground_start, state_force, p1, pn, pg1, pg0):
+    """The loads of an implicit step on its free DOFs (n,) N from the constant load of the static stages
+    ``static_load``, the ground (and time-given) loads at the step's end and start ``ground_end``,
+    ``ground_start`` and the state force ``state_force``: ``p1 = (static_load + ground_end) + state_force``,
+    ``pn`` the same at the start, and the earthquake loads of the energy balance ``pg1 = ground_end +
+    state_force``, ``pg0`` (:meth:`~masonrydam.solvers.dynamic.energy.EnergyBalance.record`). Each entry is
+    the sum numpy forms in that order, so the values are bit for bit those of the expressions; one pass
+    instead of six temporaries of n entries."""
+    for i in range(p1.shape[0]):
+        s = state_force[i]
+        p1[i] = (static_load[i] + ground_end[i]) + s
+        pn[i] = (static_load[i] + ground_start[i]) + s
+        pg1[i] = ground_end[i] + s
+        pg0[i] = ground_start[i] + s
+
+
+@numba.njit(cache=True)
+def step_constant(p1, pn, mass_diag, ma_n, an, weight_m, cv_n, f_int, free, weight_f, const):
+    """The constant part of an implicit step's residual (N, free DOFs (n,); Chung & Hulbert 1993, see
+    :mod:`~masonrydam.solvers.dynamic.implicit`):
+
+        const = -p1 + weight_m M a_n + weight_f ((C v_n + f_int(u_n)) - p_n)
+
+    with ``weight_m = am / (1 - af)`` and ``weight_f = af / (1 - af)``; a zero weight leaves its term out (not
+    added as zero: the sign of a zero stays that of -p1). ``M a_n`` is ``mass_diag a_n`` when ``mass_diag``
+    has n entries (lumped mass), else ``ma_n`` from the caller; ``f_int`` (n_dof,) is gathered at ``free``.
+    The operations are numpy's for ``const = -p1; const = const + weight_m * (M a_n); const = const + weight_f
+    * ((C v_n + f_int[free]) - p_n)``, in that order: the same bits."""
+    n = p1.shape[0]
+    lumped = mass_diag.shape[0] == n
+    for i in range(n):
+        c = -p1[i]
+        if weight_m != 0.0:
+            m = mass_diag[i] * an[i] if lumped else ma_n[i]
+            c = c + weight_m * m
+        if weight_f != 0.0:
+            c = c + weight_f * ((cv_n[i] + f_int[free[i]]) - pn[i])
+        const[i] = c
+
+
+@numba.njit(cache=True)
 def step_works(free, u0, u1, pg0, pg1, fs, cv0, cv1, f0, f1, kc0, kc1, v1, mass_diag, mv1, a0, a1, ma0, ma1, out):
     """Trapezoidal works of one step on the ``free`` (n,) DOFs (the energy balance of
     :meth:`~masonrydam.solvers.dynamic.energy.EnergyBalance.record`; Hughes 2000, sec. 9.1.4), with

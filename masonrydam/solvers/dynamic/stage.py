@@ -184,7 +184,8 @@ class StepState:
     m/s2 the ground acceleration; ``Kc_u`` (n_dof,) N the blocks' forces, ``energy`` (dict, J), ``joints`` the
     joint sets' (delta, traction, state) copies, ``fluid`` and ``fw`` the compressible water's state and force."""
 
-    __slots__ = ("t", "tau", "u", "v", "a", "f_int", "Kdata", "ag", "Kc_u", "energy", "joints", "fluid", "fw")
+    __slots__ = ("t", "tau", "u", "v", "a", "f_int", "Kdata", "ag", "Kc_u", "energy", "joints", "fluid", "fw", "cv",
+                 "_free", "_on_free")
 
     def __init__(self, t, tau, u, v, a, f_int, Kdata, ag):
         self.t, self.tau, self.u, self.v, self.a = t, tau, u, v, a
@@ -193,3 +194,23 @@ class StepState:
         self.fluid = self.fw = None
         self.energy = None
         self.joints = ()  # (delta, traction, state) copies per joint set (see EnergyBalance.joint_snapshot)
+        #: (n_eq,) N the damping force ``C v`` on the free DOFs where the step that ended here computed it, else None
+        self.cv = None
+        self._free, self._on_free = None, (None, None, None)
+
+    def keep_free_values(self, free, u, v, a):
+        """Keep ``u``, ``v``, ``a`` (n_eq,) as this state's values on the free DOFs ``free`` (None: gathered when
+        asked for). A state is not changed after its step, so they stay its values."""
+        self._free, self._on_free = free, (u, v, a)
+
+    def free_values(self, free):
+        """``(u[free], v[free], a[free])``, each gathered once and kept."""
+        if self._free is not free:
+            self._free, self._on_free = free, (None, None, None)
+        u, v, a = self._on_free
+        if u is None or v is None or a is None:
+            u = self.u[free] if u is None else u
+            v = self.v[free] if v is None else v
+            a = self.a[free] if a is None else a
+            self._on_free = (u, v, a)
+        return u, v, a

@@ -196,11 +196,12 @@ class AdaptiveStepping:
         free = self.free
         # Euclidean norms over the free DOFs, as Zienkiewicz & Xie: a joint's rattle, a few DOFs with
         # large accelerations, weighs by its share of the motion, not as much as the whole structure
-        e_zx = h * h * error_constant * float(np.linalg.norm(new.a[free] - st.a[free]))
-        u_peak = max(self.u_peak, float(np.linalg.norm(new.u[free] - self.u_stage_start)))
+        u1, v1, a1 = new.free_values(free)
+        e_zx = h * h * error_constant * float(np.linalg.norm(a1 - st.free_values(free)[2]))
+        u_peak = max(self.u_peak, float(np.linalg.norm(u1 - self.u_stage_start)))
         eta_zx = e_zx / max(u_peak, ADAPTIVE_DISPLACEMENT_FLOOR * math.sqrt(len(free)))
         # the ground load between the step's ends: the velocity missed, over the velocity scale
-        v_peak = max(self.v_peak, float(np.max(np.abs(new.v[free]), initial=0.0)))
+        v_peak = max(self.v_peak, float(np.max(np.abs(v1), initial=0.0)))
         miss = max((g.chord_error(st.tau, new.tau) for g in self.ground.values()), default=0.0)
         eta_input = miss / max(v_peak, self.peak_ground_velocity, 1e-300) if miss > 0 else 0.0
         scale = max(self.energy.scale, abs(new.energy["input"]), abs(new.energy["external"]), 1e-300)

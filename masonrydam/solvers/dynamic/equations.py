@@ -139,10 +139,10 @@ class StageEquations:
                 raise SceneError(f"{s.key}ground_motion.{'xyz'[c]}", f"component {'xyz'[c]} in a {m.dim}D model")
         self._add_cache = {}
         self._kel_cache = {}
-        # a step asks for the damping force of the same velocity up to five times (the step constant,
-        # the residual at the accepted iterate, the energy balance of this step and of the next; the
-        # joint-space path evaluates the residual at two velocities, so two remembered products would
-        # lose the start-of-step one), and for the ground load of its two ends twice
+        # an implicit step keeps the damping force of its end velocity with its state (the energy balance
+        # and the next step's constant part take it from there); these remember the products asked for
+        # otherwise (a stage's first state, the explicit steps), and the ground loads of a step's two ends,
+        # asked for twice
         self._recent_damping_forces = RecentProducts(3)
         self._recent_ground_loads = RecentProducts(2)
         #: operands of the step residual kernels (kernels.newmark_kinematics: the lumped mass
@@ -167,10 +167,6 @@ class StageEquations:
             y = self.damping_free @ x
             self._recent_damping_forces.put(x, y)
         return y
-
-    def remember_damping_force(self, v, Cv):
-        """Keep ``Cv = C v``, computed by the caller, for :meth:`damping_force`."""
-        self._recent_damping_forces.put(v, Cv)
 
     def ground_at(self, tau):
         """Ground acceleration (dim,) m/s2 at stage time ``tau`` (s)."""

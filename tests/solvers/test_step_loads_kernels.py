@@ -75,7 +75,7 @@ def test_a_state_gathers_its_free_values_once_and_keeps_the_steps_own():
     st = StepState(0.0, 0.0, u, v, a, np.zeros(12), None, np.zeros(2))
     free = np.array([1, 2, 5, 7, 11])
     v_kept = v[free].copy()
-    st.keep_free_values(free, None, v_kept, None)
+    st.keep_free_values(free, v_kept, None)
     uf, vf, af = st.free_values(free)
     assert vf is v_kept
     assert np.array_equal(uf, u[free]) and np.array_equal(af, a[free])

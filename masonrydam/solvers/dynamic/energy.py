@@ -106,8 +106,10 @@ class EnergyBalance:
             self._weight = [np.ascontiguousarray(g.jw * g.thickness[:, None]) for g in self.model.igroups]
         return self._weight
 
-    def record(self, st, prev, pg0=None, pg1=None):
-        """Accumulate the works of the step prev -> st (Hughes 2000, sec. 9.1.4) and the balance error.
+    def record(self, st, prev, pg0, pg1):
+        """Accumulate the works of the step prev -> st (Hughes 2000, sec. 9.1.4) and the balance error; ``pg0``,
+        ``pg1`` (n_eq,) N the earthquake loads (ground, time-given and state forces) at the step's two ends, as the
+        step summed them (:func:`~.kernels.step_loads`).
 
         Terms (J, cumulative): the trapezoidal works of the loads, damping and joints; kinetic, strain and
         joint stored energies; the joint work split by :func:`~.kernels.joint_step_energy` into
@@ -137,9 +139,6 @@ class EnergyBalance:
         else:
             mv1, ma0, ma1 = eq.mass_times(v1f), eq.mass_times(a0f), eq.mass_times(a1f)
         w = np.empty(10)
-        if pg0 is None:  # (the step passes the loads it summed: the same sums)
-            pg0 = eq.ground_load(prev.ag, prev.tau) + eq.step_state_force
-            pg1 = eq.ground_load(st.ag, st.tau) + eq.step_state_force
         hydro = 0.0
         if eq.fluid is not None:
             wet = eq.fluid.wet_eq

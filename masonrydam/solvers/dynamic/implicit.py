@@ -411,7 +411,7 @@ class ImplicitStep:
                         current.f_int, Kdata.copy() if Kdata is not None else None, self.ag1)
         new.v[free] = current.v1
         new.a[free] = current.a1
-        new.keep_free_values(free, None, current.v1, current.a1)
+        new.keep_free_values(free, current.v1, current.a1)
         new.cv = current.Cv
         new.Kc_u = m.continuum_force(u)
         if self.fluid is not None:

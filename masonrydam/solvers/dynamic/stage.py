@@ -198,10 +198,10 @@ class StepState:
         self.cv = None
         self._free, self._on_free = None, (None, None, None)
 
-    def keep_free_values(self, free, u, v, a):
-        """Keep ``u``, ``v``, ``a`` (n_eq,) as this state's values on the free DOFs ``free`` (None: gathered when
-        asked for). A state is not changed after its step, so they stay its values."""
-        self._free, self._on_free = free, (u, v, a)
+    def keep_free_values(self, free, v, a):
+        """Keep ``v``, ``a`` (n_eq,), the step's own arrays, as this state's values on the free DOFs ``free``
+        (``u[free]`` is gathered when asked for). A state is not changed after its step, so they stay its values."""
+        self._free, self._on_free = free, (None, v, a)
 
     def free_values(self, free):
         """``(u[free], v[free], a[free])``, each gathered once and kept."""

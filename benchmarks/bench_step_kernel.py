@@ -120,7 +120,7 @@ class Recorder:
 def run(case, compiled, rec, example_duration):
     import masonrydam
 
-    rec.module.COMPILED_DYNAMIC_STEP = compiled
+    rec.module.COMPILED_STEP = compiled
     rec.reset()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")

@@ -23,6 +23,10 @@ def stats_attrs(solver, t_start, dyn_solvers=()):
            "joint_space_setup_s": round(st.joint_space_setup_s, 4),
            "joint_space_flexibility_columns": st.joint_space_flexibility_columns,
            "joint_space_flexibility_s": round(st.joint_space_flexibility_s, 4),
+           "joint_space_compiled_steps": st.joint_space_compiled_steps,
+           "joint_space_python_steps": st.joint_space_python_steps, "joint_space_holds": st.joint_space_holds,
+           "joint_space_bond_latches": st.joint_space_bond_latches,
+           "joint_space_fresh_budgets": st.joint_space_fresh_budgets,
            "step_cuts": st.step_cuts, "arc_length_steps": st.arc_length_steps,
            "arc_length_switches": st.arc_length_switches, "solve_wall_time_s": round(st.wall_time_s, 4),
            "total_wall_time_s": round(time.perf_counter() - t_start, 4), "per_stage": json.dumps(st.per_stage)}
@@ -190,7 +194,8 @@ def _static_lines(solver, stats, model) -> list[str]:
                      f"{stats['joint_space_setup_s']:.3g} s): {stats['joint_space_steps']} step attempts converged "
                      f"there in {stats['joint_space_iterations']} iterations, {stats['joint_space_splits']} cut "
                      "where it did not converge"
-                     + _columns_note(stats['joint_space_flexibility_columns'], stats['joint_space_flexibility_s']))
+                     + _columns_note(stats['joint_space_flexibility_columns'], stats['joint_space_flexibility_s'])
+                     + _kernel_note(stats['joint_space_compiled_steps'], stats['joint_space_python_steps']))
     return lines
 
 

@@ -7,7 +7,8 @@ kernels and LAPACK routine, so a whole run must give the same dataset bit for bi
 included, with fixed steps and with dt = "auto" (where a step refused by the error control is retried: any
 difference of one bit would change the step sizes). Checked on a sliding block (Newmark 1965, every step of the
 pulse slides), a rocking block (Housner 1963: opening, impact, re-closure, points held), the Koyna section
-(cracking lift joints, El Centro 1940 at 0.5 g) and a 3D block sliding along an oblique direction.
+(cracking lift joints, El Centro 1940 at 0.5 g) and a 3D block sliding along an oblique direction; and, for static
+steps (bond latching, fresh Newton budgets), the Koyna section pushed at its crest and filled with its reservoir.
 """
 from __future__ import annotations
 
@@ -74,7 +75,7 @@ CASES = {"sliding block": _sliding, "rocking block": _rocking, "Koyna section": 
 
 
 def _run(scene, compiled, monkeypatch):
-    monkeypatch.setattr(js_module, "COMPILED_DYNAMIC_STEP", compiled)
+    monkeypatch.setattr(js_module, "COMPILED_STEP", compiled)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the energy notes of a coarse dt are not this test's business
         return masonrydam.run(scene)
@@ -95,9 +96,64 @@ def test_compiled_step_gives_the_python_loops_run_bit_for_bit(case, dt, monkeypa
     for name in compiled.data_vars:
         x, y = compiled[name].values, python[name].values
         assert np.array_equal(x, y, equal_nan=x.dtype.kind == "f"), name
-    skip = ("history", "dynamic_joint_space_compiled_steps", "dynamic_joint_space_python_steps")
+    skip = ("history", "dynamic_joint_space_compiled_steps", "dynamic_joint_space_python_steps",
+            "joint_space_compiled_steps", "joint_space_python_steps")  # (static stages' steps: the switch too)
     for key, value in a.items():
         if key in skip or key.endswith("_s") or "time" in key or "ms_per_step" in key:
+            continue
+        assert value == b[key] if not isinstance(value, np.ndarray) else np.array_equal(value, b[key]), key
+
+
+def _koyna_push():
+    """The Koyna section at element_size 6 m (320 joint unknowns) under self-weight, its crest then pushed 0.1 m
+    downstream in 4 steps, the lift and base joints given a weak bond (c = 0.3 MPa, ft = 0.2 MPa): points at the
+    tips of the opening cracks flip across the cohesion jump, so the static step holds them and latches their
+    bonds broken (``JointSpace._bond_chatter``)."""
+    overrides = {"joints.lift_joints.cohesion": 0.3e6, "joints.lift_joints.tensile_strength": 0.2e6,
+                 "joints.base_joint.cohesion": 0.3e6, "joints.base_joint.tensile_strength": 0.2e6}
+    sc = koyna_el_centro(element_size=6.0, dt=0.01, steps=1, overrides=overrides)
+    sc["stages"] = [sc["stages"][0], {"name": "push", "steps": 4, "loads": [
+        {"type": "displacement", "set": "crest", "components": ["x"], "value": [0.1]}]}]
+    sc["output"] = {"nodes": ["crest"]}
+    return sc
+
+
+def _koyna_reservoir():
+    """examples/koyna_reservoir.toml (self-weight, the reservoir filled to 91.75 m with uplift, then a flood that
+    raises the water until a joint slides): a release of held points in one step starts a fresh Newton budget
+    (``FRESH_BUDGET_RELEASES``)."""
+    import tomllib
+
+    from masonrydam.scene import Scene
+    from repository_paths import EXAMPLES
+
+    sc = tomllib.loads((EXAMPLES / "koyna_reservoir.toml").read_text())
+    return Scene(sc, base_dir=EXAMPLES)
+
+
+#: static cases and the statistic each must show (the part of the static step it exercises)
+STATIC_CASES = {"Koyna push, bonds latched": (_koyna_push, "joint_space_bond_latches"),
+                "Koyna reservoir filling, a fresh Newton budget": (_koyna_reservoir, "joint_space_fresh_budgets")}
+
+
+@pytest.mark.parametrize("case", list(STATIC_CASES))
+def test_compiled_static_step_gives_the_python_loops_run_bit_for_bit(case, monkeypatch):
+    """A static step condensed on the joints does what a dynamic one does, plus the latching of bonds at points
+    that flip across the cohesion jump and a fresh Newton budget after a release of held points: the kernel
+    must do both as the Python loop does (same datasets, same counts of holds, latches and fresh budgets)."""
+    make, exercised = STATIC_CASES[case]
+    compiled = _run(make(), True, monkeypatch)
+    python = _run(make(), False, monkeypatch)
+    a, b = compiled.attrs, python.attrs
+    assert a["joint_space_compiled_steps"] > 0 and a["joint_space_python_steps"] == 0
+    assert b["joint_space_compiled_steps"] == 0 and b["joint_space_python_steps"] > 0
+    assert a[exercised] > 0 and a["joint_space_holds"] > 0, "the case must exercise what it is here for"
+    for name in compiled.data_vars:
+        x, y = compiled[name].values, python[name].values
+        assert np.array_equal(x, y, equal_nan=x.dtype.kind == "f"), name
+    skip = ("history", "joint_space_compiled_steps", "joint_space_python_steps")
+    for key, value in a.items():
+        if key in skip or key.endswith("_s") or "time" in key:
             continue
         assert value == b[key] if not isinstance(value, np.ndarray) else np.array_equal(value, b[key]), key
 

@@ -83,10 +83,10 @@ RECOVERY_COLUMNS_MIN = 64
 
 #: a pivot of the capacitance LU below this fraction of max |J| is a singular matrix
 SINGULAR_PIVOT = 1e-14
-#: a dynamic step is solved by the compiled kernel (:mod:`.step_kernel`) where it applies (every column of the
-#: flexibility stored, an ``L D L^T`` reference factorization); False: always the Python loop of
+#: a step (dynamic or static) is solved by the compiled kernel (:mod:`.step_kernel`) where it applies (every
+#: column of the flexibility stored, an ``L D L^T`` reference factorization); False: always the Python loop of
 #: :meth:`JointSpace._solve_step` (the reference the kernel is tested against)
-COMPILED_DYNAMIC_STEP = True
+COMPILED_STEP = True
 
 
 def capacitance_lu(ST, slot, rows, qt):
@@ -392,6 +392,8 @@ class JointSpace:
         #: points whose bond was latched broken within a step because they kept flipping across the cohesion
         #: jump (statistics; see _bond_chatter)
         self.bond_latches = 0
+        #: releases of held points after which Newton started a fresh budget (a static step; statistics)
+        self.fresh_budgets = 0
         #: converged steps whose displacements came from the stored columns, not a substitution (statistics)
         self.column_recoveries = 0
         #: the last step needed more columns of S than the store holds
@@ -406,10 +408,10 @@ class JointSpace:
         #: steps solved by the compiled kernel (:mod:`.step_kernel`) and by the Python loop (statistics)
         self.compiled_steps = 0
         self.python_steps = 0
-        #: :meth:`solve_step` runs the compiled kernel (:data:`COMPILED_DYNAMIC_STEP`), decided once: a dynamic
-        #: step, every column of the flexibility stored and an ``L D L^T`` reference factorization. A joint space
-        #: never mixes the two codes, so the Python loop's LU key (``_lu_key``) is not kept by the compiled one
-        self.compiled = (COMPILED_DYNAMIC_STEP and step_kernel.AVAILABLE and not self.static and not self.columns.lazy
+        #: :meth:`solve_step` runs the compiled kernel (:data:`COMPILED_STEP`), decided once: every column of the
+        #: flexibility stored and an ``L D L^T`` reference factorization. A joint space never mixes the two codes,
+        #: so the Python loop's LU key (``_lu_key``) is not kept by the compiled one
+        self.compiled = (COMPILED_STEP and step_kernel.AVAILABLE and not self.columns.lazy
                          and self.law is not None and getattr(self.fact, "factor_arrays", None) is not None)
         if self.compiled:
             self._prepare_kernel()
@@ -611,8 +613,8 @@ class JointSpace:
             self.held[:] = 0
 
     def _solve_step_compiled(self, u_n, R_n, force_tolerance, initial_stiffness_iterations=None):
-        """:meth:`_solve_step` for a dynamic step in one call of :func:`.step_kernel.joint_space_step` (the same
-        arithmetic, bit for bit); the same returns and exceptions."""
+        """:meth:`_solve_step` in one call of :func:`.step_kernel.joint_space_step` (the same arithmetic, bit for
+        bit; a static step's bond latching and fresh Newton budgets included); the same returns and exceptions."""
         self._load_base()
         n_fixed = MAX_INITIAL_STIFFNESS_ITERATIONS if initial_stiffness_iterations is None else initial_stiffness_iterations
         has_dq = self._dq_last is not None
@@ -628,7 +630,9 @@ class JointSpace:
                 np.ascontiguousarray(u_n, dtype=np.float64), np.ascontiguousarray(R_n, dtype=np.float64),
                 float(force_tolerance), self._dq_last if has_dq else self._dq_out, has_dq, J.T, piv, ref_rows,
                 ref_qt, has_ref, MAX_JOINT_SPACE_ITERATIONS, int(n_fixed), FLIPS_BEFORE_HOLD, UPDATE_MIN_CHANGES,
-                UPDATE_CHANGE_FRACTION, SINGULAR_PIVOT, self._latch_column, self._open_code, *self._work, u,
+                UPDATE_CHANGE_FRACTION, SINGULAR_PIVOT, self._latch_column, self._open_code, self._latches(),
+                FLIPS_BEFORE_LATCH if FLIPS_BEFORE_LATCH is not None else 0,
+                FRESH_BUDGET_RELEASES if self.static else 0, *self._work, u,
                 self._dq_out, self._counts, self._err_out)
         c = self._counts
         it = int(c[0])
@@ -636,6 +640,8 @@ class JointSpace:
         self.updates += int(c[2])
         self.hold_events += int(c[3])
         self.column_recoveries += int(c[4])
+        self.bond_latches += int(c[7])
+        self.fresh_budgets += int(c[8])
         self.compiled_steps += 1
         if has_ref:
             self.J, self.piv, self._ref = JT.T, piv, (ref_rows, ref_qt)
@@ -759,6 +765,7 @@ class JointSpace:
                 flips[was_held] = 0
                 if self.static and restarts < FRESH_BUDGET_RELEASES and it - newton_start < MAX_JOINT_SPACE_ITERATIONS:
                     restarts += 1
+                    self.fresh_budgets += 1
                     newton_start = it
                     flips[:] = 0
                 key = self._state_key()

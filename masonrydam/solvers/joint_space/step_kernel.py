@@ -67,8 +67,9 @@ STEP_RECOVERY_NAN = 6
 
 #: entries of ``counts``: iterations, capacitance LU factorizations, low-rank updates, points held, recoveries
 #: from the stored columns, the step ended with every point in its predictor state (0/1), the active components
-#: of a singular matrix
-N_COUNTS = 7
+#: of a singular matrix, bonds latched broken at flipping points and fresh Newton budgets after releases (a static
+#: step)
+N_COUNTS = 9
 
 
 @numba.njit(cache=True)
@@ -225,9 +226,10 @@ def joint_space_step(Lp, Li, Lx, d, perm, Bp, Bi, Bx, BTp, BTi, BTx, free, XT, r
                      params_table, param_index, weight, base, trial, traction, q, qt, codes, info, held, ST, slot, wk,
                      u_n, R_n, force_tolerance, dq_last, has_dq_last, JT, piv, ref_rows, ref_qt, has_ref,
                      max_newton, max_fixed, flips_before_hold, update_min_changes, update_change_fraction,
-                     singular_pivot, latch_column, open_code, delta_n, delta_n2, delta, delta2, guess, guess2, u_out,
-                     dq_out, counts, err_out):
-    """One dynamic step condensed on the joints (see the module's docstring and ``JointSpace._solve_step``).
+                     singular_pivot, latch_column, open_code, latch_flipping_bonds, flips_before_latch,
+                     fresh_budget_releases, delta_n, delta_n2, delta, delta2, guess, guess2, u_out, dq_out, counts,
+                     err_out):
+    """One step condensed on the joints (see the module's docstring and ``JointSpace._solve_step``).
 
     Factor ``Lp, Li, Lx, d, perm`` (:class:`~masonrydam.solvers.linear.direct.SymmetricFactorization`); ``B``
     (m, n_dof) and ``B_f^T`` (n_eq, m) as CSR arrays; ``free`` (n_eq,) int64; ``XT`` (m or 0, n_eq) the stored
@@ -238,7 +240,11 @@ def joint_space_step(Lp, Li, Lx, d, perm, Bp, Bi, Bx, BTp, BTi, BTx, free, XT, r
     ``dq_last`` (m,) N the last step's force change where ``has_dq_last``; the reference capacitance LU ``J``
     (given as its transpose ``JT``, C order), ``piv`` and its rows ``ref_rows``, ``ref_qt`` where ``has_ref``; the iteration limits and
     constants of :mod:`.condensation`; ``latch_column`` the law's bond column where it latches broken bonds
-    (-1: it does not); ``open_code`` (codes,) bool: the codes whose result state is open; work arrays for the
+    (-1: it does not); ``open_code`` (codes,) bool: the codes whose result state is open; what a static step does
+    besides (``JointSpace._solve_step``): ``latch_flipping_bonds`` latches the bond of a point that has flipped
+    ``flips_before_latch`` times and whose bond broke in an iterate of the step (``JointSpace._bond_chatter``; needs
+    ``latch_column`` >= 0), and ``fresh_budget_releases`` releases of held points start a fresh Newton budget (0 in a
+    dynamic step); work arrays for the
     relative displacements at the step's start, the iterate and the start guess, each flat (m,) with a (P, dim)
     view of the same memory (``delta_n2`` ...: numba's reshape would compile its error messages, seconds of the
     first run).
@@ -314,7 +320,17 @@ def joint_space_step(Lp, Li, Lx, d, perm, Bp, Bi, Bx, BTp, BTi, BTx, free, XT, r
             _copy(F, F_saved)
     flips = np.zeros(P, dtype=np.int64)
     released = np.zeros(P, dtype=np.bool_)
-    seen = np.empty((max_newton + max_fixed + 2, P), dtype=np.int8)
+    # every pass that adds a key iterates once after it: at most (releases + 1) Newton budgets and the fixed phase
+    seen = np.empty(((fresh_budget_releases + 1) * max_newton + max_fixed + 2, P), dtype=np.int8)
+    # the bonds broken in any iterate of the step (the bond column, accumulated from base), where the step latches
+    # the bonds of flipping points
+    latching = latch_flipping_bonds and latch_column >= 0
+    broke = np.zeros(P)
+    if latching:
+        for p in range(P):
+            broke[p] = max(0.0, base[p, latch_column])
+    newton_start = 0
+    restarts = 0
     n_seen = 0
     key = np.empty(P, dtype=np.int8)
     # the last pass's state key: as the Newton iterations see it (forgotten at a release, has_prev) and as the
@@ -352,9 +368,15 @@ def joint_space_step(Lp, Li, Lx, d, perm, Bp, Bi, Bx, BTp, BTi, BTx, free, XT, r
                 if was_held[p]:
                     released[p] = True
                     flips[p] = 0
+            if restarts < fresh_budget_releases and it - newton_start < max_newton:
+                restarts += 1  # the release changed the active set: Newton's iterations count from here
+                counts[8] += 1
+                newton_start = it
+                for p in range(P):
+                    flips[p] = 0
             state_key(codes, traction, key)
             has_prev = False
-        if it >= max_newton + max_fixed:
+        if it - newton_start >= max_newton + max_fixed:
             any_held = False
             for p in range(P):
                 if held[p] != 0:
@@ -370,7 +392,10 @@ def joint_space_step(Lp, Li, Lx, d, perm, Bp, Bi, Bx, BTp, BTi, BTx, free, XT, r
                     break
             converged = False
             break
-        fixed_point = it >= max_newton
+        fixed_point = it - newton_start >= max_newton
+        if latching:
+            for p in range(P):
+                broke[p] = max(broke[p], trial[p, latch_column])
         if has_prev:
             changed = False
             for p in range(P):
@@ -385,18 +410,35 @@ def joint_space_step(Lp, Li, Lx, d, perm, Bp, Bi, Bx, BTp, BTi, BTx, free, XT, r
                 n_seen = 0
             else:
                 n_hold = 0
+                n_crack = 0
                 hold = np.zeros(P, dtype=np.bool_)
+                crack = np.zeros(P, dtype=np.bool_)
                 for p in range(P):
                     if key[p] != prev_key[p]:
                         flips[p] += 1
                     if flips[p] >= flips_before_hold and not released[p] and held[p] == 0:
                         hold[p] = True
                         n_hold += 1
-                if n_hold > 0:
+                if latching:
+                    for p in range(P):
+                        # flipping across the cohesion jump: the bond stays broken for the step
+                        if flips[p] >= flips_before_latch and broke[p] != 0 and base[p, latch_column] == 0:
+                            crack[p] = True
+                            n_crack += 1
+                            base[p, latch_column] = max(base[p, latch_column], broke[p])
+                            flips[p] = 0
+                            if hold[p]:
+                                hold[p] = False
+                                n_hold -= 1
+                    counts[7] += n_crack
+                if n_hold > 0 or n_crack > 0:
                     for p in range(P):
                         if hold[p]:
                             held[p] = 1
                     counts[3] += n_hold
+                    for p in range(P):
+                        if crack[p]:
+                            hold[p] = True  # (the points evaluated again: the held ones and the latched ones)
                     if _reevaluate(_flagged(hold), params_table, param_index, weight, delta2, base,
                                                      trial, traction, q, qt, codes, info, held, ST, slot, wk, F,
                                                      err) != STATUS_OK:

@@ -157,6 +157,15 @@ class SolveStats:
     #: and the seconds they took
     joint_space_flexibility_columns: int = 0
     joint_space_flexibility_s: float = 0.0
+    #: joint-space step attempts solved by the compiled kernel (masonrydam.solvers.joint_space.step_kernel) and by
+    #: the Python loop (flexibility columns computed as needed, another factorization); points held sticking
+    #: because their state kept flipping, bonds latched broken at points flipping across the cohesion jump, and
+    #: releases of held points after which Newton started a fresh budget
+    joint_space_compiled_steps: int = 0
+    joint_space_python_steps: int = 0
+    joint_space_holds: int = 0
+    joint_space_bond_latches: int = 0
+    joint_space_fresh_budgets: int = 0
     #: Newton corrections of the AMG general path solved with a hierarchy set up for an earlier tangent, and the
     #: Krylov iterations of all its corrections
     preconditioner_reuses: int = 0
@@ -560,6 +569,8 @@ class StaticSolver:
         r0_norm = float(np.linalg.norm(R))
         ref = force_scale(float(np.linalg.norm(f_ext[free])), float(np.linalg.norm(f_int[free])), r0_norm)
         cols0, secs0 = js.columns.computed, js.columns.seconds
+        counted = ("compiled_steps", "python_steps", "hold_events", "bond_latches", "fresh_budgets")
+        before = [getattr(js, name) for name in counted]
         try:
             u_js, its, converged, _ = js.solve_step(u, R, JOINT_SPACE_FORCE_FRACTION * self.s.force_tolerance * ref,
                                                     MAX_INITIAL_STIFFNESS_ITERATIONS)
@@ -567,6 +578,10 @@ class StaticSolver:
             u_js, its, converged = None, 0, False
         self.stats.joint_space_flexibility_columns += js.columns.computed - cols0
         self.stats.joint_space_flexibility_s += js.columns.seconds - secs0
+        for name, stat, n0 in zip(counted, ("joint_space_compiled_steps", "joint_space_python_steps",
+                                            "joint_space_holds", "joint_space_bond_latches",
+                                            "joint_space_fresh_budgets"), before):
+            setattr(self.stats, stat, getattr(self.stats, stat) + getattr(js, name) - n0)
         self.stats.joint_space_iterations += its
         self._status(f"{its} joint-space iterations" + ("" if converged else ", not converged"))
         if u_js is None or not converged:

@@ -3,6 +3,7 @@ downstream under displacement control until lifts slide; the cost of a static Ne
 the joint unknowns against one substitution of the all-stick matrix.
 
     python benchmarks/bench_koyna_static_push.py [--push 0.05] [--steps 40] [--element-size 1.45]
+                                                 [--kernel compiled|python]
 
 The scene is ``examples/koyna_el_centro.toml`` (the Koyna section, reference problem 5) with its
 dynamic stage replaced by a static stage that moves the ``crest`` nodes by ``--push`` m in x. Runs
@@ -79,10 +80,19 @@ def main():
     ap.add_argument("--push", type=float, default=0.05, help="crest displacement (m)")
     ap.add_argument("--steps", type=int, default=40)
     ap.add_argument("--element-size", type=float, default=1.45)
+    ap.add_argument("--kernel", choices=["compiled", "python"], default="compiled",
+                    help="the joint-space steps in the compiled kernel or in the Python loop")
     args = ap.parse_args()
     import masonrydam
 
     print(f"# Koyna static push ({cpu_model()}, 1 thread): crest moved {args.push} m in {args.steps} steps")
+    ap_kernel = args.kernel
+    from masonrydam.solvers.joint_space import condensation as js_module
+
+    # the compiled joint-space step ("always": compiled here if no run has, as a dynamic stage would) or the Python
+    # loop ("never"); a run's own default, "cached", takes the kernel where it needs no compiling
+    js_module.STATIC_COMPILED_STEP = "always" if ap_kernel == "compiled" else "never"
+    print(f"# the static joint-space steps in the {ap_kernel} code")
     masonrydam.run(scene(0.001, 2, 6.0, "auto"))  # JIT and numba cache outside the timings
     # the joint-space systems' set-ups (one per stage) and solves, timed here: the result's joint_space_setup_s
     # counts the set-ups of the static solver's own stats

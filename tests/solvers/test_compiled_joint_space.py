@@ -142,6 +142,7 @@ def test_compiled_static_step_gives_the_python_loops_run_bit_for_bit(case, monke
     that flip across the cohesion jump and a fresh Newton budget after a release of held points: the kernel
     must do both as the Python loop does (same datasets, same counts of holds, latches and fresh budgets)."""
     make, exercised = STATIC_CASES[case]
+    monkeypatch.setattr(js_module, "STATIC_COMPILED_STEP", "always")
     compiled = _run(make(), True, monkeypatch)
     python = _run(make(), False, monkeypatch)
     a, b = compiled.attrs, python.attrs
@@ -156,6 +157,30 @@ def test_compiled_static_step_gives_the_python_loops_run_bit_for_bit(case, monke
         if key in skip or key.endswith("_s") or "time" in key:
             continue
         assert value == b[key] if not isinstance(value, np.ndarray) else np.array_equal(value, b[key]), key
+
+
+def test_static_stages_take_the_kernel_only_where_it_is_compiled_already(monkeypatch):
+    """With STATIC_COMPILED_STEP = "cached" a static stage does not compile the kernel (seconds of a static-only
+    scene's first run): where it is not compiled yet the static steps take the Python loop and a dynamic stage
+    still takes the kernel; once it is, the static steps take it too."""
+    from masonrydam.solvers.joint_space import step_kernel
+
+    monkeypatch.setattr(js_module, "STATIC_COMPILED_STEP", "cached")
+    monkeypatch.setattr(step_kernel, "compiled_already", lambda: False)
+    ds = _run(_sliding(2e-3), True, monkeypatch)
+    assert ds.attrs["joint_space_compiled_steps"] == 0 and ds.attrs["joint_space_python_steps"] > 0
+    assert ds.attrs["dynamic_joint_space_compiled_steps"] > 0
+    monkeypatch.setattr(step_kernel, "compiled_already", lambda: True)
+    ds = _run(_sliding(2e-3), True, monkeypatch)
+    assert ds.attrs["joint_space_compiled_steps"] > 0 and ds.attrs["joint_space_python_steps"] == 0
+
+
+def test_compiled_already_answers_from_this_process():
+    """After a call (the tests above compile or load it) the kernel counts as compiled: no numba internals asked."""
+    from masonrydam.solvers.joint_space import step_kernel
+
+    masonrydam.run(_sliding(2e-3))
+    assert step_kernel.joint_space_step.signatures and step_kernel.compiled_already()
 
 
 def test_rocking_block_holds_points_in_the_compiled_step(monkeypatch):

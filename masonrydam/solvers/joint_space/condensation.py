@@ -87,6 +87,12 @@ SINGULAR_PIVOT = 1e-14
 #: column of the flexibility stored, an ``L D L^T`` reference factorization); False: always the Python loop of
 #: :meth:`JointSpace._solve_step` (the reference the kernel is tested against)
 COMPILED_STEP = True
+#: which static joint spaces take the compiled kernel: "cached" those of a run in which it needs no compiling
+#: (:func:`.step_kernel.compiled_already`: a dynamic stage compiled it, now or in an earlier run), "always" every
+#: one, "never" none (the Python loop, which can be stopped between its iterations). Why not always: a static-only scene would compile it on its first run, 8 s of the default scene's first
+#: run on the 2-core AMD EPYC (27.7 -> 36.0 s), for a saving of about 1 ms a joint-space iteration (0.1-0.15 s of
+#: its warm runs, docs/performance.md)
+STATIC_COMPILED_STEP = "cached"
 
 
 def capacitance_lu(ST, slot, rows, qt):
@@ -412,7 +418,9 @@ class JointSpace:
         #: flexibility stored and an ``L D L^T`` reference factorization. A joint space never mixes the two codes,
         #: so the Python loop's LU key (``_lu_key``) is not kept by the compiled one
         self.compiled = (COMPILED_STEP and step_kernel.AVAILABLE and not self.columns.lazy
-                         and self.law is not None and getattr(self.fact, "factor_arrays", None) is not None)
+                         and self.law is not None and getattr(self.fact, "factor_arrays", None) is not None
+                         and (not self.static or STATIC_COMPILED_STEP == "always"
+                              or (STATIC_COMPILED_STEP == "cached" and step_kernel.compiled_already())))
         if self.compiled:
             self._prepare_kernel()
 

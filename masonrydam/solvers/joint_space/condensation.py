@@ -89,9 +89,10 @@ SINGULAR_PIVOT = 1e-14
 COMPILED_STEP = True
 #: which static joint spaces take the compiled kernel: "cached" those of a run in which it needs no compiling
 #: (:func:`.step_kernel.compiled_already`: a dynamic stage compiled it, now or in an earlier run), "always" every
-#: one, "never" none (the Python loop, which can be stopped between its iterations). Why not always: a static-only scene would compile it on its first run, 8 s of the default scene's first
-#: run on the 2-core AMD EPYC (27.7 -> 36.0 s), for a saving of about 1 ms a joint-space iteration (0.1-0.15 s of
-#: its warm runs, docs/performance.md)
+#: one, "never" none (the Python loop, which can be stopped between its iterations). Why not always: a
+#: static-only scene would compile it on its first run, 8 s of the default scene's first run on the 2-core AMD
+#: EPYC (27.7 -> 36.0 s), for a saving of about 1 ms a joint-space iteration (0.1-0.15 s of its warm runs,
+#: docs/performance.md)
 STATIC_COMPILED_STEP = "cached"
 
 

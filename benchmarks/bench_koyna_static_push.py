@@ -86,13 +86,12 @@ def main():
     import masonrydam
 
     print(f"# Koyna static push ({cpu_model()}, 1 thread): crest moved {args.push} m in {args.steps} steps")
-    ap_kernel = args.kernel
     from masonrydam.solvers.joint_space import condensation as js_module
 
     # the compiled joint-space step ("always": compiled here if no run has, as a dynamic stage would) or the Python
     # loop ("never"); a run's own default, "cached", takes the kernel where it needs no compiling
-    js_module.STATIC_COMPILED_STEP = "always" if ap_kernel == "compiled" else "never"
-    print(f"# the static joint-space steps in the {ap_kernel} code")
+    js_module.STATIC_COMPILED_STEP = "always" if args.kernel == "compiled" else "never"
+    print(f"# the static joint-space steps in the {args.kernel} code")
     masonrydam.run(scene(0.001, 2, 6.0, "auto"))  # JIT and numba cache outside the timings
     # the joint-space systems' set-ups (one per stage) and solves, timed here: the result's joint_space_setup_s
     # counts the set-ups of the static solver's own stats

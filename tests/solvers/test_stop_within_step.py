@@ -77,9 +77,8 @@ def test_stop_within_a_static_step_keeps_the_converged_steps(tmp_path, monkeypat
                                                              where, count):
     """The default scene (a wall pushed at its top; its static steps are solved in joint space, by the Python loop
     here, which asks between its iterations, or with ``joint_space = "off"`` by the general Newton path) stopped
-    within a step: the run raises RunStopped naming the
-    last converged step and the abandoned one; the file keeps the steps converged before, and they are those of
-    the uninterrupted run (bit for bit on the same path; on the general path within 1e-5 of the largest
+    within a step: the run raises RunStopped naming the last converged step and the abandoned one; the file keeps
+    the steps converged before, and they are those of the uninterrupted run (bit for bit on the same path; on the general path within 1e-5 of the largest
     displacement: the two paths solve the same frictional steps to their tolerances, docs/performance.md)."""
     from masonrydam.solvers.joint_space import condensation
 

@@ -54,19 +54,6 @@ except (ImportError, AttributeError, TypeError):  # pragma: no cover - depends o
 STEP_CONVERGED = 0
 #: the iteration limits were reached: ``u`` holds the last iterate (the caller goes on from it)
 STEP_NOT_CONVERGED = 1
-def compiled_already() -> bool:
-    """Whether :func:`joint_space_step` needs no compiling: compiled or loaded in this process, or in numba's cache on
-    disk for the source as it is (its index holds an entry). Asked before a static stage takes the kernel (see
-    :data:`~.condensation.STATIC_COMPILED_STEP`). The cache is read through numba's internal ``_cache`` object:
-    where a numba release changes it, the answer is False (the Python loop, the same results)."""
-    if joint_space_step.signatures:
-        return True
-    try:
-        return bool(joint_space_step._cache._cache_file._load_index())
-    except Exception:  # noqa: BLE001 - numba's internals: any failure means "not known to be cached"
-        return False
-
-
 #: the predictor's substitution gave NaN or infinity (a singular effective matrix)
 STEP_FACTOR_NAN = 2
 #: the joint law or the condensed residual gave NaN (the point in ``info[0]``, -1 for the residual)
@@ -546,6 +533,20 @@ def joint_space_step(Lp, Li, Lx, d, perm, Bp, Bi, Bx, BTp, BTi, BTx, free, XT, r
             for i in range(n_eq):
                 u_out[free[i]] -= x[i]
     return (STEP_CONVERGED if converged else STEP_NOT_CONVERGED), J.T, piv, ref_rows, ref_qt, has_ref
+
+
+def compiled_already() -> bool:
+    """Whether :func:`joint_space_step` needs no compiling: compiled or loaded in this process, or in numba's cache on
+    disk for the source as it is (its index holds an entry). Asked before a static stage takes the kernel (see
+    :data:`~.condensation.STATIC_COMPILED_STEP`). The cache is read through numba's internal ``_cache`` object:
+    where a numba release changes it, the answer is False (the Python loop, the same results)."""
+    if joint_space_step.signatures:
+        return True
+    try:
+        return bool(joint_space_step._cache._cache_file._load_index())
+    except Exception:  # noqa: BLE001 - numba's internals: any failure means "not known to be cached"
+        return False
+
 
 
 @numba.njit(cache=True)

@@ -141,6 +141,11 @@ AMG_REUSE_SLOWDOWN = 4.0
 #: first, then the cracks' opening, then the joints' dissipation
 ARC_MODES = ("cylindrical", "opening", "dissipation")
 
+#: (JointSpace counter, SolveStats field) pairs: what each joint-space step adds to the static solver's statistics
+JOINT_SPACE_COUNTS = (("compiled_steps", "joint_space_compiled_steps"), ("python_steps", "joint_space_python_steps"),
+                      ("hold_events", "joint_space_holds"), ("bond_latches", "joint_space_bond_latches"),
+                      ("fresh_budgets", "joint_space_fresh_budgets"))
+
 
 @dataclass
 class SolveStats:
@@ -569,8 +574,7 @@ class StaticSolver:
         r0_norm = float(np.linalg.norm(R))
         ref = force_scale(float(np.linalg.norm(f_ext[free])), float(np.linalg.norm(f_int[free])), r0_norm)
         cols0, secs0 = js.columns.computed, js.columns.seconds
-        counted = ("compiled_steps", "python_steps", "hold_events", "bond_latches", "fresh_budgets")
-        before = [getattr(js, name) for name in counted]
+        before = [getattr(js, name) for name, _ in JOINT_SPACE_COUNTS]
         try:
             u_js, its, converged, _ = js.solve_step(u, R, JOINT_SPACE_FORCE_FRACTION * self.s.force_tolerance * ref,
                                                     MAX_INITIAL_STIFFNESS_ITERATIONS)
@@ -578,9 +582,7 @@ class StaticSolver:
             u_js, its, converged = None, 0, False
         self.stats.joint_space_flexibility_columns += js.columns.computed - cols0
         self.stats.joint_space_flexibility_s += js.columns.seconds - secs0
-        for name, stat, n0 in zip(counted, ("joint_space_compiled_steps", "joint_space_python_steps",
-                                            "joint_space_holds", "joint_space_bond_latches",
-                                            "joint_space_fresh_budgets"), before):
+        for (name, stat), n0 in zip(JOINT_SPACE_COUNTS, before):
             setattr(self.stats, stat, getattr(self.stats, stat) + getattr(js, name) - n0)
         self.stats.joint_space_iterations += its
         self._status(f"{its} joint-space iterations" + ("" if converged else ", not converged"))

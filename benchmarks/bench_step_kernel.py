@@ -1,5 +1,5 @@
-"""What a dynamic step costs against its arithmetic: the compiled joint-space step (masonrydam.solvers.joint_space.
-step_kernel) against the Python loop it replaces, on the Koyna section of examples/koyna_el_centro.toml (Chopra &
+"""What a dynamic step costs against its arithmetic: the compiled step loop (masonrydam.solvers.dynamic.compiled_loop),
+the compiled joint-space step alone (masonrydam.solvers.joint_space.step_kernel) and the Python loop they replace, on the Koyna section of examples/koyna_el_centro.toml (Chopra &
 Chakrabarti 1973 profile, Mohr-Coulomb lift and base joints, El Centro 1940 at 0.5 g).
 
     python benchmarks/bench_step_kernel.py [--cases coarse_fixed coarse_auto example] [--example-duration 4]
@@ -8,9 +8,10 @@ Chakrabarti 1973 profile, Mohr-Coulomb lift and base joints, El Centro 1940 at 0
 Cases: ``coarse_fixed`` the section at element_size 12 m (358 DOF, 88 joint points), trapezoidal rule at dt
 2.5 ms, 2 000 steps; ``coarse_auto`` the same with dt = "auto" (dt_max 10 ms) over 1.5 s; ``example`` the
 example itself (element_size 1.45 m, about 7 500 DOF, 588 joint points, dt = "auto") over its first
-``--example-duration`` s of record. Each case runs with the compiled step and with the Python loop, alternately
-``--repeats`` times (the machine's timing noise is about 10 %), and prints per path: ms a step of the dynamic
-stage, the joint-space solve's share, and whether the two datasets are equal bit for bit.
+``--example-duration`` s of record. Each case runs on the three paths in turn, ``--repeats`` times (the machine's
+timing noise is about 10 %), and prints per path: ms a step of the dynamic stage, the joint-space solve's share
+(not separable inside the loop) and whether the datasets are equal bit for bit. dt = "auto" stages do not take
+the loop yet: there its figures are those of the compiled joint-space step.
 
 Then, for the coarse section, the floor the issue measures against (issue 35, target 1): one substitution with
 the all-stick factor plus one pass of the joint law over every point, timed here, and the step's cost as a
@@ -100,6 +101,20 @@ class Recorder:
 
         condensation.JointSpace.solve_step = timed
 
+        from masonrydam.solvers.dynamic import compiled_loop
+
+        self.loop_seconds = 0.0
+        loop_run = compiled_loop.CompiledLoop.run
+
+        def timed_loop(loop, *args, **kwargs):
+            t0 = time.perf_counter()
+            try:
+                return loop_run(loop, *args, **kwargs)
+            finally:
+                rec.loop_seconds += time.perf_counter() - t0
+
+        compiled_loop.CompiledLoop.run = timed_loop
+
         def counted(original, attribute):
             def wrapper(*args, **kwargs):
                 if rec._in_step:
@@ -113,20 +128,28 @@ class Recorder:
                                                              "partial_passes")
 
     def reset(self):
-        self.seconds, self.calls = 0.0, 0
+        self.seconds, self.calls, self.loop_seconds = 0.0, 0, 0.0
         self.substitutions = self.law_passes = self.partial_passes = 0
 
 
-def run(case, compiled, rec, example_duration):
-    import masonrydam
+#: the paths compared: the compiled step loop (many steps a call), the compiled joint-space step alone (one call a
+#: step, the rest of the step in Python), and the Python loop
+PATHS = ("loop", "kernel", "python")
 
-    rec.module.COMPILED_STEP = compiled
+
+def run(case, path, rec, example_duration):
+    import masonrydam
+    from masonrydam.solvers.dynamic import compiled_loop
+
+    rec.module.COMPILED_STEP = path != "python"
+    compiled_loop.COMPILED_LOOP = path == "loop"
     rec.reset()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         ds = masonrydam.run(scene(case, example_duration))
     steps = int(ds.attrs["dynamic_steps"])
     return ds, {"ms_per_step": 1e3 * float(ds.attrs["dynamic_wall_time_s"]) / steps,
+                "loop_steps": int(ds.attrs["dynamic_compiled_loop_steps"]), "loop_s": rec.loop_seconds,
                 "js_ms_per_step": 1e3 * rec.seconds / steps, "steps": steps, "attempts": rec.calls,
                 "wall_s": float(ds.attrs["dynamic_wall_time_s"]), "substitutions": rec.substitutions,
                 "law_passes": rec.law_passes, "partial_passes": rec.partial_passes}
@@ -172,41 +195,49 @@ def main():
     ap.add_argument("--repeats", type=int, default=2)
     args = ap.parse_args()
     rec = Recorder()
-    print(f"# dynamic steps, compiled joint-space step against the Python loop ({cpu_model()}, 1 thread)")
-    run("coarse_fixed", True, rec, 0.1)  # numba's caches loaded (or compiled) outside the timings
+    print(f"# dynamic steps: the compiled step loop, the compiled joint-space step alone and the Python loop "
+          f"({cpu_model()}, 1 thread)")
+    run("coarse_fixed", "loop", rec, 0.1)  # numba's caches loaded (or compiled) outside the timings
     for case in args.cases:
-        figures = {True: [], False: []}
+        figures = {path: [] for path in PATHS}
         datasets = {}
         for _ in range(args.repeats):
-            for compiled in (True, False):
-                ds, f = run(case, compiled, rec, args.example_duration)
-                figures[compiled].append(f)
-                datasets[compiled] = ds
-        equal = same(datasets[True], datasets[False])
-        print(f"\n[{case}] {figures[True][0]['steps']} steps, {figures[True][0]['attempts']} joint-space attempts; "
-              f"datasets {'equal bit for bit' if equal else 'DIFFER'}")
-        for compiled in (True, False):
-            ms = sorted(f["ms_per_step"] for f in figures[compiled])
-            js = sorted(f["js_ms_per_step"] for f in figures[compiled])
-            print(f"  {'compiled' if compiled else 'python  '}: {ms[0]:.3f}-{ms[-1]:.3f} ms/step, of which the "
-                  f"joint-space solve {js[0]:.3f}-{js[-1]:.3f} ms")
+            for path in PATHS:
+                ds, f = run(case, path, rec, args.example_duration)
+                figures[path].append(f)
+                datasets[path] = ds
+        equal = all(same(datasets[path], datasets["python"]) for path in PATHS)
+        print(f"\n[{case}] {figures['python'][0]['steps']} steps, {figures['python'][0]['attempts']} joint-space "
+              f"attempts; {figures['loop'][0]['loop_steps']} steps in the compiled loop; datasets "
+              f"{'equal bit for bit' if equal else 'DIFFER'}")
+        for path in PATHS:
+            ms = sorted(f["ms_per_step"] for f in figures[path])
+            js = sorted(f["js_ms_per_step"] for f in figures[path])
+            print(f"  {path:7s}: {ms[0]:.3f}-{ms[-1]:.3f} ms/step"
+                  + (f", of which the joint-space solve {js[0]:.3f}-{js[-1]:.3f} ms" if path != "loop" else ""))
         if rec.last is None:
             continue
         sub, law = floor_us(rec.last, 2000 if case.startswith("coarse") else 200)
         if case.startswith("coarse"):
-            step = 1e3 * min(f["ms_per_step"] for f in figures[True])
-            solve = 1e3 * min(f["js_ms_per_step"] for f in figures[True])
+            step = 1e3 * min(f["ms_per_step"] for f in figures["loop"])
+            step_kernel = 1e3 * min(f["ms_per_step"] for f in figures["kernel"])
+            solve = 1e3 * min(f["js_ms_per_step"] for f in figures["kernel"])
             base = sub + law
+            loop_steps = figures["loop"][0]["loop_steps"]
+            own = 1e6 * min(f["loop_s"] for f in figures["loop"]) / max(loop_steps, 1)
             print(f"  floor: one substitution {sub:.1f} us + one joint-law pass {law:.1f} us = {base:.1f} us; "
-                  f"a compiled step costs {step / base:.0f}x it (target 10x), its joint-space solve alone "
-                  f"{solve / base:.0f}x")
+                  f"a step of the compiled loop costs {step / base:.0f}x it (target 10x), with the joint-space "
+                  f"step alone compiled {step_kernel / base:.0f}x, the joint-space solve itself {solve / base:.0f}x"
+                  + (f"; the {loop_steps} steps the loop took themselves {own:.0f} us each = {own / base:.1f}x (its "
+                     "calls with their Python, records excluded; the rest is the steps handed back and halved)"
+                     if loop_steps else ""))
         else:
             # issue 35, target 2: the run against the substitutions and law passes its steps made (counted in
             # the Python loop, which does the same arithmetic), each at its cost timed here
-            counts = figures[False][0]
+            counts = figures["python"][0]
             floor_s = 1e-6 * (counts["substitutions"] * sub + counts["law_passes"] * law)
-            wall = min(f["wall_s"] for f in figures[True])
-            js = min(f["js_ms_per_step"] for f in figures[True]) * 1e-3 * counts["steps"]
+            wall = min(f["wall_s"] for f in figures["loop"])
+            js = min(f["js_ms_per_step"] for f in figures["kernel"]) * 1e-3 * counts["steps"]
             print(f"  floor: {counts['substitutions']} substitutions x {sub:.0f} us + {counts['law_passes']} full "
                   f"joint-law passes x {law:.1f} us = {floor_s:.2f} s ({counts['partial_passes']} passes over a few "
                   f"points not counted); the compiled run's dynamic stage took {wall:.2f} s = {wall / floor_s:.2f}x "

@@ -72,6 +72,9 @@ def stats_attrs(solver, t_start, dyn_solvers=()):
             "dynamic_joint_space_store_full": sum(x.joint_space_store_full for x in d),
             "dynamic_joint_space_compiled_steps": sum(x.joint_space_compiled_steps for x in d),
             "dynamic_joint_space_python_steps": sum(x.joint_space_python_steps for x in d),
+            "dynamic_compiled_loop_steps": sum(x.compiled_loop_steps for x in d),
+            "dynamic_compiled_loop_handbacks": sum(x.compiled_loop_handbacks for x in d),
+            "dynamic_compiled_loop_off": "; ".join(sorted({x.compiled_loop_off for x in d if x.compiled_loop_off})),
             "dynamic_wall_time_s": round(wall, 4),
             "dynamic_output_time_s": round(sum(x.output_time_s for x in d), 4),
             "dynamic_ms_per_step": round(1e3 * wall / max(steps, 1), 4),
@@ -120,6 +123,19 @@ def _kernel_note(compiled: int, python: int) -> str:
     if not compiled:
         return "; every step in the Python loop"
     return f"; {compiled} steps compiled (one call a step), {python} in the Python loop"
+
+
+def _loop_note(compiled: int, handed_back: int, steps: int, off: str) -> str:
+    """Which path took the dynamic steps: the compiled step loop (masonrydam.solvers.dynamic.compiled_loop) or the
+    Python step, and why not the compiled loop where it was off."""
+    if not compiled:
+        return f"every step in Python ({off})" if off else "every step in Python"
+    note = f"{compiled} of {steps} steps in the compiled loop"
+    if handed_back:
+        note += f", {handed_back} handed back to the Python step (they left its common path)"
+    if off:
+        note += f"; off in stages with {off}"
+    return note
 
 
 def _columns_note(columns, seconds, store_full=0):
@@ -217,6 +233,9 @@ def _dynamic_lines(dyn_solvers, stats, model) -> list[str]:
                      f"sub-step splits, {stats['dynamic_factorizations']} factorization(s) "
                      f"[all-stick matrix: {stats['dynamic_reference_solver'] or '-'}], "
                      f"{stats['dynamic_low_rank_solves']} low-rank solves, {stats['dynamic_ms_per_step']:.3g} ms/step")
+        lines.append("step loop  : " + _loop_note(stats["dynamic_compiled_loop_steps"],
+                                                  stats["dynamic_compiled_loop_handbacks"], stats["dynamic_steps"],
+                                                  stats["dynamic_compiled_loop_off"]))
         if stats["dynamic_joint_space_size"]:
             lines.append(f"joint space: {stats['dynamic_joint_space_size']} joint unknowns condensed (set-up "
                          f"{stats['dynamic_joint_space_setup_s']:.3g} s); {stats['dynamic_joint_space_steps']} steps "

@@ -110,10 +110,14 @@ def test_stop_within_a_static_step_keeps_the_converged_steps(tmp_path, monkeypat
 def test_stop_within_a_dynamic_joint_space_attempt(tmp_path, monkeypatch):
     """The sliding block with its dynamic steps solved in joint space, stopped at the start of a joint-space attempt
     (the compiled step, masonrydam.solvers.joint_space.step_kernel, is one call of microseconds: the stop is asked
-    for before it): the attempt is abandoned and the steps before it kept, equal to an uninterrupted run's."""
+    for before it; the compiled step loop, which asks between its calls, is switched off): the attempt is abandoned
+    and the steps before it kept, equal to an uninterrupted run's."""
+    from masonrydam.solvers.dynamic import compiled_loop
+
     scene = sliding_block(duration=0.4, dt=0.002, integrator="hht")
     requested = _stop_at(30, "solve_step")
     monkeypatch.setattr(StopRequests, "requested", requested)
+    monkeypatch.setattr(compiled_loop, "COMPILED_LOOP", False)  # (the loop's steps are asked between its calls)
     out = tmp_path / "out.nc"
     with pytest.raises(RunStopped) as err:
         masonrydam.run(scene, output=out)
@@ -128,3 +132,32 @@ def test_stop_within_a_dynamic_joint_space_attempt(tmp_path, monkeypatch):
     np.testing.assert_allclose(ds.displacement.values, ref.displacement.values, rtol=0,
                                atol=1e-10 * np.abs(ref.displacement.values).max())
     np.testing.assert_array_equal(ds.joint_state.values, ref.joint_state.values)
+
+
+def test_stop_between_calls_of_the_compiled_step_loop(tmp_path, monkeypatch):
+    """The sliding block's steps in the compiled step loop (masonrydam.solvers.dynamic.compiled_loop), a stop asked
+    for at the 5th record (the loop asks between its calls, that is at every record): the run stops there with the
+    steps taken so far kept, equal to an uninterrupted run's."""
+    scene = sliding_block(duration=0.4, dt=0.002, integrator="hht", output={"stride": 10})
+    asked = {"n": 0}
+
+    def requested(self):
+        if sys._getframe(1).f_code.co_name == "_maybe_emit":
+            asked["n"] += 1
+            return "interrupted" if asked["n"] >= 5 else None
+        return None
+
+    monkeypatch.setattr(StopRequests, "requested", requested)
+    out = tmp_path / "out.nc"
+    with pytest.raises(RunStopped) as err:
+        masonrydam.run(scene, output=out)
+    monkeypatch.undo()
+    assert "at step 50 of 200" in str(err.value)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", IncompleteResultWarning)
+        ds = open_result(out)
+    ref = masonrydam.run(sliding_block(duration=0.1, dt=0.002, integrator="hht", output={"stride": 10}))
+    assert ref.attrs["dynamic_compiled_loop_steps"] > 0
+    assert ds.sizes["step"] == ref.sizes["step"]
+    np.testing.assert_array_equal(ds.time.values, ref.time.values)
+    np.testing.assert_array_equal(ds.displacement.values, ref.displacement.values)

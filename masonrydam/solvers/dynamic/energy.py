@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .kernels import joint_step_energy, joint_stored_energy, step_works
+from .kernels import dot_product, joint_step_energy, joint_stored_energy, step_works
 from .schemes import scheme_named
 from .stage import DynamicStats
 
@@ -98,7 +98,7 @@ class EnergyBalance:
         blocks, plus the exact St. Venant-Kirchhoff energy of large-kinematics groups."""
         if self.model.large:
             return self.model.continuum_energy(u)
-        return 0.5 * float(u @ Kc_u)
+        return 0.5 * dot_product(u, Kc_u)
 
     def _weights(self):
         """Tributary areas (m^2) of the joint points per joint set, (ne, nip) each."""

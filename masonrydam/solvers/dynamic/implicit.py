@@ -29,7 +29,7 @@ from ..joint_space import (MAX_INITIAL_STIFFNESS_ITERATIONS, SPLIT_INITIAL_STIFF
 from ..linear.direct import SingularMatrix
 from ..newton import ConvergenceTest, CycleDamping, backtracking_line_search, force_scale, newton_iterations
 from .energy import energy_growth
-from .kernels import newmark_kinematics, newmark_residual, step_constant, step_loads
+from .kernels import euclidean_norm, free_norm, newmark_kinematics, newmark_residual, step_constant, step_loads
 from .settings import OPEN_TANGENT_DYNAMIC
 from .stage import StepState
 
@@ -133,14 +133,14 @@ class Iterate:
     def internal_force_norm(self, free) -> float:
         """The norm of the internal forces on the free DOFs ``free`` (N), computed once."""
         if self._f_norm is None:
-            self._f_norm = float(np.linalg.norm(self.f_int[free]))
+            self._f_norm = free_norm(self.f_int, free)
         return self._f_norm
 
     @property
     def residual_norm(self) -> float:
         """``||R||`` (N), computed once (an iterate is not changed after its evaluation)."""
         if self._r_norm is None:
-            self._r_norm = float(np.linalg.norm(self.R))
+            self._r_norm = euclidean_norm(self.R)
         return self._r_norm
 
 
@@ -195,7 +195,7 @@ class ImplicitStep:
         self.const = const
         self.inertia_damping = eq.inertia_damping(h)
         self.nonlinear = m.nonlinear
-        self.p1_norm = float(np.linalg.norm(p1))
+        self.p1_norm = euclidean_norm(p1)
         #: every joint point has stuck at the iterates so far (the step started so): forces only, and the
         #: elastic tangent while they all still stick
         self.sticking_so_far = st.Kdata is None
@@ -229,7 +229,7 @@ class ImplicitStep:
             Cv = eq.zeros_free
         if newmark_residual(Ma, self.w_m, Cv, f_int, free, self.const, R) != 0:
             raise NumericalError("NaN or infinity in the dynamic residual")
-        return R, a1, v1, Cv, float(np.linalg.norm(Ma))
+        return R, a1, v1, Cv, euclidean_norm(Ma)
 
     def evaluate(self, u):
         """(f_int, tangent values or None for the all-stick tangent) at ``u``."""
@@ -256,7 +256,7 @@ class ImplicitStep:
         return Iterate(u, f_int, Kdata, R, a1, v1, Cv, ma_norm)
 
     # -- the attempt ----------------------------------------------------------------------------------
-    def solve(self, can_split=True, error_check=None, split_joint_space=True):
+    def solve(self, can_split=True, error_check=None, split_joint_space=True, joint_space_result=None):
         """Returns (ok, new_state, why). ``can_split``: the caller can still halve the step, so a joint-space
         iteration that does not converge and a step that gains energy are refused (ok False) rather than
         finished in the general path or accepted. ``error_check(new, st, h)``: dt = "auto"'s local error test
@@ -264,7 +264,8 @@ class ImplicitStep:
         iteration that does not converge goes on in the general path at this step size even where the step
         could be halved (dt = "auto": the error decides the step size; halving for the joint-space iteration's
         sake took 2 484 of 2 801 refusals on the Koyna example at tolerance 1e-5 and held the steps small
-        after them)."""
+        after them). ``joint_space_result``: called in place of the joint space's ``solve_step`` (the result of a
+        joint-space call the compiled loop made for this step, :mod:`.compiled_loop`)."""
         m, st = self.model, self.st
         u, f_int, Kdata = st.u.copy(), st.f_int, st.Kdata
         if m.rate_dependent:  # viscous blocks relax over the step even where u does not move: their force
@@ -274,7 +275,7 @@ class ImplicitStep:
             r0 = current.residual_norm
             js = self.joint_spaces.for_step(self.h)
             if js is not None:
-                current, why = self._joint_space_start(js, current, can_split, split_joint_space)
+                current, why = self._joint_space_start(js, current, can_split, split_joint_space, joint_space_result)
                 if current is None:
                     return False, None, why
             current, why = self._newton(current, r0)
@@ -289,14 +290,14 @@ class ImplicitStep:
                 m.set_open_tangent(OPEN_TANGENT_DYNAMIC)
         return self._finish(current, can_split, error_check)
 
-    def _joint_space_start(self, js, current, can_split, split_joint_space):
+    def _joint_space_start(self, js, current, can_split, split_joint_space, joint_space_result=None):
         """The step condensed on the joints (:mod:`masonrydam.solvers.joint_space`): its solution from one or
         two substitutions, or its last iterate, as the iterate the Newton iterations go on from (they accept
         it at once when the full residual is within tolerance); (None, why) where the step is to be halved."""
         s, m = self.s, self.model
         ref = self.force_scale(current)
         try:
-            u_js, its, converged, why = js.solve_step(
+            u_js, its, converged, why = (joint_space_result or js.solve_step)(
                 current.u, current.R, JOINT_SPACE_FORCE_FRACTION * s.force_tolerance * ref,
                 SPLIT_INITIAL_STIFFNESS_ITERATIONS if can_split and split_joint_space
                 else MAX_INITIAL_STIFFNESS_ITERATIONS)

@@ -6,10 +6,43 @@ The small dense LU and the low-rank (Woodbury) update the dynamic solver also us
 """
 from __future__ import annotations
 
+import math
+
 import numba
 import numpy as np
 
 from ...errors import STATUS_NAN, STATUS_OK
+
+
+@numba.njit(cache=True)
+def euclidean_norm(x) -> float:
+    """``||x||`` (x (n,) float64), summed in index order. numpy's ``np.linalg.norm`` of a vector is BLAS's
+    ``ddot``, whose order depends on the BLAS build (numba's ``np.dot`` calls scipy's BLAS, numpy calls its own,
+    and the two differ in the last bits); the implicit step's Python loop and its compiled loop
+    (:mod:`.step_loop`) both call this one, so their convergence decisions are the same bit for bit."""
+    acc = 0.0
+    for i in range(x.shape[0]):
+        acc += x[i] * x[i]
+    return math.sqrt(acc)
+
+
+@numba.njit(cache=True)
+def free_norm(x, free) -> float:
+    """``||x[free]||`` (x (n_dof,), ``free`` (n,) int), as :func:`euclidean_norm` without the gathered copy."""
+    acc = 0.0
+    for i in range(free.shape[0]):
+        v = x[free[i]]
+        acc += v * v
+    return math.sqrt(acc)
+
+
+@numba.njit(cache=True)
+def dot_product(x, y) -> float:
+    """``x . y`` (both (n,) float64) summed in index order (see :func:`euclidean_norm` for why not BLAS)."""
+    acc = 0.0
+    for i in range(x.shape[0]):
+        acc += x[i] * y[i]
+    return acc
 
 
 @numba.njit(cache=True)
@@ -216,15 +249,13 @@ def joint_step_energy(delta0, traction0, state0, delta1, traction1, state1, weig
 
 
 @numba.njit(cache=True)
-def joint_stored_energy(traction, compliance_n, compliance_s):
-    """Elastic energy stored in one joint set (J): ``sum (cn t_n^2 + cs |tau|^2)`` over its points, with
-    ``traction`` (n_elem, nip, dim) Pa (shear components first, normal last) and the compliances
-    ``compliance_n = w / (2 kn)``, ``compliance_s = w / (2 ks)`` (n_elem, nip) m^3/N (w the point's
-    area). An open point has zero traction and stores nothing. One pass instead of a handful of
-    numpy reductions per set and step."""
-    ne, nip, dim = traction.shape
+def joint_stored_energy_range(traction, compliance_n, compliance_s, first, end):
+    """:func:`joint_stored_energy` over the elements ``first`` .. ``end - 1`` of the arrays: one joint set of
+    several laid one after the other (:mod:`.loop_kernel`), summed as the set's own call sums it."""
+    dim = traction.shape[2]
+    nip = traction.shape[1]
     e = 0.0
-    for i in range(ne):
+    for i in range(first, end):
         for g in range(nip):
             tn = traction[i, g, dim - 1]
             ts2 = 0.0
@@ -232,3 +263,13 @@ def joint_stored_energy(traction, compliance_n, compliance_s):
                 ts2 += traction[i, g, c] * traction[i, g, c]
             e += compliance_n[i, g] * tn * tn + compliance_s[i, g] * ts2
     return e
+
+
+@numba.njit(cache=True)
+def joint_stored_energy(traction, compliance_n, compliance_s):
+    """Elastic energy stored in one joint set (J): ``sum (cn t_n^2 + cs |tau|^2)`` over its points, with
+    ``traction`` (n_elem, nip, dim) Pa (shear components first, normal last) and the compliances
+    ``compliance_n = w / (2 kn)``, ``compliance_s = w / (2 ks)`` (n_elem, nip) m^3/N (w the point's
+    area). An open point has zero traction and stores nothing. One pass instead of a handful of
+    numpy reductions per set and step."""
+    return joint_stored_energy_range(traction, compliance_n, compliance_s, 0, traction.shape[0])

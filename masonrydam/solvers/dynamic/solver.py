@@ -22,6 +22,7 @@ from ...errors import RunStopped, SceneError, StepInterrupted
 from ...materials.joint_laws import joint_laws
 from ..linear.direct import Factorization, resolve_backend
 from ..newton import within_step_stop
+from .compiled_loop import CompiledLoop, compiled_loop_off
 from .effective import MAX_CACHED, EffectiveSolver
 from .energy import EnergyBalance
 from .equations import StageEquations
@@ -140,6 +141,13 @@ class DynamicSolver:
                 self.joint_spaces.set_up(ref)
                 stepping = (AdaptiveStepping(self, s, eq, self.energy, self.stats) if s.adaptive
                             else FixedSteps(self, s, self.stats))
+                self.compiled_loop = None
+                why_not = compiled_loop_off(m, s, eq, self.joint_spaces.by_step.get(s.dt))
+                if why_not:
+                    self.stats.compiled_loop_off = why_not
+                else:
+                    self.compiled_loop = CompiledLoop(self, self.joint_spaces.by_step[s.dt],
+                                                      can_split=stepping.cutting.can_cut(0))
                 self._last_converged = (0, st)
                 try:
                     # one BLAS thread: the dense LU of the joint-space solver (LAPACK) must be bitwise
@@ -235,13 +243,16 @@ class DynamicSolver:
         return st
 
     # -- what the step control drives -----------------------------------------------------------
-    def try_step(self, st, t_end, h, can_split=True, error_check=None, split_joint_space=True):
+    def try_step(self, st, t_end, h, can_split=True, error_check=None, split_joint_space=True,
+                 joint_space_result=None):
         """One implicit step of size ``h`` from the committed state ``st`` to stage time ``t_end``: (ok,
-        new_state, why); see :meth:`~.implicit.ImplicitStep.solve`."""
+        new_state, why); see :meth:`~.implicit.ImplicitStep.solve` (``joint_space_result``: a step the compiled
+        loop handed back after its joint-space call)."""
         step = ImplicitStep(self.model, self.s, self.eq, self.effective, self.energy, self.joint_spaces, self.stats,
                             self._count_iterations, st, t_end, h,
                             stop_check=self._stop_within_step)
-        return step.solve(can_split=can_split, error_check=error_check, split_joint_space=split_joint_space)
+        return step.solve(can_split=can_split, error_check=error_check, split_joint_space=split_joint_space,
+                          joint_space_result=joint_space_result)
 
     def refuse_step(self, st):
         """Back to the committed state ``st`` after a step that failed or was refused: the joints' trial states

@@ -169,6 +169,12 @@ class DynamicStats:
     #: the Python loop (static-style latching, flexibility columns computed as needed, another factorization)
     joint_space_compiled_steps: int = 0
     joint_space_python_steps: int = 0
+    #: steps taken whole by the compiled step loop (:mod:`.compiled_loop`: loads, joint-space step, forces, energy
+    #: balance and commit in one call for many steps), steps it handed back to the Python step (they left its
+    #: common path after their joint-space call), and why a stage did not use it ("": it did, or no implicit stage)
+    compiled_loop_steps: int = 0
+    compiled_loop_handbacks: int = 0
+    compiled_loop_off: str = ""
     #: the solvers of the all-stick effective matrices: "ldlt", "pardiso" or "superlu"
     reference_solvers: set = field(default_factory=set)
     per_stage: list = field(default_factory=list)

@@ -47,7 +47,9 @@ def step_end(k: int, n_steps: int, dt: float, duration: float, tau: float) -> tu
 
 
 class FixedSteps:
-    """Steps of ``dt``, each halved where it fails, at most ``max_substeps`` times in a row."""
+    """Steps of ``dt``, each halved where it fails, at most ``max_substeps`` times in a row. Where the solver has a
+    ``compiled_loop`` (:class:`~.compiled_loop.CompiledLoop`), the steps up to the next record go through it, and a
+    step it hands back is finished here from its joint-space result."""
 
     def __init__(self, solver, settings, stats):
         self.solver, self.s, self.stats = solver, settings, stats
@@ -57,20 +59,34 @@ class FixedSteps:
         """Integrate ``stage`` from the committed state ``st``; returns the last state."""
         s = self.s
         n_steps = stage.n_steps
-        for k in range(1, n_steps + 1):
+        loop = getattr(self.solver, "compiled_loop", None)
+        k = 1
+        while k <= n_steps:
+            handed_back = None
+            if loop is not None and k < n_steps:
+                # the steps up to the next record (not the stage's last, which may be shorter) in one call
+                stride = max(1, stage.output_stride)
+                last = min(-(-k // stride) * stride, n_steps - 1)
+                st, k_done, handed_back = loop.run(st, k, last)
+                if k_done >= k:
+                    self.solver.record_step(stage, k_done, st, n_steps)
+                k = k_done + 1
+                if k_done == last:
+                    continue
             t_end, h = step_end(k, n_steps, s.dt, stage.duration, st.tau)
             if h <= 1e-9 * s.dt:
                 break
-            st = self.advance(stage, st, t_end, h, 0)
+            st = self.advance(stage, st, t_end, h, 0, handed_back)
             self.stats.steps += 1
             self.solver.record_step(stage, k, st, n_steps)
+            k += 1
         return st
 
-    def advance(self, stage, st, t_end, h, level):
+    def advance(self, stage, st, t_end, h, level, joint_space_result=None):
         """Advance the committed state ``st`` by ``h`` to stage time ``t_end`` (``level``: halvings so far),
-        halving on failure."""
+        halving on failure; ``joint_space_result``: the compiled loop's joint-space call for this step."""
         can_cut = self.cutting.can_cut(level)
-        ok, new, why = self.solver.try_step(st, t_end, h, can_split=can_cut)
+        ok, new, why = self.solver.try_step(st, t_end, h, can_split=can_cut, joint_space_result=joint_space_result)
         if ok:
             return new
         self.solver.refuse_step(st)

@@ -13,9 +13,7 @@ Theory: docs/dynamics.md, section "The joint-space step in equations" (under "Fa
 """
 from __future__ import annotations
 
-import signal
 import time
-from contextlib import contextmanager
 
 import numpy as np
 import scipy.sparse as sp
@@ -26,6 +24,7 @@ from ...materials.joint_laws import RESULT_OPEN
 from ..linear.dense_lu import STATUS_SINGULAR
 from ..linear.common import SingularMatrix
 from . import step_kernel
+from .signals import stop_signals_held
 from .kernels import (active_components, add_flexibility_product, apply_correction, capacitance_assemble,
                                   capacitance_update_solve, condensed_residual, joint_points_evaluate,
                                   joint_space_correction, joint_space_reevaluate_points, state_key,
@@ -183,27 +182,6 @@ def joint_operator(model) -> tuple[sp.csr_matrix, np.ndarray, np.ndarray, np.nda
 _NO_LU = np.zeros((2, 2), order="F")
 _NO_PIVOTS = np.zeros(0, dtype=np.int64)
 _NO_ROWS = np.zeros(0, dtype=np.int64)
-
-
-#: the signals a run's stop handler answers (masonrydam.scene.stopping): held while the compiled step runs
-_STOP_SIGNALS = {signal.SIGINT, signal.SIGTERM}
-
-
-@contextmanager
-def _stop_signals_held():
-    """SIGINT and SIGTERM held pending (POSIX ``pthread_sigmask``) for the duration, then delivered. A second stop
-    request raises KeyboardInterrupt from its handler at once; arriving while the compiled step runs, the handler
-    ran inside numba's boxing of the step's returned arrays (a callback into Python) and the run ended with a
-    SystemError traceback instead of its one-line stop. The step takes microseconds to milliseconds, so the stop
-    is not delayed noticeably. Elsewhere (no ``pthread_sigmask``) nothing is held."""
-    if not hasattr(signal, "pthread_sigmask"):
-        yield
-        return
-    previous = signal.pthread_sigmask(signal.SIG_BLOCK, _STOP_SIGNALS)
-    try:
-        yield
-    finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
 
 
 class ColumnStoreFull(Exception):
@@ -632,7 +610,7 @@ class JointSpace:
         else:
             J, piv, ref_rows, ref_qt, has_ref = _NO_LU, _NO_PIVOTS, _NO_ROWS, np.zeros((0, self.dim)), False
         u = np.empty_like(u_n)
-        with _stop_signals_held():
+        with stop_signals_held():
             status, JT, piv, ref_rows, ref_qt, has_ref = step_kernel.joint_space_step(
                 *self._kernel_args, self.params_table, self.param_index, self.weight, self.base, self.trial,
                 self.traction, self.q, self.qt, self.codes, self.info, self.held, self.ST, self.slot, self.wk,
@@ -643,6 +621,53 @@ class JointSpace:
                 FLIPS_BEFORE_LATCH if FLIPS_BEFORE_LATCH is not None else 0,
                 FRESH_BUDGET_RELEASES if self.static else 0, *self._work, u,
                 self._dq_out, self._counts, self._err_out)
+        return self._compiled_outcome(status, JT, piv, ref_rows, ref_qt, has_ref, u, n_fixed)
+
+    def kernel_arguments(self):
+        """What :func:`.step_kernel.joint_space_step` takes from this joint space for a dynamic step, for a caller
+        that calls it from compiled code (:mod:`masonrydam.solvers.dynamic.loop_kernel`): a dict of the fixed
+        arguments, the point arrays, the reference LU, the constants and the work and output arrays."""
+        if self._ref is not None:
+            J, piv, (ref_rows, ref_qt), has_ref = self.J, self.piv, self._ref, True
+        else:
+            J, piv, ref_rows, ref_qt, has_ref = _NO_LU, _NO_PIVOTS, _NO_ROWS, np.zeros((0, self.dim)), False
+        return {"fixed": self._kernel_args, "JT": J.T, "piv": piv, "ref_rows": ref_rows, "ref_qt": ref_qt,
+                "has_ref": has_ref, "dq_last": self._dq_last if self._dq_last is not None else np.zeros(self.m),
+                "has_dq": self._dq_last is not None, "work": self._work, "counts": self._counts,
+                "dq_out": self._dq_out, "err_out": self._err_out, "latch_column": self._latch_column,
+                "open_code": self._open_code, "max_newton": MAX_JOINT_SPACE_ITERATIONS,
+                "flips_before_hold": FLIPS_BEFORE_HOLD, "update_min_changes": UPDATE_MIN_CHANGES,
+                "update_change_fraction": UPDATE_CHANGE_FRACTION, "singular_pivot": SINGULAR_PIVOT}
+
+    def keep_compiled_steps(self, steps, totals, JT, piv, ref_rows, ref_qt, has_ref, dq_last, has_dq):
+        """After ``steps`` dynamic steps solved by the kernel from compiled code: their counts ``totals``
+        (:data:`masonrydam.solvers.dynamic.loop_kernel.N_TOTALS`), the reference LU and the last force change the
+        kernel left (``dq_last`` where ``has_dq``)."""
+        self.factorizations += int(totals[2])
+        self.updates += int(totals[3])
+        self.hold_events += int(totals[4])
+        self.column_recoveries += int(totals[5])
+        self.compiled_steps += steps
+        self.columns.epoch += steps
+        if has_ref:
+            self.J, self.piv, self._ref = JT.T, piv, (ref_rows, ref_qt)
+        else:
+            self._ref = None
+        self._dq_last = dq_last.copy() if has_dq else None
+
+    def finish_compiled_step(self, status, JT, piv, ref_rows, ref_qt, has_ref, u, n_fixed):
+        """What :meth:`solve_step` returns (or raises) for a step whose kernel call compiled code made (the step
+        handed back by :func:`masonrydam.solvers.dynamic.loop_kernel.implicit_steps`): its status and the
+        arrays the call returned and wrote (``self._counts``, ``self._dq_out``, ``self._err_out``, ``u``)."""
+        self.columns.new_step()
+        self.store_full = False
+        try:
+            return self._compiled_outcome(status, JT, piv, ref_rows, ref_qt, has_ref, u, n_fixed)
+        finally:
+            self.held[:] = 0
+
+    def _compiled_outcome(self, status, JT, piv, ref_rows, ref_qt, has_ref, u, n_fixed):
+        """The returns and exceptions of :meth:`_solve_step` for a kernel call that ended in ``status``."""
         c = self._counts
         it = int(c[0])
         self.factorizations += int(c[1])

@@ -1,0 +1,202 @@
+"""The compiled step loop of the implicit stages: :class:`CompiledLoop` runs the steps between two records in one call
+of :func:`.loop_kernel.implicit_steps` and hands a step that leaves the common path back to the Python step.
+
+The common path (:func:`compiled_loop_off` says why a stage is not on it): an implicit scheme at fixed dt, linear
+blocks with small kinematics, every joint set nonlinear with the same fused law, small kinematics and no
+rate-dependence, solved in joint space by the compiled kernel; no compressible water, no loads given in time, no
+state forces, no push of a reservoir bottom. A step on it is the Python step's arithmetic, bit for bit
+(``tests/solvers/test_compiled_loop.py``); one that leaves it (the joint-space iteration does not converge, the full
+residual is above the tolerance, the step gains energy, NaN) is finished by :class:`~.implicit.ImplicitStep` from
+its joint-space result, and a refused one is halved by :class:`~.step_control.FixedSteps` as before. Between two
+calls Python records the state (every ``output_stride`` steps), tells the progress and asks whether to stop; the
+steps in between are not asked. See docs/dynamics.md ("The compiled step loop").
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..joint_space import MAX_INITIAL_STIFFNESS_ITERATIONS, SPLIT_INITIAL_STIFFNESS_ITERATIONS
+from ..joint_space.signals import stop_signals_held
+from ..joint_space.step_kernel import AVAILABLE
+from .energy import ENERGY_KEYS
+from .implicit import JOINT_SPACE_FORCE_FRACTION
+from .loop_kernel import (E_BOND, E_CONTACT, E_NUMERICAL, HANDED_BACK, N_TOTALS, implicit_steps)
+from .stage import StepState
+
+#: implicit stages at fixed dt run their common-path steps in the compiled loop (False: every step in Python, the
+#: same results; for comparisons and benchmarks)
+COMPILED_LOOP = True
+
+
+def compiled_loop_off(model, settings, equations, joint_space) -> str:
+    """Why a stage's steps cannot take the compiled loop ("" where they can): the conditions of the module's
+    docstring, checked on the ``model``, its stage ``settings`` and ``equations`` and the nominal step's
+    :class:`~masonrydam.solvers.joint_space.JointSpace` (None: none set up)."""
+    m, s, eq = model, settings, equations
+    if not COMPILED_LOOP:
+        return "switched off (compiled_loop.COMPILED_LOOP)"
+    if not AVAILABLE:
+        return "numba's LAPACK binding is not available"
+    if s.scheme.explicit:
+        return "an explicit scheme"
+    if s.adaptive:
+        return "dt = auto (its error control is in Python so far)"
+    if joint_space is None or not joint_space.compiled:
+        return "no compiled joint-space step (joint_space off, no nonlinear joints, or flexibility computed as needed)"
+    if not m.condensable or m.plastic or m.large or m.rate_dependent:
+        return "nonlinear or rate-dependent blocks"
+    groups = list(m.igroups)
+    g0 = groups[0]
+    for g in groups:
+        law = g.joint_law
+        if (not g.nonlinear or law is not g0.joint_law or not law.fused or g.kinematics != "small"
+                or law.time_step_column is not None or g.N.shape != g0.N.shape or not np.array_equal(g.N, g0.N)
+                or g.dofs.shape[1] != g0.dofs.shape[1]):
+            return f"joint set '{g.name}' differs from the others (law, integration rule or kinematics)"
+    if eq.fluid is not None:
+        return "a compressible reservoir"
+    terms = eq.terms
+    if terms.force is not None or terms.state_force is not None or eq.bottom_influence_free is not None:
+        return "loads given in time, state forces or a reservoir bottom's push"
+    return ""
+
+
+def _joined(arrays):
+    return np.ascontiguousarray(np.concatenate(arrays))
+
+
+class CompiledLoop:
+    """The compiled step loop of one implicit stage at fixed dt (see the module's docstring): ``solver`` the
+    :class:`~.solver.DynamicSolver` running the stage (its model, settings, equations, energy balance and stats),
+    ``joint_space`` the nominal step's, ``can_split`` whether a failed step may still be halved (the joint-space
+    iteration's limit and the energy-growth test depend on it, as in :meth:`~.implicit.ImplicitStep.solve`)."""
+
+    def __init__(self, solver, joint_space, can_split):
+        m, s, eq = solver.model, solver.s, solver.eq
+        self.solver, self.model, self.s, self.eq, self.js = solver, m, s, eq, joint_space
+        self.energy, self.stats = solver.energy, solver.stats
+        self.groups = groups = list(m.igroups)
+        self.n_fixed = SPLIT_INITIAL_STIFFNESS_ITERATIONS if can_split else MAX_INITIAL_STIFFNESS_ITERATIONS
+        self.growth_check = bool(can_split and m.nonlinear and s.energy_growth_tolerance > 0)
+        beta, gamma, am, af = s.coefficients()
+        self.scheme = (beta, gamma, am, af, (1.0 - am) / (1.0 - af), am / (1.0 - af), af / (1.0 - af))
+        # the joint sets as one: elements one set after the other, parameter rows offset
+        self.ends = np.cumsum([g.n_elem for g in groups]).astype(np.int64)
+        offsets = np.cumsum([0] + [len(g.params_table) for g in groups[:-1]])
+        self.joint_fixed = (
+            _joined([g.conn for g in groups]), np.ascontiguousarray(groups[0].N), _joined([g.frame for g in groups]),
+            _joined([g.jw for g in groups]), _joined([g.thickness for g in groups]),
+            _joined([g.params_table for g in groups]),
+            _joined([g.param_index + off for g, off in zip(groups, offsets)]).astype(groups[0].param_index.dtype),
+            groups[0].law_id, _joined([g.dofs for g in groups]).astype(np.int64), self.ends)
+        self.energy.joint_stored()  # (the compliances, once per stage)
+        self.energy_fixed = (_joined([c[0] for c in self.energy._compliance]),
+                             _joined([c[1] for c in self.energy._compliance]), _joined(self.energy._weights()))
+        mass = eq.mass_free
+        self.mass_csr = ((mass.indptr, mass.indices, mass.data) if mass is not None
+                         else (np.zeros(1, np.int32), np.zeros(0, np.int32), np.zeros(0)))
+        C = eq.damping_free
+        self.damping_csr = ((C.indptr, C.indices, C.data) if eq.damped
+                            else (np.zeros(1, np.int32), np.zeros(0, np.int32), np.zeros(0)))
+        K = m.K_continuum.tocsr()
+        self.stiffness_csr = (K.indptr, K.indices, K.data)
+        empty = np.zeros(0)
+        times, values = [empty] * 3, [empty] * 3
+        for c, g in eq.ground.items():
+            times[c], values[c] = g._times, g.values
+        self.ground = (tuple(times), tuple(values), np.ascontiguousarray(eq.mass_influence_free),
+                       bool(eq.terms.support_excitation))
+
+    def run(self, st, k_first, k_last):
+        """Steps ``k_first`` .. ``k_last`` (1-based, each ending at ``k dt``) from the committed state ``st``.
+
+        Returns ``(state, k_done, handed_back)``: the state after the last step taken (``st`` itself where none
+        was), its index, and for the step after it, where it was handed back, the joint-space result to finish it
+        from (a callable in place of :meth:`~masonrydam.solvers.joint_space.JointSpace.solve_step`; None where the
+        step is to be taken from its start by the Python step, or where every step was taken)."""
+        m, s, eq, js, groups = self.model, self.s, self.eq, self.js, self.groups
+        free = eq.free
+        m.time_step = s.dt
+        joined = [_joined([getattr(g, name) for g in groups])
+                  for name in ("state_committed", "state_base", "state_trial", "delta", "traction", "fe")]
+        committed, base, trial, delta, traction, fe = joined
+        prev = [_joined([j[i] for j in st.joints]) for i in range(3)]
+        u, v, a, f_int, kc_u = (np.array(x, dtype=np.float64) for x in (st.u, st.v, st.a, st.f_int, st.Kc_u))
+        if eq.damped:
+            cv = np.array(st.cv if st.cv is not None else eq.damping_force(st.free_values(free)[1]))
+        else:
+            cv = np.zeros(eq.n)
+        energy = np.array([float(st.energy.get(key, 0.0)) for key in ENERGY_KEYS])
+        stats = self.stats
+        energy_stats = np.array([self.energy.scale, stats.energy_growth_max, stats.energy_error_max])
+        ref = self.energy._reference
+        ka = js.kernel_arguments()
+        totals = np.zeros(N_TOTALS, dtype=np.int64)
+        u_js = np.empty(m.n_dof)
+        ag = np.array(st.ag, dtype=np.float64)
+        info = np.zeros(1, dtype=np.int64)
+        P, ns = js.base.shape
+        with stop_signals_held():  # (a stop asked for within the call is answered after it, at the record)
+            result = implicit_steps(
+                k_first, k_last, s.dt, st.t, st.tau, *self.scheme, np.asarray(free, dtype=np.int64),
+                eq.kernel_mass_diagonal, *self.mass_csr, eq.damped, *self.damping_csr, *self.stiffness_csr,
+                eq.static_load, *self.ground, *self.joint_fixed, *self.energy_fixed, committed, base, trial, delta,
+                traction, fe, info, base.reshape(P, ns), *prev,
+                ka["fixed"], js.params_table, js.param_index, js.weight, js.base, js.trial, js.traction, js.q, js.qt,
+                js.codes, js.info, js.held, js.ST, js.slot, js.wk, ka["dq_last"], ka["has_dq"], ka["JT"], ka["piv"],
+                ka["ref_rows"], ka["ref_qt"], ka["has_ref"], ka["max_newton"], self.n_fixed, ka["flips_before_hold"],
+                ka["update_min_changes"], ka["update_change_fraction"], ka["singular_pivot"], ka["latch_column"],
+                ka["open_code"], ka["work"], u_js, ka["dq_out"], ka["counts"], ka["err_out"],
+                s.force_tolerance, JOINT_SPACE_FORCE_FRACTION, self.growth_check, s.energy_growth_tolerance,
+                energy, ref["kinetic0"], ref["strain0"], ref["stored0"], energy_stats,
+                u, v, a, f_int, kc_u, cv, ag, totals)
+        outcome, k_done, t, tau, JT, piv, ref_rows, ref_qt, has_ref, has_dq, status = result
+        # the joint sets' arrays back (committed to the last step taken; the trial state and fields of the step
+        # handed back are evaluated again by the Python step, or restored by its refusal)
+        start = 0
+        for g, end in zip(groups, self.ends):
+            for name, x in zip(("state_committed", "state_base", "state_trial", "delta", "traction", "fe"), joined):
+                getattr(g, name)[...] = x[start:end]
+            start = end
+        steps = int(totals[0])
+        js.keep_compiled_steps(steps, totals, JT, piv, ref_rows, ref_qt, has_ref, ka["dq_last"], has_dq)
+        stats.steps += steps
+        stats.compiled_loop_steps += steps
+        stats.joint_space_steps += steps
+        stats.joint_space_iterations += int(totals[1])
+        self.solver._count_iterations(int(totals[1]))
+        if steps:
+            self.energy.scale = float(energy_stats[0])
+            stats.energy_growth_max = float(energy_stats[1])
+            stats.energy_error_max = float(energy_stats[2])
+            if energy_stats[0] > 0:
+                stats.energy_error_relative = stats.energy_error_max / self.energy.scale
+            stats.energy_scale = self.energy.scale
+            stats.energy_numerical = float(energy[E_NUMERICAL])
+            stats.energy_contact = float(energy[E_CONTACT])
+            stats.energy_bond_break = float(energy[E_BOND])
+            st = self._state(t, tau, u, v, a, f_int, kc_u, cv, ag, energy, prev)
+        handed_back = None
+        if outcome == HANDED_BACK:
+            stats.compiled_loop_handbacks += 1
+            if status >= 0:  # its joint-space call was made: the Python step goes on from its result
+                u_step, n_fixed = u_js.copy(), self.n_fixed
+
+                def handed_back(*_):
+                    return js.finish_compiled_step(status, JT, piv, ref_rows, ref_qt, has_ref, u_step, n_fixed)
+        return st, int(k_done), handed_back
+
+    def _state(self, t, tau, u, v, a, f_int, kc_u, cv, ag, energy, prev):
+        """The :class:`~.stage.StepState` the last step taken ended in."""
+        free = self.eq.free
+        new = StepState(float(t), float(tau), u, v, a, f_int, None, ag)
+        new.keep_free_values(free, v[free], a[free])
+        new.cv = cv
+        new.Kc_u = kc_u
+        new.energy = {key: float(x) for key, x in zip(ENERGY_KEYS, energy)}
+        joints, start = [], 0
+        for end in self.ends:
+            joints.append(tuple(x[start:end].copy() for x in prev))
+            start = end
+        new.joints = joints
+        return new

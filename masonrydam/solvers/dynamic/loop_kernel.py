@@ -1,0 +1,329 @@
+"""Many implicit steps in one compiled call: :func:`implicit_steps`, the kernel of :mod:`.compiled_loop`.
+
+The steps of the common path - linear blocks, nonlinear joints of one fused law, a Newmark-family scheme at the
+stage's nominal step size, a step that the joint-space iteration solves and that then passes the full residual test
+and the energy-growth test - done as :class:`~.implicit.ImplicitStep` does them, operation for operation: the
+ground acceleration (``np.interp`` of the record), the ground loads (``-(a_g . M iota)``), :func:`~.kernels.step_loads`
+and :func:`~.kernels.step_constant`, the residual at the start (:func:`~.kernels.newmark_kinematics`,
+:func:`~.kernels.newmark_residual`, the sparse products in scipy's order), the joint-space step
+(:func:`masonrydam.solvers.joint_space.step_kernel.joint_space_step`), the joints' forces at its solution
+(:func:`masonrydam.elements.interface.interface_forces` and the assembly of :func:`~masonrydam.assembly.sparsity.scatter_vector`),
+the residual there, the energy balance of :meth:`~.energy.EnergyBalance.record` and
+:meth:`~.energy.EnergyBalance.accept` with the same kernels and the same order of sums, and the commit. The steps it
+takes are equal bit for bit to those of the Python loop (``tests/solvers/test_compiled_loop.py``).
+
+Where a step leaves the common path (the joint-space iteration does not converge or fails, the full residual is
+above the tolerance, the step gains energy, NaN), the kernel stops *after* that step's joint-space call and hands
+the step back (:data:`HANDED_BACK`): the joint space's own state (its last force change, its capacitance LU) is then
+exactly what the Python loop would have left, and :class:`~.compiled_loop.CompiledLoop` finishes the step in Python
+from the joint-space result. What the kernel changed for the step handed back (the joints' trial state and fields)
+is what the Python step evaluates again from the committed state.
+
+Why it is written out: the Python around one joint-space call took about 200 us a step on the coarse Koyna section
+(the step's set-up, two residuals, the model's forces, the energy balance; docs/performance.md), against 68 us for
+the joint-space call and 10 us for the floor issue 35 measures against.
+"""
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from ...elements.interface import interface_forces
+from ...errors import STATUS_OK
+from ..joint_space.step_kernel import STEP_CONVERGED, joint_space_step
+from .kernels import (dot_product, euclidean_norm, free_norm, joint_step_energy, joint_stored_energy_range,
+                      newmark_kinematics, newmark_residual, step_constant, step_loads, step_works)
+
+#: every step asked for was taken
+ALL_TAKEN = 0
+#: the step after the last one taken is handed back (its joint-space call made; see the module's docstring)
+HANDED_BACK = 1
+
+#: entries of ``totals``: steps taken, joint-space iterations, capacitance LU factorizations, their low-rank
+#: updates, points held, recoveries from the stored columns
+N_TOTALS = 6
+
+#: indices of the energy terms in ``energy`` (the order of :data:`~.energy.ENERGY_KEYS`)
+E_INPUT, E_EXTERNAL, E_HYDRO, E_KINETIC, E_STRAIN, E_DAMPING, E_JOINT, E_STORED, E_DISSIPATED, E_FRICTION, \
+    E_BOND, E_CONTACT, E_NUMERICAL, E_ERROR = range(14)
+
+
+@numba.njit(cache=True)
+def _csr(indptr, indices, data, x, out):
+    """``out = A x``, each row summed from 0.0 in the order of its entries (scipy's csr_matvec)."""
+    for i in range(out.shape[0]):
+        acc = 0.0
+        for k in range(indptr[i], indptr[i + 1]):
+            acc += data[k] * x[indices[k]]
+        out[i] = acc
+
+
+@numba.njit(cache=True)
+def _ground_at(t, times, values):
+    """:meth:`~.ground_motion.GroundMotion.at`: the record linear between samples, zero outside it; a component
+    without a record (no samples) is zero."""
+    if times.shape[0] == 0:
+        return 0.0
+    if t < 0.0 or t > times[times.shape[0] - 1] * (1 + 1e-12):
+        return 0.0
+    return np.interp(t, times, values)
+
+
+@numba.njit(cache=True)
+def _ground_load(ag, influence, support_excitation, out):
+    """:meth:`~.equations.StageEquations.ground_load` without loads given in time: ``-(a_g . M iota)``."""
+    if support_excitation:
+        g = np.dot(ag, influence)
+        for i in range(out.shape[0]):
+            out[i] = -g[i]
+    else:
+        for i in range(out.shape[0]):
+            out[i] = 0.0
+
+
+@numba.njit(cache=True)
+def _growth(e):
+    """:func:`~.energy.energy_growth`, in its order of operations."""
+    return (e[E_KINETIC] + e[E_STRAIN] + e[E_STORED] + e[E_DAMPING] - e[E_EXTERNAL] - e[E_INPUT]
+            - e[E_HYDRO])
+
+
+@numba.njit(cache=True)
+def implicit_steps(k_first, k_last, dt, t, tau, beta, gamma, am, af, w_m, weight_m, weight_f,
+                   free, mass_diag, Mp, Mi, Mx, damped, Cp, Ci, Cx, Kp, Ki, Kx, static_load,
+                   ground_times, ground_values, influence, support_excitation,
+                   conn, N, frame, jw, thickness, jparams, jparam_index, law_id, jdofs, group_ends, compliance_n,
+                   compliance_s, jweight, committed, base, trial, delta, traction, fe, jinfo, base2,
+                   prev_delta, prev_traction, prev_state,
+                   js_fixed, js_params, js_param_index, js_weight, js_base, js_trial, js_traction, js_q, js_qt, js_codes,
+                   js_info, js_held, ST, slot, wk, dq_last, has_dq, JT, piv, ref_rows, ref_qt, has_ref, max_newton,
+                   n_fixed, flips_before_hold, update_min_changes, update_change_fraction, singular_pivot,
+                   latch_column, open_code, js_work, u_js, dq_out, counts, err_out,
+                   force_tolerance, joint_space_fraction, growth_check, growth_tolerance,
+                   energy, kinetic0, strain0, stored0, energy_stats,
+                   u, v, a, f_int, kc_u, cv, ag, totals):
+    """Steps ``k_first`` .. ``k_last`` (1-based, each ending at ``k dt``) of an implicit stage from the committed
+    state, in place.
+
+    Scheme: ``dt`` s, Newmark's ``beta``, ``gamma``, the alpha weights ``am``, ``af`` and ``w_m = (1 - am)/(1 - af)``,
+    ``weight_m = am/(1 - af)``, ``weight_f = af/(1 - af)``. Stage terms on the ``free`` (n,) DOFs: the lumped
+    mass ``mass_diag`` (n,) or (0,) and the consistent one as CSR (``Mp, Mi, Mx``), the damping ``C`` (CSR; ``damped``),
+    the blocks' full-DOF stiffness ``K`` (CSR, n_dof rows), the static load (n,) N, the ground records (three tuples
+    of sample times and values, empty for a direction without one), ``influence`` (dim, n) kg (``M iota``). The
+    joints as one set (the model's sets one after the other; ``group_ends`` the element index where each ends): the
+    arguments of :func:`~masonrydam.elements.interface.interface_forces` with the law's states ``committed``,
+    ``base``, ``trial`` (ne, nip, ns) (``base2`` a (P, ns) view of ``base``), the element DOFs ``jdofs``, the
+    compliances and areas of the energy balance, and the snapshot of the last step's fields ``prev_*``. The joint
+    space: the arguments of :func:`~masonrydam.solvers.joint_space.step_kernel.joint_space_step` (``js_fixed`` those
+    that never change, ``js_work`` its six work arrays). Tolerances: ``force_tolerance`` (relative),
+    ``joint_space_fraction`` of it for the joint-space iteration, the energy-growth test where ``growth_check``.
+    Energies: ``energy`` (14,) J in the order of :data:`~.energy.ENERGY_KEYS`, the references ``kinetic0``,
+    ``strain0``, ``stored0``, and ``energy_stats`` = [largest term, largest growth, largest error]. The state: ``t``,
+    ``tau`` (s), ``u, v, a, f_int, kc_u`` (n_dof,), ``cv`` (n,) the damping force of its velocity, ``ag`` (dim,).
+    ``totals`` (:data:`N_TOTALS`,) are added to.
+
+    Returns ``(outcome, k_done, t, tau, JT, piv, ref_rows, ref_qt, has_ref, has_dq, status)``: :data:`ALL_TAKEN` or
+    :data:`HANDED_BACK` (step ``k_done + 1``: its joint-space status ``status``, the iterate in ``u_js``, and the
+    counts of :data:`~masonrydam.solvers.joint_space.step_kernel.N_COUNTS` in ``counts``), the last step taken, the
+    state's times and the joint space's reference LU and whether it keeps a last force change."""
+    n = free.shape[0]
+    n_dof = u.shape[0]
+    dim = ag.shape[0]
+    h = dt
+    lumped = mass_diag.shape[0] == n
+    zeros = np.zeros(n)
+    state_force = np.zeros(n)
+    ag1 = np.zeros(dim)
+    g1 = np.empty(n)
+    g0 = np.empty(n)
+    p1 = np.empty(n)
+    pn = np.empty(n)
+    pg1 = np.empty(n)
+    pg0 = np.empty(n)
+    const = np.empty(n)
+    un = np.empty(n)
+    vn = np.empty(n)
+    an = np.empty(n)
+    ma_n = np.zeros(n)
+    a1 = np.empty(n)
+    v1 = np.empty(n)
+    ma = np.empty(n)
+    cv1 = np.zeros(n)
+    R = np.empty(n)
+    fc = np.empty(n_dof)
+    f = np.empty(n_dof)
+    mv1 = np.zeros(n)
+    ma0 = np.zeros(n)
+    ma1 = np.zeros(n)
+    w = np.empty(10)
+    split = np.zeros(5)
+    e = np.empty(14)
+    a_new = np.empty(n_dof)
+    n_groups = group_ends.shape[0]
+    P = js_q.shape[0]
+    ns = base2.shape[1]
+    delta_n, delta_n2, delta_i, delta_i2, guess, guess2 = js_work
+    status = STEP_CONVERGED
+    k_done = k_first - 1
+    for k in range(k_first, k_last + 1):
+        t_end = k * dt
+        # -- the step's loads and constant part (ImplicitStep.__init__)
+        for c in range(dim):
+            ag1[c] = _ground_at(t_end, ground_times[c], ground_values[c])
+        _ground_load(ag1, influence, support_excitation, g1)
+        _ground_load(ag, influence, support_excitation, g0)
+        step_loads(static_load, g1, g0, state_force, p1, pn, pg1, pg0)
+        for i in range(n):
+            un[i] = u[free[i]]
+            vn[i] = v[free[i]]
+            an[i] = a[free[i]]
+        if am != 0.0 and not lumped:
+            _csr(Mp, Mi, Mx, an, ma_n)
+        cv_n = cv if af != 0.0 else zeros
+        step_constant(p1, pn, mass_diag, ma_n, an, weight_m, cv_n, f_int, free, weight_f, const)
+        p1_norm = euclidean_norm(p1)
+        # -- the residual at the start and the joint-space step (ImplicitStep.solve, _joint_space_start)
+        newmark_kinematics(u, free, un, vn, an, h, beta, gamma, mass_diag, a1, v1, ma)
+        if not lumped:
+            _csr(Mp, Mi, Mx, a1, ma)
+        if damped:
+            _csr(Cp, Ci, Cx, v1, cv1)
+        if newmark_residual(ma, w_m, cv1, f_int, free, const, R) != STATUS_OK:
+            return HANDED_BACK, k_done, t, tau, JT, piv, ref_rows, ref_qt, has_ref, has_dq, -1
+        ref = max(euclidean_norm(ma), free_norm(f_int, free), p1_norm, 0.0, 1e-30)
+        for p in range(P):
+            js_held[p] = 0
+            for s in range(ns):
+                js_base[p, s] = base2[p, s]
+        tolerance = joint_space_fraction * force_tolerance * ref
+        dq_start = dq_last if has_dq else dq_out
+        Lp, Li, Lx, dd, perm, Bp, Bi, Bx, BTp, BTi, BTx, js_free, XT, recovery_columns_max = js_fixed
+        status, JT, piv, ref_rows, ref_qt, has_ref = joint_space_step(
+            Lp, Li, Lx, dd, perm, Bp, Bi, Bx, BTp, BTi, BTx, js_free, XT, recovery_columns_max,
+            js_params, js_param_index, js_weight, js_base, js_trial, js_traction, js_q, js_qt, js_codes,
+            js_info, js_held, ST, slot, wk, u, R, tolerance, dq_start, has_dq, JT, piv, ref_rows, ref_qt, has_ref, max_newton, n_fixed,
+            flips_before_hold, update_min_changes, update_change_fraction, singular_pivot, latch_column, open_code,
+            False, 0, 0, delta_n, delta_n2, delta_i, delta_i2, guess, guess2, u_js, dq_out, counts, err_out)
+        for p in range(P):
+            js_held[p] = 0
+        if status != STEP_CONVERGED:
+            return HANDED_BACK, k_done, t, tau, JT, piv, ref_rows, ref_qt, has_ref, has_dq, status
+        predictor = counts[5] != 0
+        its = 0 if predictor else counts[0]
+        if predictor:
+            has_dq = False
+        else:
+            has_dq = True
+            for i in range(dq_out.shape[0]):
+                dq_last[i] = dq_out[i]
+            if latch_column >= 0:  # JointSpace._store_latched_bonds
+                for p in range(P):
+                    if js_base[p, latch_column] > base2[p, latch_column]:
+                        base2[p, latch_column] = js_base[p, latch_column]
+        # -- the forces at the joint-space solution and the residual there (Model.evaluate, forces only)
+        _csr(Kp, Ki, Kx, u_js, fc)
+        for i in range(n_dof):
+            f[i] = fc[i]
+        if interface_forces(conn, u_js, N, frame, jw, thickness, jparams, jparam_index, base, trial, delta,
+                            traction, fe, jinfo, law_id) != STATUS_OK:
+            return HANDED_BACK, k_done, t, tau, JT, piv, ref_rows, ref_qt, has_ref, has_dq, status
+        for el in range(fe.shape[0]):
+            for r in range(fe.shape[1]):
+                f[jdofs[el, r]] += fe[el, r]
+        newmark_kinematics(u_js, free, un, vn, an, h, beta, gamma, mass_diag, a1, v1, ma)
+        if not lumped:
+            _csr(Mp, Mi, Mx, a1, ma)
+        if damped:
+            _csr(Cp, Ci, Cx, v1, cv1)
+        if newmark_residual(ma, w_m, cv1, f, free, const, R) != STATUS_OK:
+            return HANDED_BACK, k_done, t, tau, JT, piv, ref_rows, ref_qt, has_ref, has_dq, status
+        scale = max(euclidean_norm(ma), free_norm(f, free), p1_norm, 0.0, 1e-30)
+        if not euclidean_norm(R) <= force_tolerance * scale:
+            return HANDED_BACK, k_done, t, tau, JT, piv, ref_rows, ref_qt, has_ref, has_dq, status
+        # -- the energy balance of the step (EnergyBalance.record, record_works)
+        if not lumped:
+            _csr(Mp, Mi, Mx, v1, mv1)
+            _csr(Mp, Mi, Mx, an, ma0)
+            _csr(Mp, Mi, Mx, a1, ma1)
+        # the end state's a over all DOFs (zero where constrained), for step_works
+        for i in range(n_dof):
+            a_new[i] = 0.0
+        for i in range(n):
+            a_new[free[i]] = a1[i]
+        step_works(free, u, u_js, pg0, pg1, static_load, cv, cv1, f_int, f, kc_u, fc, v1, mass_diag, mv1, a, a_new,
+                   ma0, ma1, w)
+        for i in range(14):
+            e[i] = energy[i]
+        e[E_INPUT] += w[0] - 0.0
+        e[E_HYDRO] = e[E_HYDRO] + 0.0
+        e[E_EXTERNAL] += w[1]
+        e[E_DAMPING] += w[2]
+        e[E_JOINT] += w[3]
+        kinetic_before = e[E_KINETIC]
+        e[E_KINETIC] = w[4] - kinetic0
+        e[E_STRAIN] = 0.5 * dot_product(u_js, fc) - strain0
+        numerical = w[5] - (e[E_KINETIC] - kinetic_before)
+        numerical -= (am - 0.5) * w[6] + (af - 0.5) * (w[8] + w[7] - w[9])
+        e[E_NUMERICAL] = e[E_NUMERICAL] + numerical
+        stored = 0.0
+        start = 0
+        for gi in range(n_groups):
+            stored = stored + joint_stored_energy_range(traction, compliance_n, compliance_s, start, group_ends[gi])
+            start = group_ends[gi]
+        e[E_STORED] = stored - stored0
+        for i in range(5):
+            split[i] = 0.0
+        joint_step_energy(prev_delta, prev_traction, prev_state, delta, traction, trial, jweight, split)
+        e[E_FRICTION] = e[E_FRICTION] + split[0]
+        e[E_BOND] = e[E_BOND] + split[1]
+        e[E_CONTACT] = e[E_CONTACT] + split[2]
+        e[E_DISSIPATED] = e[E_JOINT] - e[E_STORED]
+        e[E_ERROR] = e[E_INPUT] + e[E_EXTERNAL] + e[E_HYDRO] - (e[E_KINETIC] + e[E_STRAIN] + e[E_DAMPING]
+                                                                 + e[E_STORED] + e[E_FRICTION] + e[E_BOND]
+                                                                 + e[E_CONTACT] + e[E_NUMERICAL])
+        if growth_check:  # ImplicitStep._finish: a step that gains energy is refused (handed back)
+            g = _growth(e)
+            cap = growth_tolerance * energy_stats[0]
+            allowed = max(cap, _growth(energy) + 0.01 * cap)
+            if g > allowed and energy_stats[0] > 0:
+                return HANDED_BACK, k_done, t, tau, JT, piv, ref_rows, ref_qt, has_ref, has_dq, status
+        # -- the commit (Model.commit) and the accepted step (EnergyBalance.accept)
+        for el in range(trial.shape[0]):
+            for gp in range(trial.shape[1]):
+                for s in range(ns):
+                    committed[el, gp, s] = trial[el, gp, s]
+                    base[el, gp, s] = trial[el, gp, s]
+                    prev_state[el, gp, s] = trial[el, gp, s]
+                for c in range(dim):
+                    prev_delta[el, gp, c] = delta[el, gp, c]
+                    prev_traction[el, gp, c] = traction[el, gp, c]
+        for i in range(14):
+            energy[i] = e[i]
+        energy_stats[0] = max(energy_stats[0], abs(e[E_INPUT]), abs(e[E_EXTERNAL]), abs(e[E_KINETIC]),
+                              abs(e[E_STRAIN]), abs(e[E_JOINT]), abs(e[E_DAMPING]))
+        g = _growth(e)
+        if g > energy_stats[1]:
+            energy_stats[1] = g
+        energy_stats[2] = max(energy_stats[2], abs(e[E_ERROR]))
+        # the new state
+        t = t - tau + t_end
+        tau = t_end
+        for i in range(n_dof):
+            u[i] = u_js[i]
+            v[i] = 0.0
+            a[i] = a_new[i]
+            f_int[i] = f[i]
+            kc_u[i] = fc[i]
+        for i in range(n):
+            v[free[i]] = v1[i]
+            cv[i] = cv1[i]
+        for c in range(dim):
+            ag[c] = ag1[c]
+        totals[0] += 1
+        totals[1] += its
+        totals[2] += counts[1]
+        totals[3] += counts[2]
+        totals[4] += counts[3]
+        totals[5] += counts[4]
+        k_done = k
+    return ALL_TAKEN, k_done, t, tau, JT, piv, ref_rows, ref_qt, has_ref, has_dq, status

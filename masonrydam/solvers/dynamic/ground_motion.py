@@ -9,9 +9,74 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+import numba
 import numpy as np
 
 from ...errors import SceneError
+
+
+@numba.njit(cache=True)
+def record_at(t, times, values) -> float:
+    """The record (samples ``values`` at ``times``) linear between samples and zero outside them, at ``t`` (s)."""
+    if t < 0.0 or t > times[times.shape[0] - 1] * (1 + 1e-12):
+        return 0.0
+    return np.interp(t, times, values)
+
+
+@numba.njit(cache=True)
+def chord_error(t0, t1, times, values, dt) -> float:
+    """:meth:`GroundMotion.chord_error` of the record sampled every ``dt`` s (``times``, ``values``), compiled: the
+    compiled step loop (:mod:`.loop_kernel`) measures its steps with it. |d| is linear on each piece between the
+    breakpoints (samples inside the step, the record's end with its jump to zero), and integrated exactly also where d
+    changes sign inside a piece; the pieces are summed in order."""
+    if t1 <= t0:
+        return 0.0
+    count = values.shape[0]
+    t_end = times[count - 1] * (1 + 1e-12)
+    i0 = int(math.floor(t0 / dt)) + 1
+    i1 = min(int(math.ceil(t1 / dt)) - 1, count - 1)
+    jump = t0 <= t_end < t1 and values[count - 1] != 0.0
+    if i1 < i0 and not jump:  # no sample inside the step (most steps): the chord is the record
+        return 0.0
+    a0 = record_at(t0, times, values)
+    a1 = record_at(t1, times, values)
+    n_in = 0
+    for i in range(i0, i1 + 1):
+        if t0 < i * dt < t1:
+            n_in += 1
+    if n_in == 0 and not jump:
+        return 0.0
+    m = n_in + 2 + (2 if jump else 0)
+    tt = np.empty(m)
+    f = np.empty(m)
+    tt[0], f[0] = t0, a0
+    j = 1
+    for i in range(i0, i1 + 1):
+        ti = i * dt
+        if t0 < ti < t1:
+            tt[j], f[j] = ti, np.interp(ti, times, values)
+            j += 1
+    tt[j], f[j] = t1, a1
+    if jump:  # a_g falls from the last sample to zero at t_end: the segment split there
+        k = 0
+        while k < j + 1 and tt[k] <= t_end:
+            k += 1
+        for i in range(j, k - 1, -1):
+            tt[i + 2], f[i + 2] = tt[i], f[i]
+        tt[k], f[k] = t_end, values[count - 1]
+        tt[k + 1], f[k + 1] = t_end, 0.0
+    total = 0.0
+    da = f[0] - (a0 + (a1 - a0) * (tt[0] - t0) / (t1 - t0))
+    for i in range(m - 1):
+        db = f[i + 1] - (a0 + (a1 - a0) * (tt[i + 1] - t0) / (t1 - t0))
+        width = abs(da) + abs(db)
+        if da * db >= 0.0:
+            piece = 0.5 * width
+        else:
+            piece = 0.5 * (da * da + db * db) / width
+        total += piece * (tt[i + 1] - tt[i])
+        da = db
+    return total
 
 
 @dataclass
@@ -58,31 +123,4 @@ class GroundMotion:
         a_g(t0) and a_g(t1): the velocity a step from t0 to t1 misses by taking the ground load as linear
         over the step (the implicit schemes see its ends only). Exact for the piecewise-linear record,
         including its jump to zero after the last sample. Zero when the record is linear over the step."""
-        if t1 <= t0:
-            return 0.0
-        t_end = self._times[-1] * (1 + 1e-12)
-        # breakpoints of a_g inside the step: samples, and the record's end (a jump to zero)
-        i0 = int(math.floor(t0 / self.dt)) + 1
-        i1 = min(int(math.ceil(t1 / self.dt)) - 1, len(self.values) - 1)
-        jump = t0 <= t_end < t1 and self.values[-1] != 0.0
-        if i1 < i0 and not jump:  # no sample inside the step (most steps): the chord is the record
-            return 0.0
-        a0, a1 = self.at(t0), self.at(t1)
-        t_in = np.arange(i0, i1 + 1) * self.dt if i1 >= i0 else np.zeros(0)
-        t_in = t_in[(t_in > t0) & (t_in < t1)]
-        if len(t_in) == 0 and not jump:
-            return 0.0
-        tt = np.concatenate(([t0], t_in, [t1]))
-        f = np.concatenate(([a0], np.interp(t_in, self._times, self.values), [a1]))
-        if jump:  # a_g falls from the last sample to zero at t_end: split the segment there
-            k = int(np.searchsorted(tt, t_end, side="right"))
-            tt = np.concatenate((tt[:k], [t_end, t_end], tt[k:]))
-            f = np.concatenate((f[:k], [self.values[-1], 0.0], f[k:]))
-        d = f - (a0 + (a1 - a0) * (tt - t0) / (t1 - t0))
-        # |d| is linear on each piece: integrated exactly, also where d changes sign inside it (one pass
-        # in numpy: a step of dt_max over a pulse sampled at dt_min holds a thousand samples)
-        da, db, h = d[:-1], d[1:], np.diff(tt)
-        same = da * db >= 0.0
-        width = np.abs(da) + np.abs(db)
-        piece = np.where(same, 0.5 * width, 0.5 * (da * da + db * db) / np.where(same, 1.0, width))
-        return float(np.sum(piece * h))
+        return chord_error(t0, t1, self._times, self.values, self.dt)

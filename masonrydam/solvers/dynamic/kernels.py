@@ -37,6 +37,16 @@ def free_norm(x, free) -> float:
 
 
 @numba.njit(cache=True)
+def difference_norm(x, y) -> float:
+    """``||x - y||`` (both (n,) float64), as :func:`euclidean_norm` of the difference without forming it."""
+    acc = 0.0
+    for i in range(x.shape[0]):
+        d = x[i] - y[i]
+        acc += d * d
+    return math.sqrt(acc)
+
+
+@numba.njit(cache=True)
 def dot_product(x, y) -> float:
     """``x . y`` (both (n,) float64) summed in index order (see :func:`euclidean_norm` for why not BLAS)."""
     acc = 0.0

@@ -1,23 +1,27 @@
 """Many implicit steps in one compiled call: :func:`implicit_steps`, the kernel of :mod:`.compiled_loop`.
 
-The steps of the common path - linear blocks, nonlinear joints of one fused law, a Newmark-family scheme at the
-stage's nominal step size, a step that the joint-space iteration solves and that then passes the full residual test
-and the energy-growth test - done as :class:`~.implicit.ImplicitStep` does them, operation for operation: the
+The steps of the common path - linear blocks, nonlinear joints of one fused law, a Newmark-family scheme at a fixed
+dt or with the error control of dt = "auto", a step that the joint-space iteration solves and that then passes the
+full residual test, the energy-growth test and the local error test - done as :class:`~.implicit.ImplicitStep` and
+the step controls (:mod:`.step_control`) do them, operation for operation: the
 ground acceleration (``np.interp`` of the record), the ground loads (``-(a_g . M iota)``), :func:`~.kernels.step_loads`
 and :func:`~.kernels.step_constant`, the residual at the start (:func:`~.kernels.newmark_kinematics`,
 :func:`~.kernels.newmark_residual`, the sparse products in scipy's order), the joint-space step
 (:func:`masonrydam.solvers.joint_space.step_kernel.joint_space_step`), the joints' forces at its solution
 (:func:`masonrydam.elements.interface.interface_forces` and the assembly of :func:`~masonrydam.assembly.sparsity.scatter_vector`),
 the residual there, the energy balance of :meth:`~.energy.EnergyBalance.record` and
-:meth:`~.energy.EnergyBalance.accept` with the same kernels and the same order of sums, and the commit. The steps it
+:meth:`~.energy.EnergyBalance.accept` with the same kernels and the same order of sums, the local error of
+:meth:`~.step_control.AdaptiveStepping.step_error` (with the compiled :func:`~.ground_motion.chord_error`), the commit
+and the choice of the next step size. The steps it
 takes are equal bit for bit to those of the Python loop (``tests/solvers/test_compiled_loop.py``).
 
 Where a step leaves the common path (the joint-space iteration does not converge or fails, the full residual is
-above the tolerance, the step gains energy, NaN), the kernel stops *after* that step's joint-space call and hands
+above the tolerance, the step gains energy or its local error is above the tolerance, NaN), the kernel stops *after* that step's joint-space call and hands
 the step back (:data:`HANDED_BACK`): the joint space's own state (its last force change, its capacitance LU) is then
 exactly what the Python loop would have left, and :class:`~.compiled_loop.CompiledLoop` finishes the step in Python
 from the joint-space result. What the kernel changed for the step handed back (the joints' trial state and fields)
-is what the Python step evaluates again from the committed state.
+is what the Python step evaluates again from the committed state. With dt = "auto" the kernel also returns where a
+step it accepted chose another step size (:data:`LEVEL_CHANGED`): that size's joint space is another one.
 
 Why it is written out: the Python around one joint-space call took about 200 us a step on the coarse Koyna section
 (the step's set-up, two residuals, the model's forces, the energy balance; docs/performance.md), against 68 us for
@@ -31,13 +35,23 @@ import numpy as np
 from ...elements.interface import interface_forces
 from ...errors import STATUS_OK
 from ..joint_space.step_kernel import STEP_CONVERGED, joint_space_step
-from .kernels import (dot_product, euclidean_norm, free_norm, joint_step_energy, joint_stored_energy_range,
+from .ground_motion import chord_error, record_at
+from .kernels import (difference_norm, dot_product, euclidean_norm, free_norm, joint_step_energy, joint_stored_energy_range,
                       newmark_kinematics, newmark_residual, step_constant, step_loads, step_works)
 
 #: every step asked for was taken
 ALL_TAKEN = 0
 #: the step after the last one taken is handed back (its joint-space call made; see the module's docstring)
 HANDED_BACK = 1
+
+#: dt = "auto": the step accepted last took another step size (the state is before grid point ``k``)
+LEVEL_CHANGED = 2
+
+#: entries of ``adapt`` (dt = "auto"): the peaks of the error measures, the last error, the smallest and largest steps
+#: taken, and the constants of :class:`~.step_control.AdaptiveStepping`
+ADAPT_U_PEAK, ADAPT_V_PEAK, ADAPT_LAST_ERROR, ADAPT_SMALLEST, ADAPT_LARGEST, ADAPT_TOLERANCE, ADAPT_ERROR_CONSTANT, \
+    ADAPT_DISPLACEMENT_FLOOR, ADAPT_GROW_FRACTION, ADAPT_PEAK_GROUND_VELOCITY = range(10)
+N_ADAPT = 10
 
 #: entries of ``totals``: steps taken, joint-space iterations, capacitance LU factorizations, their low-rank
 #: updates, points held, recoveries from the stored columns
@@ -60,13 +74,10 @@ def _csr(indptr, indices, data, x, out):
 
 @numba.njit(cache=True)
 def _ground_at(t, times, values):
-    """:meth:`~.ground_motion.GroundMotion.at`: the record linear between samples, zero outside it; a component
-    without a record (no samples) is zero."""
+    """:meth:`~.ground_motion.GroundMotion.at`; a component without a record (no samples) is zero."""
     if times.shape[0] == 0:
         return 0.0
-    if t < 0.0 or t > times[times.shape[0] - 1] * (1 + 1e-12):
-        return 0.0
-    return np.interp(t, times, values)
+    return record_at(t, times, values)
 
 
 @numba.njit(cache=True)
@@ -89,9 +100,9 @@ def _growth(e):
 
 
 @numba.njit(cache=True)
-def implicit_steps(k_first, k_last, dt, t, tau, beta, gamma, am, af, w_m, weight_m, weight_f,
+def implicit_steps(k_first, k_last, dt, duration, t, tau, beta, gamma, am, af, w_m, weight_m, weight_f,
                    free, mass_diag, Mp, Mi, Mx, damped, Cp, Ci, Cx, Kp, Ki, Kx, static_load,
-                   ground_times, ground_values, influence, support_excitation,
+                   ground_times, ground_values, ground_dt, influence, support_excitation,
                    conn, N, frame, jw, thickness, jparams, jparam_index, law_id, jdofs, group_ends, compliance_n,
                    compliance_s, jweight, committed, base, trial, delta, traction, fe, jinfo, base2,
                    prev_delta, prev_traction, prev_state,
@@ -101,35 +112,45 @@ def implicit_steps(k_first, k_last, dt, t, tau, beta, gamma, am, af, w_m, weight
                    latch_column, open_code, js_work, u_js, dq_out, counts, err_out,
                    force_tolerance, joint_space_fraction, growth_check, growth_tolerance,
                    energy, kinetic0, strain0, stored0, energy_stats,
+                   adaptive, control, adapt, u_stage_start,
                    u, v, a, f_int, kc_u, cv, ag, totals):
-    """Steps ``k_first`` .. ``k_last`` (1-based, each ending at ``k dt``) of an implicit stage from the committed
-    state, in place.
+    """The steps of an implicit stage toward grid points ``k_first`` .. ``k_last`` (1-based, grid point ``k`` at
+    ``min(k dt, duration)``) from the committed state, in place: one step a grid point at a fixed dt (``adaptive``
+    False), steps of ``dt / 2^level`` with the error control of :class:`~.step_control.AdaptiveStepping` for dt =
+    "auto" (``adaptive``; ``control`` = [level, hold count, top level], ``adapt`` (:data:`N_ADAPT`,) its peaks,
+    last error, smallest and largest steps and constants, ``u_stage_start`` (n,) m the displacements the stage
+    started from). The state starts before grid point ``k_first``; the joint space given is the one of the
+    starting level's step size.
 
     Scheme: ``dt`` s, Newmark's ``beta``, ``gamma``, the alpha weights ``am``, ``af`` and ``w_m = (1 - am)/(1 - af)``,
     ``weight_m = am/(1 - af)``, ``weight_f = af/(1 - af)``. Stage terms on the ``free`` (n,) DOFs: the lumped
     mass ``mass_diag`` (n,) or (0,) and the consistent one as CSR (``Mp, Mi, Mx``), the damping ``C`` (CSR; ``damped``),
     the blocks' full-DOF stiffness ``K`` (CSR, n_dof rows), the static load (n,) N, the ground records (three tuples
-    of sample times and values, empty for a direction without one), ``influence`` (dim, n) kg (``M iota``). The
+    of sample times and values, empty for a direction without one, and their sample intervals ``ground_dt`` (3,)
+    s), ``influence`` (dim, n) kg (``M iota``). The
     joints as one set (the model's sets one after the other; ``group_ends`` the element index where each ends): the
     arguments of :func:`~masonrydam.elements.interface.interface_forces` with the law's states ``committed``,
     ``base``, ``trial`` (ne, nip, ns) (``base2`` a (P, ns) view of ``base``), the element DOFs ``jdofs``, the
     compliances and areas of the energy balance, and the snapshot of the last step's fields ``prev_*``. The joint
     space: the arguments of :func:`~masonrydam.solvers.joint_space.step_kernel.joint_space_step` (``js_fixed`` those
     that never change, ``js_work`` its six work arrays). Tolerances: ``force_tolerance`` (relative),
-    ``joint_space_fraction`` of it for the joint-space iteration, the energy-growth test where ``growth_check``.
-    Energies: ``energy`` (14,) J in the order of :data:`~.energy.ENERGY_KEYS`, the references ``kinetic0``,
+    ``joint_space_fraction`` of it for the joint-space iteration, the energy-growth test where ``growth_check`` (and,
+    with dt = "auto", below the top level). Energies: ``energy`` (14,) J in the order of
+    :data:`~.energy.ENERGY_KEYS`, the references ``kinetic0``,
     ``strain0``, ``stored0``, and ``energy_stats`` = [largest term, largest growth, largest error]. The state: ``t``,
     ``tau`` (s), ``u, v, a, f_int, kc_u`` (n_dof,), ``cv`` (n,) the damping force of its velocity, ``ag`` (dim,).
     ``totals`` (:data:`N_TOTALS`,) are added to.
 
-    Returns ``(outcome, k_done, t, tau, JT, piv, ref_rows, ref_qt, has_ref, has_dq, status)``: :data:`ALL_TAKEN` or
-    :data:`HANDED_BACK` (step ``k_done + 1``: its joint-space status ``status``, the iterate in ``u_js``, and the
-    counts of :data:`~masonrydam.solvers.joint_space.step_kernel.N_COUNTS` in ``counts``), the last step taken, the
-    state's times and the joint space's reference LU and whether it keeps a last force change."""
+    Returns ``(outcome, k, on_grid, t, tau, JT, piv, ref_rows, ref_qt, has_ref, has_dq, status)``: :data:`ALL_TAKEN`
+    (the state is on grid point ``k = k_last``, ``on_grid``), :data:`LEVEL_CHANGED` (dt = "auto": the last step
+    accepted changed the level; the state is before grid point ``k``) or :data:`HANDED_BACK` (the next step, toward
+    grid point ``k``, is the Python step's: from its joint-space result where ``status`` >= 0, the iterate in
+    ``u_js`` and the counts of :data:`~masonrydam.solvers.joint_space.step_kernel.N_COUNTS` in ``counts``; from its
+    start where ``status`` is -1, a shorter last step of the stage); the state's times, the joint space's reference
+    LU and whether it keeps a last force change."""
     n = free.shape[0]
     n_dof = u.shape[0]
     dim = ag.shape[0]
-    h = dt
     lumped = mass_diag.shape[0] == n
     zeros = np.zeros(n)
     state_force = np.zeros(n)
@@ -163,10 +184,22 @@ def implicit_steps(k_first, k_last, dt, t, tau, beta, gamma, am, af, w_m, weight
     P = js_q.shape[0]
     ns = base2.shape[1]
     delta_n, delta_n2, delta_i, delta_i2, guess, guess2 = js_work
+    u1 = np.empty(n)
     status = STEP_CONVERGED
-    k_done = k_first - 1
-    for k in range(k_first, k_last + 1):
-        t_end = k * dt
+    k = k_first
+    level = control[0]
+    hold = control[1]
+    top = control[2]
+    level_start = level
+    h = dt / 2.0 ** level
+    t_grid = min(k * dt, duration)
+    while True:
+        # -- the step toward grid point k (AdaptiveStepping.run; FixedSteps: level 0, one step a grid point)
+        t_end = tau + h
+        if t_end > t_grid - 1e-9 * dt:
+            if abs(t_grid - t_end) > 1e-9 * dt:  # a shorter last step of the stage: the Python step's
+                return HANDED_BACK, k, False, t, tau, JT, piv, ref_rows, ref_qt, has_ref, has_dq, -1
+            t_end = t_grid
         # -- the step's loads and constant part (ImplicitStep.__init__)
         for c in range(dim):
             ag1[c] = _ground_at(t_end, ground_times[c], ground_values[c])
@@ -189,7 +222,7 @@ def implicit_steps(k_first, k_last, dt, t, tau, beta, gamma, am, af, w_m, weight
         if damped:
             _csr(Cp, Ci, Cx, v1, cv1)
         if newmark_residual(ma, w_m, cv1, f_int, free, const, R) != STATUS_OK:
-            return HANDED_BACK, k_done, t, tau, JT, piv, ref_rows, ref_qt, has_ref, has_dq, -1
+            return HANDED_BACK, k, False, t, tau, JT, piv, ref_rows, ref_qt, has_ref, has_dq, -1
         ref = max(euclidean_norm(ma), free_norm(f_int, free), p1_norm, 0.0, 1e-30)
         for p in range(P):
             js_held[p] = 0
@@ -207,7 +240,7 @@ def implicit_steps(k_first, k_last, dt, t, tau, beta, gamma, am, af, w_m, weight
         for p in range(P):
             js_held[p] = 0
         if status != STEP_CONVERGED:
-            return HANDED_BACK, k_done, t, tau, JT, piv, ref_rows, ref_qt, has_ref, has_dq, status
+            return HANDED_BACK, k, False, t, tau, JT, piv, ref_rows, ref_qt, has_ref, has_dq, status
         predictor = counts[5] != 0
         its = 0 if predictor else counts[0]
         if predictor:
@@ -226,7 +259,7 @@ def implicit_steps(k_first, k_last, dt, t, tau, beta, gamma, am, af, w_m, weight
             f[i] = fc[i]
         if interface_forces(conn, u_js, N, frame, jw, thickness, jparams, jparam_index, base, trial, delta,
                             traction, fe, jinfo, law_id) != STATUS_OK:
-            return HANDED_BACK, k_done, t, tau, JT, piv, ref_rows, ref_qt, has_ref, has_dq, status
+            return HANDED_BACK, k, False, t, tau, JT, piv, ref_rows, ref_qt, has_ref, has_dq, status
         for el in range(fe.shape[0]):
             for r in range(fe.shape[1]):
                 f[jdofs[el, r]] += fe[el, r]
@@ -236,10 +269,10 @@ def implicit_steps(k_first, k_last, dt, t, tau, beta, gamma, am, af, w_m, weight
         if damped:
             _csr(Cp, Ci, Cx, v1, cv1)
         if newmark_residual(ma, w_m, cv1, f, free, const, R) != STATUS_OK:
-            return HANDED_BACK, k_done, t, tau, JT, piv, ref_rows, ref_qt, has_ref, has_dq, status
+            return HANDED_BACK, k, False, t, tau, JT, piv, ref_rows, ref_qt, has_ref, has_dq, status
         scale = max(euclidean_norm(ma), free_norm(f, free), p1_norm, 0.0, 1e-30)
         if not euclidean_norm(R) <= force_tolerance * scale:
-            return HANDED_BACK, k_done, t, tau, JT, piv, ref_rows, ref_qt, has_ref, has_dq, status
+            return HANDED_BACK, k, False, t, tau, JT, piv, ref_rows, ref_qt, has_ref, has_dq, status
         # -- the energy balance of the step (EnergyBalance.record, record_works)
         if not lumped:
             _csr(Mp, Mi, Mx, v1, mv1)
@@ -281,12 +314,37 @@ def implicit_steps(k_first, k_last, dt, t, tau, beta, gamma, am, af, w_m, weight
         e[E_ERROR] = e[E_INPUT] + e[E_EXTERNAL] + e[E_HYDRO] - (e[E_KINETIC] + e[E_STRAIN] + e[E_DAMPING]
                                                                  + e[E_STORED] + e[E_FRICTION] + e[E_BOND]
                                                                  + e[E_CONTACT] + e[E_NUMERICAL])
-        if growth_check:  # ImplicitStep._finish: a step that gains energy is refused (handed back)
-            g = _growth(e)
+        if growth_check and (not adaptive or level < top):  # ImplicitStep._finish: a step that gains energy
+            g = _growth(e)                                       # is refused (handed back)
             cap = growth_tolerance * energy_stats[0]
             allowed = max(cap, _growth(energy) + 0.01 * cap)
             if g > allowed and energy_stats[0] > 0:
-                return HANDED_BACK, k_done, t, tau, JT, piv, ref_rows, ref_qt, has_ref, has_dq, status
+                return HANDED_BACK, k, False, t, tau, JT, piv, ref_rows, ref_qt, has_ref, has_dq, status
+        if adaptive:  # AdaptiveStepping.step_error
+            for i in range(n):
+                u1[i] = u_js[free[i]]
+            e_zx = h * h * adapt[ADAPT_ERROR_CONSTANT] * difference_norm(a1, an)
+            u_peak = max(adapt[ADAPT_U_PEAK], difference_norm(u1, u_stage_start))
+            eta_zx = e_zx / max(u_peak, adapt[ADAPT_DISPLACEMENT_FLOOR] * np.sqrt(n))
+            v_max = 0.0
+            for i in range(n):
+                v_max = max(v_max, abs(v1[i]))
+            v_peak = max(adapt[ADAPT_V_PEAK], v_max)
+            miss = 0.0
+            for c in range(3):
+                if ground_times[c].shape[0]:
+                    miss = max(miss, chord_error(tau, t_end, ground_times[c], ground_values[c], ground_dt[c]))
+            eta_input = miss / max(v_peak, adapt[ADAPT_PEAK_GROUND_VELOCITY], 1e-300) if miss > 0 else 0.0
+            scale_e = max(energy_stats[0], abs(e[E_INPUT]), abs(e[E_EXTERNAL]), 1e-300)
+            eta_event = abs(e[E_CONTACT] - energy[E_CONTACT]) / scale_e
+            if energy_stats[0] <= 0:
+                eta_event = 0.0
+            eta = max(eta_zx, eta_input, eta_event)
+            if not (eta <= adapt[ADAPT_TOLERANCE] or not level < top):
+                return HANDED_BACK, k, False, t, tau, JT, piv, ref_rows, ref_qt, has_ref, has_dq, status
+            adapt[ADAPT_LAST_ERROR] = eta
+            adapt[ADAPT_U_PEAK] = u_peak
+            adapt[ADAPT_V_PEAK] = v_peak
         # -- the commit (Model.commit) and the accepted step (EnergyBalance.accept)
         for el in range(trial.shape[0]):
             for gp in range(trial.shape[1]):
@@ -325,5 +383,23 @@ def implicit_steps(k_first, k_last, dt, t, tau, beta, gamma, am, af, w_m, weight
         totals[3] += counts[2]
         totals[4] += counts[3]
         totals[5] += counts[4]
-        k_done = k
-    return ALL_TAKEN, k_done, t, tau, JT, piv, ref_rows, ref_qt, has_ref, has_dq, status
+        if adaptive:  # AdaptiveStepping.run after an accepted step
+            adapt[ADAPT_SMALLEST] = min(adapt[ADAPT_SMALLEST], h)
+            adapt[ADAPT_LARGEST] = max(adapt[ADAPT_LARGEST], h)
+            hold -= 1
+            if level > 0 and hold <= 0 and adapt[ADAPT_LAST_ERROR] < adapt[ADAPT_GROW_FRACTION] * adapt[ADAPT_TOLERANCE]:
+                h_up = dt / 2.0 ** (level - 1)
+                x = tau / h_up
+                if abs(x - round(x)) < 1e-6:
+                    level -= 1
+            elif level > top:
+                level = top
+            control[0] = level
+            control[1] = hold
+        if not t_grid - tau > 1e-9 * dt:  # grid point k reached
+            if k == k_last:
+                return ALL_TAKEN, k, True, t, tau, JT, piv, ref_rows, ref_qt, has_ref, has_dq, status
+            k += 1
+            t_grid = min(k * dt, duration)
+        if level != level_start:  # another step size: its joint space is the caller's to give
+            return LEVEL_CHANGED, k, False, t, tau, JT, piv, ref_rows, ref_qt, has_ref, has_dq, status

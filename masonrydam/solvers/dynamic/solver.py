@@ -142,12 +142,12 @@ class DynamicSolver:
                 stepping = (AdaptiveStepping(self, s, eq, self.energy, self.stats) if s.adaptive
                             else FixedSteps(self, s, self.stats))
                 self.compiled_loop = None
+                self.stage_duration = stage.duration
                 why_not = compiled_loop_off(m, s, eq, self.joint_spaces.by_step.get(s.dt))
                 if why_not:
                     self.stats.compiled_loop_off = why_not
                 else:
-                    self.compiled_loop = CompiledLoop(self, self.joint_spaces.by_step[s.dt],
-                                                      can_split=stepping.cutting.can_cut(0))
+                    self.compiled_loop = CompiledLoop(self)
                 self._last_converged = (0, st)
                 try:
                     # one BLAS thread: the dense LU of the joint-space solver (LAPACK) must be bitwise

@@ -24,6 +24,8 @@ import numpy as np
 
 from ...errors import ConvergenceError
 from ..newton import StepCutting
+from .kernels import difference_norm
+from .loop_kernel import HANDED_BACK
 
 #: dt = "auto": a step is taken one level larger when its error is below this fraction of the tolerance
 #: (the Zienkiewicz-Xie estimate goes like h^3 on a smooth response: doubling h multiplies it by 8)
@@ -67,7 +69,7 @@ class FixedSteps:
                 # the steps up to the next record (not the stage's last, which may be shorter) in one call
                 stride = max(1, stage.output_stride)
                 last = min(-(-k // stride) * stride, n_steps - 1)
-                st, k_done, handed_back = loop.run(st, k, last)
+                st, k_done, handed_back = loop.run(st, k, last, self.cutting.can_cut(0))
                 if k_done >= k:
                     self.solver.record_step(stage, k_done, st, n_steps)
                 k = k_done + 1
@@ -132,15 +134,33 @@ class AdaptiveStepping:
         last converged state."""
         s, solver = self.s, self.solver
         n_steps, top = stage.n_steps, stage.levels
+        #: the largest number of halvings of dt by the error control (dt_min), for the compiled loop
+        self.top = top
         self.u_stage_start = st.u[self.free].copy()
         self.u_peak = self.v_peak = 0.0
         self.peak_ground_velocity = max((g.peak_velocity for g in self.ground.values()), default=0.0)
         self.last_error, self.error_levels = 0.0, 0
         level = hold = 0
         last_level = top + s.max_substeps
-        for k in range(1, n_steps + 1):
+        loop = getattr(solver, "compiled_loop", None)
+        stride = max(1, stage.output_stride)
+        k = 0
+        while k < n_steps:
+            k += 1
             t_grid = min(k * s.dt, stage.duration)
             while t_grid - st.tau > 1e-9 * s.dt:
+                handed_back = None
+                if loop is not None and k < n_steps and loop.joint_space(s.dt / 2 ** level) is not None:
+                    # the steps up to the next record grid point (not the stage's last) in compiled calls
+                    last = min(-(-k // stride) * stride, n_steps - 1)
+                    st, outcome, k, on_grid, handed_back, level, hold = loop.run_adaptive(st, k, last, self, level,
+                                                                                          hold)
+                    solver._last_converged = (k, st)
+                    if on_grid:
+                        break
+                    t_grid = min(k * s.dt, stage.duration)
+                    if outcome != HANDED_BACK:  # another step size: its joint space, if it has one yet
+                        continue
                 h = s.dt / 2 ** level
                 t_end = st.tau + h
                 if t_end > t_grid - 1e-9 * s.dt:  # the step that reaches the grid point (or the stage's end)
@@ -151,7 +171,7 @@ class AdaptiveStepping:
                 # level (the error decides the step size); below dt_min a step is halved for Newton's sake only
                 ok, new, why = solver.try_step(st, t_end, h, can_split=level < top,
                                                error_check=partial(self.step_error, enforce=level < top),
-                                               split_joint_space=False)
+                                               split_joint_space=False, joint_space_result=handed_back)
                 if not ok:
                     solver.refuse_step(st)
                     self.stats.steps_rejected += 1
@@ -213,8 +233,8 @@ class AdaptiveStepping:
         # Euclidean norms over the free DOFs, as Zienkiewicz & Xie: a joint's rattle, a few DOFs with
         # large accelerations, weighs by its share of the motion, not as much as the whole structure
         u1, v1, a1 = new.free_values(free)
-        e_zx = h * h * error_constant * float(np.linalg.norm(a1 - st.free_values(free)[2]))
-        u_peak = max(self.u_peak, float(np.linalg.norm(u1 - self.u_stage_start)))
+        e_zx = h * h * error_constant * difference_norm(a1, st.free_values(free)[2])
+        u_peak = max(self.u_peak, difference_norm(u1, self.u_stage_start))
         eta_zx = e_zx / max(u_peak, ADAPTIVE_DISPLACEMENT_FLOOR * math.sqrt(len(free)))
         # the ground load between the step's ends: the velocity missed, over the velocity scale
         v_peak = max(self.v_peak, float(np.max(np.abs(v1), initial=0.0)))

@@ -10,8 +10,7 @@ Cases: ``coarse_fixed`` the section at element_size 12 m (358 DOF, 88 joint poin
 example itself (element_size 1.45 m, about 7 500 DOF, 588 joint points, dt = "auto") over its first
 ``--example-duration`` s of record. Each case runs on the three paths in turn, ``--repeats`` times (the machine's
 timing noise is about 10 %), and prints per path: ms a step of the dynamic stage, the joint-space solve's share
-(not separable inside the loop) and whether the datasets are equal bit for bit. dt = "auto" stages do not take
-the loop yet: there its figures are those of the compiled joint-space step.
+(not separable inside the loop) and whether the datasets are equal bit for bit.
 
 Then, for the coarse section, the floor the issue measures against (issue 35, target 1): one substitution with
 the all-stick factor plus one pass of the joint law over every point, timed here, and the step's cost as a
@@ -104,16 +103,16 @@ class Recorder:
         from masonrydam.solvers.dynamic import compiled_loop
 
         self.loop_seconds = 0.0
-        loop_run = compiled_loop.CompiledLoop.run
+        loop_call = compiled_loop.CompiledLoop._call
 
         def timed_loop(loop, *args, **kwargs):
             t0 = time.perf_counter()
             try:
-                return loop_run(loop, *args, **kwargs)
+                return loop_call(loop, *args, **kwargs)
             finally:
                 rec.loop_seconds += time.perf_counter() - t0
 
-        compiled_loop.CompiledLoop.run = timed_loop
+        compiled_loop.CompiledLoop._call = timed_loop
 
         def counted(original, attribute):
             def wrapper(*args, **kwargs):

@@ -28,8 +28,8 @@ from .loop_kernel import (ADAPT_DISPLACEMENT_FLOOR, ADAPT_ERROR_CONSTANT, ADAPT_
 from .stage import StepState
 from .step_control import ADAPTIVE_DISPLACEMENT_FLOOR, ADAPTIVE_GROW_FRACTION
 
-#: implicit stages at fixed dt run their common-path steps in the compiled loop (False: every step in Python, the
-#: same results; for comparisons and benchmarks)
+#: implicit stages run their common-path steps in the compiled loop (False: every step in Python, the same results;
+#: for comparisons and benchmarks)
 COMPILED_LOOP = True
 
 
@@ -55,7 +55,8 @@ def compiled_loop_off(model, settings, equations, joint_space) -> str:
         if (not g.nonlinear or law is not g0.joint_law or not law.fused or g.kinematics != "small"
                 or law.time_step_column is not None or g.N.shape != g0.N.shape or not np.array_equal(g.N, g0.N)
                 or g.dofs.shape[1] != g0.dofs.shape[1]):
-            return f"joint set '{g.name}' differs from the others (law, integration rule or kinematics)"
+            return (f"joint set '{g.name}' (linear, a law without a fused kernel or with a time step, large kinematics, "
+                    "or another law or integration rule than the first set's)")
     if eq.fluid is not None:
         return "a compressible reservoir"
     terms = eq.terms

@@ -10,7 +10,8 @@ for bit (``tests/solvers/test_compiled_loop.py``). One that leaves it (the joint
 the full residual is above the tolerance, the step gains energy, its local error is above the tolerance, NaN) is
 finished by :class:`~.implicit.ImplicitStep` from its joint-space result, and a refused one is halved or retried
 smaller by the step control (:mod:`.step_control`) as before. Between two calls Python records the state (every
-``output_stride`` grid points), tells the progress and asks whether to stop; the steps in between are not asked.
+``output_stride`` grid points, at least every :data:`~.step_control.GRID_POINTS_PER_CALL`), tells the progress
+and asks whether to stop; the steps in between are not asked.
 See docs/dynamics.md ("The compiled step loop").
 """
 from __future__ import annotations

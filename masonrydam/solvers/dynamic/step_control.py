@@ -39,6 +39,18 @@ ADAPTIVE_DISPLACEMENT_FLOOR = 1e-4
 #: how a step refused by dt = "auto"'s error control says so
 ERROR_REFUSAL = "local error"
 
+#: a call of the compiled step loop (:mod:`.compiled_loop`) ends at the next record or after this many grid points
+#: (steps of a fixed dt, multiples of dt_max with dt = "auto"), whichever comes first: Python then tells the
+#: progress and asks whether to stop (signals are held during a call), so a stop waits at most this many grid
+#: points; a call costs about 0.1-0.2 ms of Python
+GRID_POINTS_PER_CALL = 64
+
+
+def last_grid_point(k: int, stride: int, n_steps: int) -> int:
+    """The grid point a call of the loop starting toward grid point ``k`` ends at: the next record (every ``stride``),
+    at most :data:`GRID_POINTS_PER_CALL` on, never the stage's last (``n_steps``, which may be shorter)."""
+    return min(-(-k // stride) * stride, n_steps - 1, k + GRID_POINTS_PER_CALL - 1)
+
 
 def step_end(k: int, n_steps: int, dt: float, duration: float, tau: float) -> tuple[float, float]:
     """End time and size of step ``k`` (1-based) of a stage: nominal steps use h = dt exactly (the
@@ -67,8 +79,7 @@ class FixedSteps:
             handed_back = None
             if loop is not None and k < n_steps:
                 # the steps up to the next record (not the stage's last, which may be shorter) in one call
-                stride = max(1, stage.output_stride)
-                last = min(-(-k // stride) * stride, n_steps - 1)
+                last = last_grid_point(k, max(1, stage.output_stride), n_steps)
                 st, k_done, handed_back = loop.run(st, k, last, self.cutting.can_cut(0))
                 if k_done >= k:
                     self.solver.record_step(stage, k_done, st, n_steps)
@@ -152,7 +163,7 @@ class AdaptiveStepping:
                 handed_back = None
                 if loop is not None and k < n_steps and loop.joint_space(s.dt / 2 ** level) is not None:
                     # the steps up to the next record grid point (not the stage's last) in compiled calls
-                    last = min(-(-k // stride) * stride, n_steps - 1)
+                    last = last_grid_point(k, stride, n_steps)
                     st, outcome, k, on_grid, handed_back, level, hold = loop.run_adaptive(st, k, last, self, level,
                                                                                           hold)
                     solver._last_converged = (k, st)

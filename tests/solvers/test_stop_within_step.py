@@ -161,3 +161,32 @@ def test_stop_between_calls_of_the_compiled_step_loop(tmp_path, monkeypatch):
     assert ds.sizes["step"] == ref.sizes["step"]
     np.testing.assert_array_equal(ds.time.values, ref.time.values)
     np.testing.assert_array_equal(ds.displacement.values, ref.displacement.values)
+
+
+def test_stop_between_calls_of_the_compiled_step_loop_with_dt_auto(tmp_path, monkeypatch):
+    """The same with dt = "auto" (output every 0.02 s): calls of the loop end at records, where a step takes another
+    size and where a step is handed back; a stop asked for from the 12th question on (records and the questions
+    between calls alike) stops the run, which keeps the records before it, equal to an uninterrupted run's."""
+    scene = sliding_block(duration=0.4, dt="auto", integrator="hht", output={"dt": 0.02})
+    asked = {"n": 0}
+
+    def requested(self):
+        if sys._getframe(1).f_code.co_name in ("_maybe_emit", "between_calls"):
+            asked["n"] += 1
+            return "interrupted" if asked["n"] >= 12 else None
+        return None
+
+    monkeypatch.setattr(StopRequests, "requested", requested)
+    out = tmp_path / "out.nc"
+    with pytest.raises(RunStopped):
+        masonrydam.run(scene, output=out)
+    monkeypatch.undo()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", IncompleteResultWarning)
+        ds = open_result(out)
+    full = masonrydam.run(sliding_block(duration=0.4, dt="auto", integrator="hht", output={"dt": 0.02}))
+    assert full.attrs["dynamic_compiled_loop_steps"] > 0
+    n = ds.sizes["step"] - 1  # (the last record is the state the run stopped at)
+    assert 0 < n < full.sizes["step"]
+    np.testing.assert_array_equal(ds.time.values[:n], full.time.values[:n])
+    np.testing.assert_array_equal(ds.displacement.values[:n], full.displacement.values[:n])

@@ -209,11 +209,13 @@ class CompiledLoop:
                 adaptive, control, adapt, u_stage_start,
                 u, v, a, f_int, kc_u, cv, ag, totals)
         outcome, k, on_grid, t, tau, JT, piv, ref_rows, ref_qt, has_ref, has_dq, status = result
-        # the joint sets' arrays back (committed to the last step taken; the trial state and fields of the step
-        # handed back are evaluated again by the Python step, or restored by its refusal)
+        # the joint sets' arrays back as the last step taken committed them: its state, and its relative
+        # displacements and tractions (a step handed back after its joints were evaluated left its trial values in
+        # the joined arrays; the Python step evaluates them again, and a stop before it records these)
         start = 0
         for g, end in zip(groups, self.ends):
-            for name, x in zip(("state_committed", "state_base", "state_trial", "delta", "traction", "fe"), joined):
+            for name, x in (("state_committed", committed), ("state_base", committed), ("state_trial", committed),
+                            ("delta", prev[0]), ("traction", prev[1])):
                 getattr(g, name)[...] = x[start:end]
             start = end
         steps = int(totals[0])

@@ -24,6 +24,7 @@ from ...errors import SceneError
 from ...materials.joint_laws import RESULT_STICK
 from .explicit import node_mass_blocks
 from .fluid import ExplicitAcoustic
+from .kernels import ground_load as ground_load_kernel
 from .stage import DynamicTerms
 
 #: effective-matrix values kept per step size before the caches are cleared
@@ -182,7 +183,9 @@ class StageEquations:
         key = ag.tobytes() + struct.pack("d", tau)
         v = self._recent_ground_loads.get(key)
         if v is None:
-            v = -(ag @ self.mass_influence_free) if self.terms.support_excitation else np.zeros(self.n)
+            v = np.zeros(self.n)
+            if self.terms.support_excitation:
+                ground_load_kernel(np.ascontiguousarray(ag, dtype=np.float64), self.mass_influence_free, v)
             if self.bottom_influence_free is not None:  # the reservoir bottom pushing incompressible water
                 v = v - self.bottom_at(tau, ag) @ self.bottom_influence_free
             if self.terms.force is not None:

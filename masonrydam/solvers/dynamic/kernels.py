@@ -56,6 +56,19 @@ def dot_product(x, y) -> float:
 
 
 @numba.njit(cache=True)
+def ground_load(ag, influence, out):
+    """``out = -(a_g . M iota)`` (n,) N from the ground acceleration ``ag`` (dim,) m/s2 and ``influence`` (dim, n)
+    kg, the directions summed in order (numpy's ``ag @ influence`` is BLAS's ``gemv``, whose order differs between
+    the BLAS numpy ships and the one numba calls; see :func:`euclidean_norm`)."""
+    dim, n = influence.shape
+    for i in range(n):
+        acc = ag[0] * influence[0, i]
+        for c in range(1, dim):
+            acc += ag[c] * influence[c, i]
+        out[i] = -acc
+
+
+@numba.njit(cache=True)
 def newmark_kinematics(u, free, un, vn, an, h, beta, gamma, mass_diag, a1, v1, Ma):
     """End-of-step acceleration and velocity of an implicit Newmark-family step (Newmark 1959; Hughes
     2000, *The Finite Element Method*, sec. 9.1) from the end-of-step displacements ``u`` (n_dof,) m on

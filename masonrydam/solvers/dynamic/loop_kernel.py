@@ -36,8 +36,9 @@ from ...elements.interface import interface_forces
 from ...errors import STATUS_OK
 from ..joint_space.step_kernel import STEP_CONVERGED, joint_space_step
 from .ground_motion import chord_error, record_at
-from .kernels import (difference_norm, dot_product, euclidean_norm, free_norm, joint_step_energy, joint_stored_energy_range,
-                      newmark_kinematics, newmark_residual, step_constant, step_loads, step_works)
+from .kernels import (difference_norm, dot_product, euclidean_norm, free_norm, ground_load, joint_step_energy,
+                      joint_stored_energy_range, newmark_kinematics, newmark_residual, step_constant, step_loads,
+                      step_works)
 
 #: every step asked for was taken
 ALL_TAKEN = 0
@@ -84,9 +85,7 @@ def _ground_at(t, times, values):
 def _ground_load(ag, influence, support_excitation, out):
     """:meth:`~.equations.StageEquations.ground_load` without loads given in time: ``-(a_g . M iota)``."""
     if support_excitation:
-        g = np.dot(ag, influence)
-        for i in range(out.shape[0]):
-            out[i] = -g[i]
+        ground_load(ag, influence, out)
     else:
         for i in range(out.shape[0]):
             out[i] = 0.0

@@ -294,6 +294,18 @@ class DynamicSolver:
         self.on_step(rec)
         self.stats.output_time_s += time.perf_counter() - t0
 
+    def between_calls(self, stage, k, st, n_steps):
+        """After a call of the compiled step loop that ended between grid points (``st`` past grid point ``k``): the
+        last converged state kept, the progress told and a stop asked for, as :meth:`record_step` does without
+        recording."""
+        self._last_converged = (k, st)
+        if self.progress is not None:
+            self.progress(st.tau / stage.duration)
+        status = self.stop_requested() if self.stop_requested is not None else None
+        if status is not None:
+            self.fail(stage, st, RunStopped(status, f"after step {k} of {n_steps} (t = {st.t:.4g} s) of stage "
+                                                    f"'{stage.name}'"))
+
     def _maybe_emit(self, stage, k, st, n_steps):
         last = k == n_steps
         if last or k % stage.output_stride == 0:

@@ -166,9 +166,10 @@ class AdaptiveStepping:
                     last = last_grid_point(k, stride, n_steps)
                     st, outcome, k, on_grid, handed_back, level, hold = loop.run_adaptive(st, k, last, self, level,
                                                                                           hold)
-                    solver._last_converged = (k, st)
                     if on_grid:
                         break
+                    # before grid point k: the progress told and a stop asked for, no record
+                    solver.between_calls(stage, k - 1, st, n_steps)
                     t_grid = min(k * s.dt, stage.duration)
                     if outcome != HANDED_BACK:  # another step size: its joint space, if it has one yet
                         continue

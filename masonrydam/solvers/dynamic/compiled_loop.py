@@ -24,8 +24,8 @@ from ..joint_space.step_kernel import AVAILABLE
 from .energy import ENERGY_KEYS
 from .implicit import JOINT_SPACE_FORCE_FRACTION
 from .loop_kernel import (ADAPT_DISPLACEMENT_FLOOR, ADAPT_ERROR_CONSTANT, ADAPT_GROW_FRACTION, ADAPT_LARGEST,
-                          ADAPT_LAST_ERROR, ADAPT_PEAK_GROUND_VELOCITY, ADAPT_SMALLEST, ADAPT_TOLERANCE, ADAPT_U_PEAK, ADAPT_V_PEAK, E_BOND,
-                          E_CONTACT, E_NUMERICAL, HANDED_BACK, N_ADAPT, N_TOTALS, implicit_steps)
+                          ADAPT_LAST_ERROR, ADAPT_PEAK_GROUND_VELOCITY, ADAPT_SMALLEST, ADAPT_TOLERANCE, ADAPT_U_PEAK,
+                          ADAPT_V_PEAK, E_BOND, E_CONTACT, E_NUMERICAL, HANDED_BACK, N_ADAPT, N_TOTALS, implicit_steps)
 from .stage import StepState
 from .step_control import ADAPTIVE_DISPLACEMENT_FLOOR, ADAPTIVE_GROW_FRACTION
 
@@ -56,8 +56,8 @@ def compiled_loop_off(model, settings, equations, joint_space) -> str:
         if (not g.nonlinear or law is not g0.joint_law or not law.fused or g.kinematics != "small"
                 or law.time_step_column is not None or g.N.shape != g0.N.shape or not np.array_equal(g.N, g0.N)
                 or g.dofs.shape[1] != g0.dofs.shape[1]):
-            return (f"joint set '{g.name}' (linear, a law without a fused kernel or with a time step, large kinematics, "
-                    "or another law or integration rule than the first set's)")
+            return (f"joint set '{g.name}' (linear, a law without a fused kernel or with a time step, large "
+                    "kinematics, or another law or integration rule than the first set's)")
     if eq.fluid is not None:
         return "a compressible reservoir"
     terms = eq.terms

@@ -106,9 +106,7 @@ class GroundMotion:
         return (len(self.values) - 1) * self.dt
 
     def at(self, t: float) -> float:
-        if t < 0.0 or t > self._times[-1] * (1 + 1e-12):
-            return 0.0
-        return float(np.interp(t, self._times, self.values))
+        return float(record_at(t, self._times, self.values))
 
     @property
     def peak_velocity(self) -> float:

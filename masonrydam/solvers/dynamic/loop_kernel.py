@@ -8,7 +8,8 @@ ground acceleration (``np.interp`` of the record), the ground loads (``-(a_g . M
 and :func:`~.kernels.step_constant`, the residual at the start (:func:`~.kernels.newmark_kinematics`,
 :func:`~.kernels.newmark_residual`, the sparse products in scipy's order), the joint-space step
 (:func:`masonrydam.solvers.joint_space.step_kernel.joint_space_step`), the joints' forces at its solution
-(:func:`masonrydam.elements.interface.interface_forces` and the assembly of :func:`~masonrydam.assembly.sparsity.scatter_vector`),
+(:func:`masonrydam.elements.interface.interface_forces` and the assembly of
+:func:`~masonrydam.assembly.sparsity.scatter_vector`),
 the residual there, the energy balance of :meth:`~.energy.EnergyBalance.record` and
 :meth:`~.energy.EnergyBalance.accept` with the same kernels and the same order of sums, the local error of
 :meth:`~.step_control.AdaptiveStepping.step_error` (with the compiled :func:`~.ground_motion.chord_error`), the commit
@@ -16,12 +17,13 @@ and the choice of the next step size. The steps it
 takes are equal bit for bit to those of the Python loop (``tests/solvers/test_compiled_loop.py``).
 
 Where a step leaves the common path (the joint-space iteration does not converge or fails, the full residual is
-above the tolerance, the step gains energy or its local error is above the tolerance, NaN), the kernel stops *after* that step's joint-space call and hands
-the step back (:data:`HANDED_BACK`): the joint space's own state (its last force change, its capacitance LU) is then
-exactly what the Python loop would have left, and :class:`~.compiled_loop.CompiledLoop` finishes the step in Python
-from the joint-space result. What the kernel changed for the step handed back (the joints' trial state and fields)
-is what the Python step evaluates again from the committed state. With dt = "auto" the kernel also returns where a
-step it accepted chose another step size (:data:`LEVEL_CHANGED`): that size's joint space is another one.
+above the tolerance, the step gains energy or its local error is above the tolerance, NaN), the kernel stops *after*
+that step's joint-space call and hands the step back (:data:`HANDED_BACK`): the joint space's own state (its last
+force change, its capacitance LU) is then exactly what the Python loop would have left, and
+:class:`~.compiled_loop.CompiledLoop` finishes the step in Python from the joint-space result. What the kernel
+changed for the step handed back (the joints' trial state and fields) is what the Python step evaluates again from
+the committed state. With dt = "auto" the kernel also returns where a step it accepted chose another step size
+(:data:`LEVEL_CHANGED`): that size's joint space is another one.
 
 Why it is written out: the Python around one joint-space call took about 200 us a step on the coarse Koyna section
 (the step's set-up, two residuals, the model's forces, the energy balance; docs/performance.md), against 68 us for
@@ -34,7 +36,7 @@ import numpy as np
 
 from ...elements.interface import interface_forces
 from ...errors import STATUS_OK
-from ..joint_space.step_kernel import STEP_CONVERGED, joint_space_step
+from ..joint_space.step_kernel import STEP_CONVERGED, csr_product, joint_space_step
 from .ground_motion import chord_error, record_at
 from .kernels import (difference_norm, dot_product, euclidean_norm, free_norm, ground_load, joint_step_energy,
                       joint_stored_energy_range, newmark_kinematics, newmark_residual, step_constant, step_loads,
@@ -64,16 +66,6 @@ E_INPUT, E_EXTERNAL, E_HYDRO, E_KINETIC, E_STRAIN, E_DAMPING, E_JOINT, E_STORED,
 
 
 @numba.njit(cache=True)
-def _csr(indptr, indices, data, x, out):
-    """``out = A x``, each row summed from 0.0 in the order of its entries (scipy's csr_matvec)."""
-    for i in range(out.shape[0]):
-        acc = 0.0
-        for k in range(indptr[i], indptr[i + 1]):
-            acc += data[k] * x[indices[k]]
-        out[i] = acc
-
-
-@numba.njit(cache=True)
 def _ground_at(t, times, values):
     """:meth:`~.ground_motion.GroundMotion.at`; a component without a record (no samples) is zero."""
     if times.shape[0] == 0:
@@ -92,6 +84,21 @@ def _ground_load(ag, influence, support_excitation, out):
 
 
 @numba.njit(cache=True)
+def _residual(u, f_int, free, un, vn, an, h, beta, gamma, mass_diag, Mp, Mi, Mx, damped, Cp, Ci, Cx, w_m, const,
+              p1_norm, a1, v1, ma, cv1, R):
+    """:meth:`~.implicit.ImplicitStep.residual` at ``u`` with internal forces ``f_int`` (n_dof,) into ``a1``, ``v1``,
+    ``ma`` (``M a1``, scaled), ``cv1`` (``C v1``) and ``R`` (n,), and the force scale of its convergence test
+    (:meth:`~.implicit.ImplicitStep.force_scale` at the first iteration); returns ``(status, scale)``."""
+    newmark_kinematics(u, free, un, vn, an, h, beta, gamma, mass_diag, a1, v1, ma)
+    if mass_diag.shape[0] != free.shape[0]:
+        csr_product(Mp, Mi, Mx, a1, ma)
+    if damped:
+        csr_product(Cp, Ci, Cx, v1, cv1)
+    status = newmark_residual(ma, w_m, cv1, f_int, free, const, R)
+    return status, max(euclidean_norm(ma), free_norm(f_int, free), p1_norm, 0.0, 1e-30)
+
+
+@numba.njit(cache=True)
 def _growth(e):
     """:func:`~.energy.energy_growth`, in its order of operations."""
     return (e[E_KINETIC] + e[E_STRAIN] + e[E_STORED] + e[E_DAMPING] - e[E_EXTERNAL] - e[E_INPUT]
@@ -105,8 +112,8 @@ def implicit_steps(k_first, k_last, dt, duration, t, tau, beta, gamma, am, af, w
                    conn, N, frame, jw, thickness, jparams, jparam_index, law_id, jdofs, group_ends, compliance_n,
                    compliance_s, jweight, committed, base, trial, delta, traction, fe, jinfo, base2,
                    prev_delta, prev_traction, prev_state,
-                   js_fixed, js_params, js_param_index, js_weight, js_base, js_trial, js_traction, js_q, js_qt, js_codes,
-                   js_info, js_held, ST, slot, wk, dq_last, has_dq, JT, piv, ref_rows, ref_qt, has_ref, max_newton,
+                   js_fixed, js_params, js_param_index, js_weight, js_base, js_trial, js_traction, js_q, js_qt,
+                   js_codes, js_info, js_held, ST, slot, wk, dq_last, has_dq, JT, piv, ref_rows, ref_qt, has_ref, max_newton,
                    n_fixed, flips_before_hold, update_min_changes, update_change_fraction, singular_pivot,
                    latch_column, open_code, js_work, u_js, dq_out, counts, err_out,
                    force_tolerance, joint_space_fraction, growth_check, growth_tolerance,
@@ -210,19 +217,15 @@ def implicit_steps(k_first, k_last, dt, duration, t, tau, beta, gamma, am, af, w
             vn[i] = v[free[i]]
             an[i] = a[free[i]]
         if am != 0.0 and not lumped:
-            _csr(Mp, Mi, Mx, an, ma_n)
+            csr_product(Mp, Mi, Mx, an, ma_n)
         cv_n = cv if af != 0.0 else zeros
         step_constant(p1, pn, mass_diag, ma_n, an, weight_m, cv_n, f_int, free, weight_f, const)
         p1_norm = euclidean_norm(p1)
         # -- the residual at the start and the joint-space step (ImplicitStep.solve, _joint_space_start)
-        newmark_kinematics(u, free, un, vn, an, h, beta, gamma, mass_diag, a1, v1, ma)
-        if not lumped:
-            _csr(Mp, Mi, Mx, a1, ma)
-        if damped:
-            _csr(Cp, Ci, Cx, v1, cv1)
-        if newmark_residual(ma, w_m, cv1, f_int, free, const, R) != STATUS_OK:
+        residual_status, ref = _residual(u, f_int, free, un, vn, an, h, beta, gamma, mass_diag, Mp, Mi, Mx, damped,
+                                         Cp, Ci, Cx, w_m, const, p1_norm, a1, v1, ma, cv1, R)
+        if residual_status != STATUS_OK:
             return HANDED_BACK, k, False, t, tau, JT, piv, ref_rows, ref_qt, has_ref, has_dq, -1
-        ref = max(euclidean_norm(ma), free_norm(f_int, free), p1_norm, 0.0, 1e-30)
         for p in range(P):
             js_held[p] = 0
             for s in range(ns):
@@ -233,8 +236,9 @@ def implicit_steps(k_first, k_last, dt, duration, t, tau, beta, gamma, am, af, w
         status, JT, piv, ref_rows, ref_qt, has_ref = joint_space_step(
             Lp, Li, Lx, dd, perm, Bp, Bi, Bx, BTp, BTi, BTx, js_free, XT, recovery_columns_max,
             js_params, js_param_index, js_weight, js_base, js_trial, js_traction, js_q, js_qt, js_codes,
-            js_info, js_held, ST, slot, wk, u, R, tolerance, dq_start, has_dq, JT, piv, ref_rows, ref_qt, has_ref, max_newton, n_fixed,
-            flips_before_hold, update_min_changes, update_change_fraction, singular_pivot, latch_column, open_code,
+            js_info, js_held, ST, slot, wk, u, R, tolerance, dq_start, has_dq, JT, piv, ref_rows, ref_qt, has_ref,
+            max_newton, n_fixed, flips_before_hold, update_min_changes, update_change_fraction, singular_pivot,
+            latch_column, open_code,
             False, 0, 0, delta_n, delta_n2, delta_i, delta_i2, guess, guess2, u_js, dq_out, counts, err_out)
         for p in range(P):
             js_held[p] = 0
@@ -253,7 +257,7 @@ def implicit_steps(k_first, k_last, dt, duration, t, tau, beta, gamma, am, af, w
                     if js_base[p, latch_column] > base2[p, latch_column]:
                         base2[p, latch_column] = js_base[p, latch_column]
         # -- the forces at the joint-space solution and the residual there (Model.evaluate, forces only)
-        _csr(Kp, Ki, Kx, u_js, fc)
+        csr_product(Kp, Ki, Kx, u_js, fc)
         for i in range(n_dof):
             f[i] = fc[i]
         if interface_forces(conn, u_js, N, frame, jw, thickness, jparams, jparam_index, base, trial, delta,
@@ -262,21 +266,17 @@ def implicit_steps(k_first, k_last, dt, duration, t, tau, beta, gamma, am, af, w
         for el in range(fe.shape[0]):
             for r in range(fe.shape[1]):
                 f[jdofs[el, r]] += fe[el, r]
-        newmark_kinematics(u_js, free, un, vn, an, h, beta, gamma, mass_diag, a1, v1, ma)
-        if not lumped:
-            _csr(Mp, Mi, Mx, a1, ma)
-        if damped:
-            _csr(Cp, Ci, Cx, v1, cv1)
-        if newmark_residual(ma, w_m, cv1, f, free, const, R) != STATUS_OK:
+        residual_status, scale = _residual(u_js, f, free, un, vn, an, h, beta, gamma, mass_diag, Mp, Mi, Mx, damped,
+                                           Cp, Ci, Cx, w_m, const, p1_norm, a1, v1, ma, cv1, R)
+        if residual_status != STATUS_OK:
             return HANDED_BACK, k, False, t, tau, JT, piv, ref_rows, ref_qt, has_ref, has_dq, status
-        scale = max(euclidean_norm(ma), free_norm(f, free), p1_norm, 0.0, 1e-30)
         if not euclidean_norm(R) <= force_tolerance * scale:
             return HANDED_BACK, k, False, t, tau, JT, piv, ref_rows, ref_qt, has_ref, has_dq, status
         # -- the energy balance of the step (EnergyBalance.record, record_works)
         if not lumped:
-            _csr(Mp, Mi, Mx, v1, mv1)
-            _csr(Mp, Mi, Mx, an, ma0)
-            _csr(Mp, Mi, Mx, a1, ma1)
+            csr_product(Mp, Mi, Mx, v1, mv1)
+            csr_product(Mp, Mi, Mx, an, ma0)
+            csr_product(Mp, Mi, Mx, a1, ma1)
         # the end state's a over all DOFs (zero where constrained), for step_works
         for i in range(n_dof):
             a_new[i] = 0.0
@@ -386,7 +386,8 @@ def implicit_steps(k_first, k_last, dt, duration, t, tau, beta, gamma, am, af, w
             adapt[ADAPT_SMALLEST] = min(adapt[ADAPT_SMALLEST], h)
             adapt[ADAPT_LARGEST] = max(adapt[ADAPT_LARGEST], h)
             hold -= 1
-            if level > 0 and hold <= 0 and adapt[ADAPT_LAST_ERROR] < adapt[ADAPT_GROW_FRACTION] * adapt[ADAPT_TOLERANCE]:
+            grow_below = adapt[ADAPT_GROW_FRACTION] * adapt[ADAPT_TOLERANCE]
+            if level > 0 and hold <= 0 and adapt[ADAPT_LAST_ERROR] < grow_below:
                 h_up = dt / 2.0 ** (level - 1)
                 x = tau / h_up
                 if abs(x - round(x)) < 1e-6:

@@ -123,7 +123,7 @@ def _fill_int8(dst, value):
 
 
 @numba.njit(cache=True)
-def _csr_product(indptr, indices, data, x, out):
+def csr_product(indptr, indices, data, x, out):
     """``out = A x`` for a CSR matrix, each row summed in the order of its entries (as scipy's csr_matvec)."""
     for i in range(out.shape[0]):
         acc = 0.0
@@ -269,8 +269,8 @@ def joint_space_step(Lp, Li, Lx, d, perm, Bp, Bi, Bx, BTp, BTi, BTx, free, XT, r
     for i in range(n_eq):
         u_y[free[i]] -= x[i]
     delta_y = np.empty(m)
-    _csr_product(Bp, Bi, Bx, u_n, delta_n)
-    _csr_product(Bp, Bi, Bx, u_y, delta_y)
+    csr_product(Bp, Bi, Bx, u_n, delta_n)
+    csr_product(Bp, Bi, Bx, u_y, delta_y)
     none_held = np.zeros(P, dtype=np.int8)
     st = joint_law_at_points(np.zeros(0, dtype=np.int64), P, params_table, param_index, weight,
                              delta_n2, base, trial, traction, q, qt, codes, info, none_held)
@@ -527,7 +527,7 @@ def joint_space_step(Lp, Li, Lx, d, perm, Bp, Bi, Bx, BTp, BTi, BTx, free, XT, r
             counts[4] = 1
         else:
             rhs = np.empty(n_eq)
-            _csr_product(BTp, BTi, BTx, dq, rhs)
+            csr_product(BTp, BTi, BTx, dq, rhs)
             if ldlt_solve_vector(Lp, Li, Lx, d, perm, rhs, x, w) != 0:
                 return STEP_FACTOR_NAN, J.T, piv, ref_rows, ref_qt, has_ref
             for i in range(n_eq):

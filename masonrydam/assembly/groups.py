@@ -245,6 +245,12 @@ class InterfaceGroup:
         self.jw = np.zeros((ne, self.nip))
         st = ik.interface_geometry(coords, self.conn, self.N, self.dN, self.weights, self.points, self.frame, self.jw, self.info)
         raise_for_status(st, self.info, name, "interface geometry")
+        #: a forces-only evaluation reads the reference frames and weights computed here
+        #: (:func:`~masonrydam.elements.interface.interface_forces`) instead of computing them again
+        #: (``interface_evaluate`` without tangents): set by :meth:`Model.use_stored_frames` for time stepping,
+        #: where forces-only evaluations come every step. A static run evaluates forces a few times a step
+        #: and does not compile that second kernel (about 2 s of the default scene's first run, AMD EPYC).
+        self.forces_from_stored_frames = False
 
     @property
     def n_elem(self) -> int:
@@ -272,7 +278,7 @@ class InterfaceGroup:
                 want_tangent, self.info)
         if self.kinematics == "large":
             st = interface_large_evaluate(*args, 0.0 if self.frame_surface == "bottom" else 0.5, self.law_id)
-        elif not want_tangent:  # forces only (an explicit step): the reference frames computed once
+        elif not want_tangent and self.forces_from_stored_frames:  # forces only: the reference frames computed once
             st = ik.interface_forces(self.conn, u, self.N, self.frame, self.jw, self.thickness, self.params_table,
                                      self.param_index, self.state_base, self.state_trial, self.delta, self.traction,
                                      self.fe, self.info, self.law_id)

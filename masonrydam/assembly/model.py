@@ -303,6 +303,13 @@ class Model:
             K = sp.csr_matrix((data, self.indices, self.indptr), shape=(n, n))
         return f, K
 
+    def use_stored_frames(self) -> None:
+        """Forces-only evaluations (``evaluate(u, want_tangent=False)``) of the joints read the reference frames
+        and weights computed when the model was built (``InterfaceGroup.forces_from_stored_frames``): the
+        dynamic solver's choice, where they come every step (the compiled step loop uses the same kernel)."""
+        for g in self.igroups:
+            g.forces_from_stored_frames = True
+
     def tangent_product(self, x: np.ndarray) -> np.ndarray:
         """``K x`` (n_dof,) with the full-DOF tangent of the last evaluation with tangents (the linear blocks'
         constant stiffness, the element tangents of nonlinear blocks and joints), for any ``x`` (n_dof,),

@@ -10,13 +10,9 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-import obspy
-from obspy.core.util import AttribDict
 
-from .. import records as rec
 from ..errors import SceneError
 from ..pulses import pulse_samples
-from ..records import RecordError
 from ..solvers.dynamic import GroundMotion, scheme_named
 from .base import Effect
 
@@ -99,6 +95,9 @@ def _modes(scene, model):
 
 def _synthetic_trace(values, dt, source: str, parameters: dict):
     """An obspy Trace (m/s2) for a ground motion given in the scene (values or a pulse), with provenance."""
+    import obspy  # here, not at import: a scene without a ground motion does not load obspy (about 35 ms)
+    from obspy.core.util import AttribDict
+
     tr = obspy.Trace(data=np.ascontiguousarray(values, dtype=np.float64))
     tr.stats.delta = dt
     tr.stats.masonrydam = AttribDict(quantity="acceleration", units="m/s2", source_file=source,
@@ -118,6 +117,9 @@ def build_ground_motion(spec: dict, component: int, key: str, stage_dt: float, b
     processed (baseline, taper, band-pass, resampling, significant-duration trim, in the scene's order)
     and scaled as asked; its ``attrs`` hold the record's provenance with every step
     (``records.provenance_attrs``)."""
+    from .. import records as rec  # obspy with it: only for a scene with a ground motion
+    from ..records import RecordError
+
     try:
         src = spec["source"]
         if src == "record":

@@ -44,3 +44,26 @@ def test_a_scene_lists_only_what_it_asks_for():
     for name, e in registry().items():
         if name not in ("self_weight", "static"):
             assert e.describe(sc.normalized, model) == [], name
+
+
+def test_a_static_scene_loads_no_record_reader_and_compiles_no_time_stepping_kernel():
+    """A scene without a ground motion or a dynamic stage pays nothing for them: the default static scene neither
+    imports obspy (the records' reader, about 35 ms of start-up, AMD EPYC) nor compiles the joints' forces-only
+    kernel of time stepping (``interface_forces``, about 2 s of a first run with a fresh numba cache: a static
+    step's forces-only evaluations use ``interface_evaluate``, already compiled for its tangents). In a fresh
+    process, since both would be loaded for good by any earlier test."""
+    import subprocess
+    import sys
+
+    code = ("import sys\n"
+            "import masonrydam\n"
+            "from masonrydam.cli.main import default_scene_path\n"
+            "from masonrydam.elements import interface\n"
+            "ds = masonrydam.run(default_scene_path())\n"
+            "print('OBSPY', 'obspy' in sys.modules)\n"
+            "print('FORCES_KERNEL', len(interface.interface_forces.signatures))\n"
+            "print('STEPS', int(ds.sizes['step']))\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert "OBSPY False" in out, out
+    assert "FORCES_KERNEL 0" in out, out
+    assert "STEPS" in out and "STEPS 0" not in out, out

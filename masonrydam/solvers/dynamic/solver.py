@@ -57,6 +57,7 @@ class DynamicSolver:
     def __init__(self, model, settings: DynamicSettings, mass: MassMatrix | None = None, progress=None,
                  stop_requested=None):
         self.model, self.s = model, settings
+        model.use_stored_frames()  # the joints' forces-only evaluations from stored frames, as the compiled loop's
         self.mass = mass if mass is not None else MassMatrix(model, settings.mass == "lumped")
         if self.mass.lumped != (settings.mass == "lumped"):
             raise ValueError("the mass matrix passed does not match settings.mass")

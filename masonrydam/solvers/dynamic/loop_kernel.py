@@ -85,13 +85,16 @@ def _ground_load(ag, influence, support_excitation, out):
 
 @numba.njit(cache=True)
 def _residual(u, f_int, free, un, vn, an, h, beta, gamma, mass_diag, Mp, Mi, Mx, damped, Cp, Ci, Cx, w_m, const,
-              p1_norm, a1, v1, ma, cv1, R):
+              p1_norm, a1, v1, ma, ma_unscaled, cv1, R):
     """:meth:`~.implicit.ImplicitStep.residual` at ``u`` with internal forces ``f_int`` (n_dof,) into ``a1``, ``v1``,
     ``ma`` (``M a1``, scaled), ``cv1`` (``C v1``) and ``R`` (n,), and the force scale of its convergence test
-    (:meth:`~.implicit.ImplicitStep.force_scale` at the first iteration); returns ``(status, scale)``."""
+    (:meth:`~.implicit.ImplicitStep.force_scale` at the first iteration); returns ``(status, scale)``. A consistent
+    mass's product ``M a1`` is also kept unscaled in ``ma_unscaled`` (n,): the energy balance's, not computed again."""
     newmark_kinematics(u, free, un, vn, an, h, beta, gamma, mass_diag, a1, v1, ma)
     if mass_diag.shape[0] != free.shape[0]:
         csr_product(Mp, Mi, Mx, a1, ma)
+        for i in range(ma.shape[0]):
+            ma_unscaled[i] = ma[i]
     if damped:
         csr_product(Cp, Ci, Cx, v1, cv1)
     status = newmark_residual(ma, w_m, cv1, f_int, free, const, R)
@@ -171,7 +174,7 @@ def implicit_steps(k_first, k_last, dt, duration, t, tau, beta, gamma, am, af, w
     un = np.empty(n)
     vn = np.empty(n)
     an = np.empty(n)
-    ma_n = np.zeros(n)
+    ma_n = np.zeros(n)  # stays zero with a lumped mass (step_constant takes mass_diag a_n there)
     a1 = np.empty(n)
     v1 = np.empty(n)
     ma = np.empty(n)
@@ -180,7 +183,12 @@ def implicit_steps(k_first, k_last, dt, duration, t, tau, beta, gamma, am, af, w
     fc = np.empty(n_dof)
     f = np.empty(n_dof)
     mv1 = np.zeros(n)
+    # a consistent mass's products with the step's start and end accelerations: ``M a_n`` (``ma0``) is the last
+    # accepted step's ``M a1`` (``a_n`` is its ``a1``, bit for bit), carried over instead of computed again (the
+    # first step of a call computes it); ``M a1`` (``ma1``) is the residual's before its alpha weight. Each saves a
+    # sparse product a step, the same bits
     ma0 = np.zeros(n)
+    ma0_ready = False
     ma1 = np.zeros(n)
     w = np.empty(10)
     split = np.zeros(5)
@@ -216,14 +224,16 @@ def implicit_steps(k_first, k_last, dt, duration, t, tau, beta, gamma, am, af, w
             un[i] = u[free[i]]
             vn[i] = v[free[i]]
             an[i] = a[free[i]]
-        if am != 0.0 and not lumped:
-            csr_product(Mp, Mi, Mx, an, ma_n)
+        if not lumped and not ma0_ready:
+            csr_product(Mp, Mi, Mx, an, ma0)
+            ma0_ready = True
         cv_n = cv if af != 0.0 else zeros
-        step_constant(p1, pn, mass_diag, ma_n, an, weight_m, cv_n, f_int, free, weight_f, const)
+        step_constant(p1, pn, mass_diag, ma0 if am != 0.0 and not lumped else ma_n, an, weight_m, cv_n, f_int, free,
+                      weight_f, const)
         p1_norm = euclidean_norm(p1)
         # -- the residual at the start and the joint-space step (ImplicitStep.solve, _joint_space_start)
         residual_status, ref = _residual(u, f_int, free, un, vn, an, h, beta, gamma, mass_diag, Mp, Mi, Mx, damped,
-                                         Cp, Ci, Cx, w_m, const, p1_norm, a1, v1, ma, cv1, R)
+                                         Cp, Ci, Cx, w_m, const, p1_norm, a1, v1, ma, ma1, cv1, R)
         if residual_status != STATUS_OK:
             return HANDED_BACK, k, False, t, tau, JT, piv, ref_rows, ref_qt, has_ref, has_dq, -1
         for p in range(P):
@@ -267,7 +277,7 @@ def implicit_steps(k_first, k_last, dt, duration, t, tau, beta, gamma, am, af, w
             for r in range(fe.shape[1]):
                 f[jdofs[el, r]] += fe[el, r]
         residual_status, scale = _residual(u_js, f, free, un, vn, an, h, beta, gamma, mass_diag, Mp, Mi, Mx, damped,
-                                           Cp, Ci, Cx, w_m, const, p1_norm, a1, v1, ma, cv1, R)
+                                           Cp, Ci, Cx, w_m, const, p1_norm, a1, v1, ma, ma1, cv1, R)
         if residual_status != STATUS_OK:
             return HANDED_BACK, k, False, t, tau, JT, piv, ref_rows, ref_qt, has_ref, has_dq, status
         if not euclidean_norm(R) <= force_tolerance * scale:
@@ -275,8 +285,6 @@ def implicit_steps(k_first, k_last, dt, duration, t, tau, beta, gamma, am, af, w
         # -- the energy balance of the step (EnergyBalance.record, record_works)
         if not lumped:
             csr_product(Mp, Mi, Mx, v1, mv1)
-            csr_product(Mp, Mi, Mx, an, ma0)
-            csr_product(Mp, Mi, Mx, a1, ma1)
         # the end state's a over all DOFs (zero where constrained), for step_works
         for i in range(n_dof):
             a_new[i] = 0.0
@@ -376,6 +384,9 @@ def implicit_steps(k_first, k_last, dt, duration, t, tau, beta, gamma, am, af, w
             cv[i] = cv1[i]
         for c in range(dim):
             ag[c] = ag1[c]
+        if not lumped:  # the next step's M a_n
+            for i in range(n):
+                ma0[i] = ma1[i]
         totals[0] += 1
         totals[1] += its
         totals[2] += counts[1]

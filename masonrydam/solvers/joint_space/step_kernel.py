@@ -30,7 +30,7 @@ from numba import types
 
 from ...errors import STATUS_NAN, STATUS_OK
 from ..linear.dense_lu import STATUS_SINGULAR
-from ..linear.ldlt_kernels import ldlt_solve_vector
+from ..linear.ldlt_kernels import UNSIGNED, ldlt_solve_vector
 from .kernels import (add_flexibility_product, add_point_force_changes, apply_correction, capacitance_assemble,
                       capacitance_update_solve, condensed_residual, joint_law_at_points, joint_space_correction,
                       state_key, subtract_columns_product)
@@ -124,12 +124,20 @@ def _fill_int8(dst, value):
 
 @numba.njit(cache=True)
 def csr_product(indptr, indices, data, x, out):
-    """``out = A x`` for a CSR matrix, each row summed in the order of its entries (as scipy's csr_matvec)."""
+    """``out = A x`` for a CSR matrix, each row summed in the order of its entries (as scipy's csr_matvec: the
+    same bits). Subscripts are unsigned (:data:`~masonrydam.solvers.linear.ldlt_kernels.UNSIGNED`): with the
+    signed ones numba tests each for wrap-around, and the product of the Koyna example's stiffness (7 666 rows,
+    126 012 entries) took 140 us against scipy's 63 (AMD EPYC); unsigned it is no slower than scipy's."""
+    start = UNSIGNED(indptr[0])
     for i in range(out.shape[0]):
         acc = 0.0
-        for k in range(indptr[i], indptr[i + 1]):
-            acc += data[k] * x[indices[k]]
+        end = UNSIGNED(indptr[i + 1])
+        k = start
+        while k < end:
+            acc += data[k] * x[UNSIGNED(indices[k])]
+            k += UNSIGNED(1)
         out[i] = acc
+        start = end
 
 
 @numba.njit(cache=True)

@@ -5,8 +5,10 @@ hysteresis of examples/eindhoven_J4D_cyclic.py.
 
     python benchmarks/figures_eindhoven.py [--out docs/figures]
 
-Writes eindhoven_J4D_curves.png, eindhoven_J4D_cracks_peak.png, eindhoven_J4D_cracks_end.png and
-eindhoven_J4D_cyclic.png, and prints the runs' figures (peak, plateau, wall time).
+Writes eindhoven_J4D_curves.png, eindhoven_J4D_cracks_peak.png, eindhoven_J4D_cracks_end.png,
+eindhoven_J4D_cyclic.png, and for the higher precompressions of J6D and J7D (issue 36) eindhoven_walls_curves.png
+and eindhoven_J6D_cracks_peak.png, eindhoven_J6D_cracks_end.png, eindhoven_J7D_cracks_peak.png,
+eindhoven_J7D_cracks_end.png; prints the runs' figures (peak, plateau, wall time).
 """
 from __future__ import annotations
 
@@ -69,6 +71,7 @@ def main(argv=None) -> int:
     for step, name, scale in ((first_peak, "peak", 100.0), (-1, "end", 30.0)):
         fig = deformed_figure(held, step=step, scale=scale, title=f"J4D, top held: {name}")
         fig.savefig(out / f"eindhoven_J4D_cracks_{name}.png", dpi=90)
+    _higher_precompressions(held, out, plt)
     spec = importlib.util.spec_from_file_location("cyclic", EXAMPLES / "eindhoven_J4D_cyclic.py")
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
@@ -77,6 +80,42 @@ def main(argv=None) -> int:
     fig.savefig(out / "eindhoven_J4D_cyclic.png", dpi=90)
     print(f"wrote the figures in {out}")
     return 0
+
+
+#: the walls of the series besides J4D (J5D repeats J4D's 0.30 MPa): their precompressions (PROBLEMS.md, problem 6)
+HIGHER_PRECOMPRESSIONS = {"J6D": "1.21 MPa", "J7D": "2.12 MPa"}
+
+
+def _higher_precompressions(held_j4d, out, plt):
+    """The example with the precompressions of J6D and J7D (issue 36, item 2): the held walls' curves beside
+    J4D's (eindhoven_walls_curves.png) and each wall's cracks at its peak (the force's first drop, or the end
+    where it never drops) and at 4 mm (eindhoven_J6D_cracks_peak.png ...)."""
+    runs = {"J4D": held_j4d}
+    for wall, pressure in HIGHER_PRECOMPRESSIONS.items():
+        data = Scene.from_toml(EXAMPLES / "eindhoven_J4D.toml").data
+        set_key(data, "stages[0].loads[1].pressure", pressure)
+        runs[wall] = run(data, f"{wall}, top held, p = {pressure}")
+    fig, ax = plt.subplots(figsize=(6.4, 4.2))
+    for wall, ds in runs.items():
+        d, f, steps = pushover_data(ds)
+        ax.plot(d * 1e3, f / 1e3, "-o", ms=2.5, lw=1.2, label=f"{wall}, p = {HIGHER_PRECOMPRESSIONS.get(wall, '0.30 MPa')}")
+        k = int(np.argmax(f))
+        print(f"  {wall}: peak {f[k] / 1e3:.2f} kN at {d[k] * 1e3:.2f} mm, at 2 mm "
+              f"{np.interp(2e-3, d, f) / 1e3:.2f} kN, at 4 mm {f[-1] / 1e3:.2f} kN")
+        if wall == "J4D":
+            continue
+        drops = np.flatnonzero(np.diff(f) < 0)
+        peak = int(steps[drops[0]]) if len(drops) else int(steps[-1])
+        for step, name, scale in ((peak, "peak", 100.0), (-1, "end", 30.0)):
+            dfig = deformed_figure(ds, step=step, scale=scale, title=f"{wall}, top held: {name}")
+            dfig.savefig(out / f"eindhoven_{wall}_cracks_{name}.png", dpi=90)
+    ax.set_xlabel("horizontal displacement of the top beam (mm)")
+    ax.set_ylabel("horizontal force (kN)")
+    ax.set_title("Eindhoven walls, top held at its height (model only)")
+    ax.grid(True, alpha=0.3)
+    ax.legend(loc="upper left", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(out / "eindhoven_walls_curves.png", dpi=90)
 
 
 if __name__ == "__main__":

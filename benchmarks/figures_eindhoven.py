@@ -59,18 +59,8 @@ def main(argv=None) -> int:
         k = int(np.argmax(f))
         print(f"  {label}: peak {f[k] / 1e3:.2f} kN at {d[k] * 1e3:.2f} mm, end {f[-1] / 1e3:.2f} kN")
     ax.axhline(22.3, color="0.4", ls="--", lw=1, label="tan(phi) p A = 22.3 kN")
-    ax.set_xlabel("horizontal displacement of the top beam (mm)")
-    ax.set_ylabel("horizontal force (kN)")
-    ax.set_title("Eindhoven wall J4D, p = 0.30 MPa")
-    ax.grid(True, alpha=0.3)
-    ax.legend(loc="upper left", fontsize=8)
-    fig.tight_layout()
-    fig.savefig(out / "eindhoven_J4D_curves.png", dpi=90)
-    d, f, steps = pushover_data(held)
-    first_peak = int(steps[np.flatnonzero(np.diff(f) < 0)[0]])  # the first drop of the force
-    for step, name, scale in ((first_peak, "peak", 100.0), (-1, "end", 30.0)):
-        fig = deformed_figure(held, step=step, scale=scale, title=f"J4D, top held: {name}")
-        fig.savefig(out / f"eindhoven_J4D_cracks_{name}.png", dpi=90)
+    _save_curves(fig, ax, "Eindhoven wall J4D, p = 0.30 MPa", out / "eindhoven_J4D_curves.png")
+    _crack_figures(held, "J4D", out)
     _higher_precompressions(held, out, plt)
     spec = importlib.util.spec_from_file_location("cyclic", EXAMPLES / "eindhoven_J4D_cyclic.py")
     mod = importlib.util.module_from_spec(spec)
@@ -97,25 +87,36 @@ def _higher_precompressions(held_j4d, out, plt):
         runs[wall] = run(data, f"{wall}, top held, p = {pressure}")
     fig, ax = plt.subplots(figsize=(6.4, 4.2))
     for wall, ds in runs.items():
-        d, f, steps = pushover_data(ds)
+        d, f, _ = pushover_data(ds)
         ax.plot(d * 1e3, f / 1e3, "-o", ms=2.5, lw=1.2, label=f"{wall}, p = {HIGHER_PRECOMPRESSIONS.get(wall, '0.30 MPa')}")
         k = int(np.argmax(f))
         print(f"  {wall}: peak {f[k] / 1e3:.2f} kN at {d[k] * 1e3:.2f} mm, at 2 mm "
               f"{np.interp(2e-3, d, f) / 1e3:.2f} kN, at 4 mm {f[-1] / 1e3:.2f} kN")
-        if wall == "J4D":
-            continue
-        drops = np.flatnonzero(np.diff(f) < 0)
-        peak = int(steps[drops[0]]) if len(drops) else int(steps[-1])
-        for step, name, scale in ((peak, "peak", 100.0), (-1, "end", 30.0)):
-            dfig = deformed_figure(ds, step=step, scale=scale, title=f"{wall}, top held: {name}")
-            dfig.savefig(out / f"eindhoven_{wall}_cracks_{name}.png", dpi=90)
+        if wall != "J4D":  # J4D's are drawn with its own figures
+            _crack_figures(ds, wall, out)
+    _save_curves(fig, ax, "Eindhoven walls, top held at its height (model only)", out / "eindhoven_walls_curves.png")
+
+
+def _save_curves(fig, ax, title, path):
+    """Axes, title, grid and legend of a load-displacement figure, written to ``path``."""
     ax.set_xlabel("horizontal displacement of the top beam (mm)")
     ax.set_ylabel("horizontal force (kN)")
-    ax.set_title("Eindhoven walls, top held at its height (model only)")
+    ax.set_title(title)
     ax.grid(True, alpha=0.3)
     ax.legend(loc="upper left", fontsize=8)
     fig.tight_layout()
-    fig.savefig(out / "eindhoven_walls_curves.png", dpi=90)
+    fig.savefig(path, dpi=90)
+
+
+def _crack_figures(ds, wall, out):
+    """A held wall's cracks at its peak (the force's first drop, or the end where it never drops), displacements
+    x 100, and at the end, x 30: eindhoven_<wall>_cracks_peak.png and eindhoven_<wall>_cracks_end.png."""
+    d, f, steps = pushover_data(ds)
+    drops = np.flatnonzero(np.diff(f) < 0)
+    peak = int(steps[drops[0]]) if len(drops) else int(steps[-1])
+    for step, name, scale in ((peak, "peak", 100.0), (-1, "end", 30.0)):
+        fig = deformed_figure(ds, step=step, scale=scale, title=f"{wall}, top held: {name}")
+        fig.savefig(out / f"eindhoven_{wall}_cracks_{name}.png", dpi=90)
 
 
 if __name__ == "__main__":

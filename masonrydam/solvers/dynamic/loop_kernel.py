@@ -89,11 +89,12 @@ def _residual(u, f_int, free, un, vn, an, h, beta, gamma, mass_diag, Mp, Mi, Mx,
     """:meth:`~.implicit.ImplicitStep.residual` at ``u`` with internal forces ``f_int`` (n_dof,) into ``a1``, ``v1``,
     ``ma`` (``M a1``, scaled), ``cv1`` (``C v1``) and ``R`` (n,), and the force scale of its convergence test
     (:meth:`~.implicit.ImplicitStep.force_scale` at the first iteration); returns ``(status, scale)``. A consistent
-    mass's product ``M a1`` is also kept unscaled in ``ma_unscaled`` (n,): the energy balance's, not computed again."""
+    mass's product ``M a1`` is also kept unscaled in ``ma_unscaled`` where that has n entries (the residual at the
+    step's solution: the energy balance's, not computed again; (0,) at its start, where it is not needed)."""
     newmark_kinematics(u, free, un, vn, an, h, beta, gamma, mass_diag, a1, v1, ma)
     if mass_diag.shape[0] != free.shape[0]:
         csr_product(Mp, Mi, Mx, a1, ma)
-        for i in range(ma.shape[0]):
+        for i in range(ma_unscaled.shape[0]):
             ma_unscaled[i] = ma[i]
     if damped:
         csr_product(Cp, Ci, Cx, v1, cv1)
@@ -190,6 +191,7 @@ def implicit_steps(k_first, k_last, dt, duration, t, tau, beta, gamma, am, af, w
     ma0 = np.zeros(n)
     ma0_ready = False
     ma1 = np.zeros(n)
+    no_copy = np.zeros(0)  # the residual at a step's start keeps no unscaled M a1
     w = np.empty(10)
     split = np.zeros(5)
     e = np.empty(14)
@@ -233,7 +235,7 @@ def implicit_steps(k_first, k_last, dt, duration, t, tau, beta, gamma, am, af, w
         p1_norm = euclidean_norm(p1)
         # -- the residual at the start and the joint-space step (ImplicitStep.solve, _joint_space_start)
         residual_status, ref = _residual(u, f_int, free, un, vn, an, h, beta, gamma, mass_diag, Mp, Mi, Mx, damped,
-                                         Cp, Ci, Cx, w_m, const, p1_norm, a1, v1, ma, ma1, cv1, R)
+                                         Cp, Ci, Cx, w_m, const, p1_norm, a1, v1, ma, no_copy, cv1, R)
         if residual_status != STATUS_OK:
             return HANDED_BACK, k, False, t, tau, JT, piv, ref_rows, ref_qt, has_ref, has_dq, -1
         for p in range(P):

@@ -1,6 +1,6 @@
-"""The Eindhoven wall J4D (examples/eindhoven_J4D.toml, reference problem 6): what its curve costs and how
-it converges (issue 18): the relaxation time of the joints' viscous regularisation, the number of push
-steps and the mesh, for both vertical conditions of the top beam:
+"""The Eindhoven walls J4D to J7D (examples/eindhoven_J4D.toml, reference problem 6): what their curves cost
+and how they converge (issues 18 and 36): the relaxation time of the joints' viscous regularisation, the number
+of push steps and the mesh, for both vertical conditions of the top beam:
 
 - ``held``: the reference loading (PROBLEMS.md; Lourenco & Rots 1997): the top beam kept level and at its
   height, so the vertical force grows as the wall rocks;
@@ -10,10 +10,12 @@ steps and the mesh, for both vertical conditions of the top beam:
 Each case is the example with ``--set`` style changes: ``relaxation_time`` of the three composite joint sets
 (0: the inviscid law), the push's ``steps``, the generator's ``elements_per_unit`` and the push's ``control``
 (``load``: displacement control with the automatic switches; ``dissipation``: dissipation-based path
-following). The first case runs once before the timings (numba compilation and cache).
+following), and the precompression of the wall (``--walls``): J4D and J5D 0.30 MPa (two specimens of one
+wall: the model cannot tell them apart), J6D 1.21 MPa, J7D 2.12 MPa (Raijmakers & Vermeltfoort 1992, as
+modelled by Lourenco & Rots 1997). The first case runs once before the timings (numba compilation and cache).
 
-    python benchmarks/bench_eindhoven.py [--cases held constant] [--taus 0.25 0.025 0.0025 0]
-        [--steps 40 80] [--elements 2 4] [--controls load dissipation]
+    python benchmarks/bench_eindhoven.py [--walls J4D J6D J7D] [--cases held constant]
+        [--taus 0.25 0.025 0.0025 0] [--steps 40 80] [--elements 2 4] [--controls load dissipation]
 
 Prints per case: the peak force and its displacement, the force at 1, 2, 3 and 4 mm, how far the run got,
 the wall time of the run, and the peak's change against the case with the smallest relaxation time of the
@@ -42,10 +44,13 @@ from masonrydam.scene.scene import Scene, set_key
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "eindhoven_J4D.toml"
 JOINT_SETS = ("bed_joints", "head_joints", "unit_cracks")
+#: the walls' vertical precompression (Raijmakers & Vermeltfoort 1992; Lourenco & Rots 1997)
+PRECOMPRESSION = {"J4D": "0.30 MPa", "J5D": "0.30 MPa", "J6D": "1.21 MPa", "J7D": "2.12 MPa"}
 
 
-def scene(case: str, tau_ms: float, steps: int, elements: int, control: str = "load") -> dict:
+def scene(case: str, tau_ms: float, steps: int, elements: int, control: str = "load", wall: str = "J4D") -> dict:
     data = Scene.from_toml(EXAMPLE).data
+    set_key(data, "stages[0].loads[1].pressure", PRECOMPRESSION[wall])
     set_key(data, "stages[1].control", control)
     for name in JOINT_SETS:
         if tau_ms > 0:
@@ -76,12 +81,25 @@ def run_case(data: dict, folder: str) -> dict:
     with xr.open_dataset(out) as ds:
         d, f, _ = pushover_data(ds)
     k = int(np.argmax(f))
-    at = [np.interp(x, d, f) if d[-1] >= x - 1e-9 else np.nan for x in (1e-3, 2e-3, 3e-3, 4e-3)]
-    return {"peak": f[k], "d_peak": d[k], "at": at, "reached": d[-1], "wall": wall, "status": status}
+    at = [force_at(d, f, x) for x in (1e-3, 2e-3, 3e-3, 4e-3)]
+    return {"peak": f[k], "d_peak": d[k], "at": at, "reached": d.max(), "wall": wall, "status": status}
+
+
+def force_at(d: np.ndarray, f: np.ndarray, x: float) -> float:
+    """The force (N) where the push first reaches ``x`` (m), linear between the recorded steps; NaN where it never
+    does. The first crossing, since a run that ends in path-following attempts may record steps that go back."""
+    reached = np.nonzero(d >= x - 1e-9)[0]
+    if len(reached) == 0:
+        return np.nan
+    i = int(reached[0])
+    if i == 0 or d[i] == d[i - 1]:
+        return float(f[i])
+    return float(f[i - 1] + (f[i] - f[i - 1]) * (x - d[i - 1]) / (d[i] - d[i - 1]))
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--walls", nargs="+", default=["J4D"], choices=list(PRECOMPRESSION))
     ap.add_argument("--cases", nargs="+", default=["constant", "held"], choices=["constant", "held"])
     ap.add_argument("--taus", nargs="+", type=float, default=[0.25, 0.025, 0.0025, 0.0], help="relaxation times, ms")
     ap.add_argument("--steps", nargs="+", type=int, default=[40])
@@ -92,18 +110,19 @@ def main(argv=None) -> int:
         warm = scene(args.cases[0], 0.025, 4, 2)
         set_key(warm, "stages[1].loads[0].value", ["0.4 mm"] if args.cases[0] == "constant" else ["0.4 mm", "0 mm"])
         run_case(warm, folder)
-        print(f"{'case':9s} {'control':11s} {'tau ms':>7s} {'steps':>5s} {'el/unit':>7s} {'peak kN':>8s} {'at mm':>6s} "
+        print(f"{'wall':4s} {'case':9s} {'control':11s} {'tau ms':>7s} {'steps':>5s} {'el/unit':>7s} {'peak kN':>8s} {'at mm':>6s} "
               f"{'F(1) kN':>8s} {'F(2)':>6s} {'F(3)':>6s} {'F(4)':>6s} {'reached':>8s} {'wall s':>7s} "
               f"{'peak vs smallest tau':>21s}  status")
-        for case, control, steps, elements in itertools.product(args.cases, args.controls, args.steps, args.elements):
+        for wall, case, control, steps, elements in itertools.product(args.walls, args.cases, args.controls,
+                                                                      args.steps, args.elements):
             rows = []
             for tau in sorted(args.taus, reverse=True):
-                r = run_case(scene(case, tau, steps, elements, control), folder)
+                r = run_case(scene(case, tau, steps, elements, control, wall), folder)
                 rows.append((tau, r))
             ref = rows[-1][1]["peak"]
             for tau, r in rows:
                 at = " ".join(f"{v / 1e3:6.2f}" for v in r["at"])
-                print(f"{case:9s} {control:11s} {tau:7.4g} {steps:5d} {elements:7d} {r['peak'] / 1e3:8.2f} {r['d_peak'] * 1e3:6.2f} "
+                print(f"{wall:4s} {case:9s} {control:11s} {tau:7.4g} {steps:5d} {elements:7d} {r['peak'] / 1e3:8.2f} {r['d_peak'] * 1e3:6.2f} "
                       f"{at:>29s} {r['reached'] * 1e3:6.2f}mm {r['wall']:7.1f} {100 * (r['peak'] / ref - 1):+20.2f}%  "
                       f"{r['status']}", flush=True)
     return 0

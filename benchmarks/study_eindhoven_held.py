@@ -17,7 +17,15 @@ Variants (``--list`` prints them with their changes):
 - ``css_1``: the cap's shear factor 1 (9);
 - ``weak_units``: the units' potential cracks at ft = 1 MPa, c = 1.4 MPa (2 and 2.8 MPa);
 - ``16_courses``: 16 courses of masonry (992 mm) between the beams instead of 18 (1116 mm);
-- ``J6D``, ``J7D``: the precompression of walls J6D and J7D, 1.21 and 2.12 MPa (0.30 MPa: J4D, J5D).
+- ``J6D``, ``J7D``: the precompression of walls J6D and J7D, 1.21 and 2.12 MPa (0.30 MPa: J4D, J5D);
+- ``tau_0.00025``: every composite set's relaxation time a tenth of the example's (0.00025 ms);
+- ``unit_k_1e4``, ``unit_k_1e4_tau_0.00025``: the units' potential cracks with a penalty stiffness of 1e4 N/mm3
+  (1e6 in the example), at the example's relaxation time and at a tenth of it.
+
+Each run also prints, per joint set, the largest traction beyond the set's virgin strength over the push: the
+normal traction beyond ``ft`` and the shear beyond ``c - tan(phi) t_n`` (MPa). The inviscid law never goes
+beyond them (softening only lowers the surfaces), so what is printed is the viscous regularisation's overstress
+(at least).
 
 A study, not a test: it prints what each run gives, including a run that stops (its error's class and where).
 One process, one thread; about six minutes for all of them on a 2-core AMD EPYC.
@@ -57,6 +65,12 @@ VARIANTS = {
     "16_courses": {"mesh.parameters.height": "992 mm"},
     "J6D": {"stages[0].loads[1].pressure": "1.21 MPa"},
     "J7D": {"stages[0].loads[1].pressure": "2.12 MPa"},
+    "tau_0.00025": {f"joints.{s}.relaxation_time": "0.00025 ms" for s in (*CAP_SETS, "unit_cracks")},
+    "unit_k_1e4": {"joints.unit_cracks.normal_stiffness": "1e4 N/mm3",
+                   "joints.unit_cracks.shear_stiffness": "1e4 N/mm3"},
+    "unit_k_1e4_tau_0.00025": {"joints.unit_cracks.normal_stiffness": "1e4 N/mm3",
+                               "joints.unit_cracks.shear_stiffness": "1e4 N/mm3",
+                               **{f"joints.{s}.relaxation_time": "0.00025 ms" for s in (*CAP_SETS, "unit_cracks")}},
 }
 
 
@@ -106,6 +120,32 @@ def run_variant(name: str) -> None:
             if c[1:].any():
                 counts.append(f"{n} {c[1]}/{c[2]}/{c[3]} of {int((sets == i).sum())}")
         print(f"{'':14s}   slide/open/crush at {label}: " + ", ".join(counts), flush=True)
+    print(f"{'':14s}   beyond the virgin strength (MPa, tension / shear): "
+          + ", ".join(beyond_virgin_strength(ds, steps, data["joints"])), flush=True)
+
+
+def beyond_virgin_strength(ds, steps, joints: dict) -> list[str]:
+    """Per composite joint set: the largest normal traction beyond its tensile strength and the largest shear
+    traction beyond ``c - tan(phi) t_n`` (MPa, tension positive) over the recorded steps ``steps``."""
+    from masonrydam.units import quantity
+
+    names = json.loads(ds.joint_set.attrs["set_names"])
+    sets = ds.joint_set.values
+    tn = ds.joint_traction_normal.values[steps]
+    ts = np.abs(ds.joint_traction_shear.values[steps][..., 0])
+    out = []
+    for i, n in enumerate(names):
+        spec = joints.get(n, {})
+        if spec.get("law") != "composite":
+            continue
+        ft = quantity(spec["tensile_strength"], "stress", f"joints.{n}.tensile_strength")
+        c = quantity(spec["cohesion"], "stress", f"joints.{n}.cohesion")
+        tan_phi = np.tan(np.radians(float(spec["friction_angle"])))
+        m = sets == i
+        tension = (tn[:, m] - ft).max() / 1e6
+        shear = (ts[:, m] - (c - tan_phi * tn[:, m])).max() / 1e6
+        out.append(f"{n} {tension:+.3f} / {shear:+.3f}")
+    return out
 
 
 def main(argv=None) -> int:

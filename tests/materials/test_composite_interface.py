@@ -678,6 +678,22 @@ def test_relaxation_tends_to_the_inviscid_law_and_is_elastic_for_a_vanishing_ste
     assert s[S_KAPPA1] == 0.0 and s[S_PLASTIC_OPENING] == 0.0
 
 
+def test_overstress_at_one_relaxation_time_grows_with_the_joints_stiffness():
+    """The Eindhoven units' potential cracks (issue 36): the same relaxation time and step (dt/tau = 1e4, the
+    J4D example's), the same opening beyond the elastic limit, perfectly plastic tension. The overstress is
+    ``kn w_p / (1 + dt/tau)`` (backward Euler of Duvaut-Lions, Simo & Hughes 1998 sec. 2.7), in proportion to
+    the stiffness: nothing at a mortar joint's 82 N/mm3, 5 % of ft = 2 MPa at a 1e6 N/mm3 penalty."""
+    tau, dt, w_plastic, ft = 2.5e-6, 2.5e-2, 1.0e-6, 2.0e6
+    over = {}
+    for kn in (82e9, 1e15):
+        p = composite_params(kn, kn, ft, 1.0e14, 1.4 * ft, PHI, mode_II_fracture_energy=1.0e14, relaxation_time=tau)
+        p[P_TIME_STEP] = dt
+        t, C, s = ev(p, [0.0, ft / kn + w_plastic])
+        over[kn] = t[1] - ft
+        assert over[kn] == pytest.approx(kn * w_plastic / (1.0 + dt / tau), rel=1e-6)
+    assert over[82e9] / ft < 1e-5 and over[1e15] / ft == pytest.approx(0.05, rel=1e-3)
+
+
 def _full_relaxing(tau, dt_or_ratio, ratio=True):
     p = FULL.copy()
     p[ci.P_RELAXATION_TIME] = tau

@@ -28,7 +28,7 @@ beyond them (softening only lowers the surfaces), so what is printed is the visc
 (at least).
 
 A study, not a test: it prints what each run gives, including a run that stops (its error's class and where).
-One process, one thread; about six minutes for all of them on a 2-core AMD EPYC.
+One process, one thread; about twelve minutes for all of them on a 2-core AMD EPYC.
 """
 from __future__ import annotations
 

@@ -1,15 +1,25 @@
-"""Mechanism diagnosis: which part of the model is free to move as a rigid body.
+"""Failure diagnosis in words: which part of the model is free to move as a rigid body, and where a Newton
+iteration that did not converge is out of balance.
 
 Nodes are joined by continuum elements and by interface elements that still transmit force (not
 every integration point open). Each connected part must have its rigid-body modes (2D: two
 translations and a rotation) restrained by constrained DOFs; a part where they are not is named
 with its element groups, its bounding box and the joint sets around it that opened.
+
+A static step whose Newton iterations do not converge is described by :func:`newton_stall`: the DOF its last
+iterate leaves most out of balance and the joint points whose state its next correction would switch, the
+signature of Newton cycling between joint-state patterns at a non-smooth point of a joint law (the Eindhoven
+wall's inviscid stall at a unit crack's tensile corner, docs/masonry_softening.md).
 """
 from __future__ import annotations
 
 import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
+
+from ..errors import NumericalError
+from ..materials.joint_laws import RESULT_STATE_NAMES
+from .linear.direct import SingularMatrix
 
 
 
@@ -103,3 +113,62 @@ def find_free_parts(model, constrained: np.ndarray, use_joint_state: bool = True
             text += "; it has no support"
         parts.append(text)
     return parts
+
+
+def _joint_states(model) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Per nonlinear interface group: its law's own trial state codes and the result's states, (ne, nip) each."""
+    return [(g.state_codes(trial=True).copy(), g.result_states(trial=True).copy())
+            for g in model.igroups if g.nonlinear]
+
+
+def newton_stall(model, u: np.ndarray, residual, solve=None) -> str:
+    """Where the last iterate ``u`` (n_dof,) m of a static step that did not converge is out of balance, in words
+    to add to the failure's message (empty where it cannot be evaluated).
+
+    ``residual(v, tangent)`` gives (r, K): the residual (N) on the free DOFs at ``v`` and, with ``tangent``, the
+    tangent there; ``solve(K, r)`` the correction (None: the next correction is not looked at, e.g. where a
+    factorization is too costly). Names the free DOF with the largest residual (node, position, component, N)
+    and, from the next Newton correction, how many joint points it would switch to another state of their law
+    (per joint set) and the switching point nearest that node, with its states before and after. Leaves the
+    joints' trial state at ``u`` or past it: the caller reverts it."""
+    free = model.dofmap.free
+    try:
+        r, K = residual(u, solve is not None)
+        before = _joint_states(model)
+        after = None
+        if solve is not None:
+            v = u.copy()
+            v[free] += solve(K, r)
+            residual(v, False)
+            after = _joint_states(model)
+    except (NumericalError, SingularMatrix, ValueError):
+        return ""
+    if len(r) == 0 or not np.isfinite(r).all():
+        return ""
+    dim = model.dim
+    k = int(np.argmax(np.abs(r)))
+    node, comp = divmod(int(free[k]), dim)
+    at = model.coords[node]
+    text = (f"; the last iterate is out of balance most at node {node} ("
+            + ", ".join(f"{c:.4g}" for c in at) + f") m, by {abs(r[k]):.3g} N in {'xyz'[comp]}")
+    if after is None:
+        return text
+    counts, nearest = [], None
+    groups = [g for g in model.igroups if g.nonlinear]
+    for g, (codes0, res0), (codes1, res1) in zip(groups, before, after):
+        switched = codes0 != codes1
+        if not switched.any():
+            continue
+        counts.append(f"{g.name} {int(switched.sum())}")
+        pts = g.points[switched].reshape(-1, dim)
+        d = np.linalg.norm(pts - at, axis=1)
+        i = int(np.argmin(d))
+        if nearest is None or d[i] < nearest[0]:
+            nearest = (d[i], g.name, pts[i], RESULT_STATE_NAMES[res0[switched][i]],
+                       RESULT_STATE_NAMES[res1[switched][i]])
+    if nearest is None:
+        return text + "; its next correction switches no joint point's state"
+    _, name, where, s0, s1 = nearest
+    return (text + f"; its next correction would switch the state of joint points ({', '.join(counts)}), the "
+            f"nearest at (" + ", ".join(f"{c:.4g}" for c in where) + f") m in joint set '{name}' ({s0} to {s1}): "
+            "Newton may be cycling at a corner of the joint law there")

@@ -39,7 +39,7 @@ from ...assembly.elastic import elastic_tangent_data
 from ...errors import ConvergenceError, MechanismError, NumericalError, RunStopped, StepInterrupted
 from ...materials.joint_laws import RESULT_OPEN, RESULT_SLIP
 from ..chatter import ChatterGuard
-from ..diagnostics import find_free_parts
+from ..diagnostics import find_free_parts, newton_stall
 from ..joint_space import MAX_INITIAL_STIFFNESS_ITERATIONS, JointSpace, joint_space_size, lazy_flexibility
 from ..linear.iterative import clear_pattern_caches, rigid_body_modes
 from ..linear.direct import SingularMatrix, SymmetricFactorization, make_solver, resolve_backend
@@ -716,6 +716,14 @@ class StaticSolver:
             self.stats.line_searches += 1
         return step
 
+    def _stall_hint(self, u, f_ext) -> str:
+        """Where a failed step's last iterate ``u`` is out of balance (:func:`~..diagnostics.newton_stall`)."""
+        def residual(v, tangent):
+            f_int, K = self.model.evaluate(v, want_tangent=tangent)
+            return (self._with_state_load(f_ext) - f_int)[self.model.dofmap.free], K
+        solve = None if self._amg_path() else (lambda K, r: self._factorize(K).solve(r))  # (no AMG solve for a message)
+        return newton_stall(self.model, u, residual, solve)
+
     def _with_state_load(self, f_ext):
         """``f_ext`` plus the forces that follow the joints' trial states (see :meth:`_newton`)."""
         return f_ext if self._state_load is None else f_ext + self._state_load()
@@ -835,6 +843,8 @@ class StaticSolver:
                     hint += st.varying.failure_hint()
                 if final and self._law_failure:
                     hint += f"; in an attempt the joint or block law gave up: {self._law_failure}"
+                if final and not parts and singular is None and m.nonlinear:
+                    hint += self._stall_hint(u_new, f_ext)
                 m.revert()
                 if final and st.until_failure:
                     what = ("a part lost every support" if parts else "singular stiffness" if singular is not None

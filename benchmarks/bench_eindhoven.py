@@ -39,7 +39,7 @@ from pathlib import Path
 import numpy as np
 
 import masonrydam
-from masonrydam.results.pushover import pushover_data
+from masonrydam.results.pushover import pushover_data, value_at_push
 from masonrydam.scene.scene import Scene, set_key
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "eindhoven_J4D.toml"
@@ -81,20 +81,8 @@ def run_case(data: dict, folder: str) -> dict:
     with xr.open_dataset(out) as ds:
         d, f, _ = pushover_data(ds)
     k = int(np.argmax(f))
-    at = [force_at(d, f, x) for x in (1e-3, 2e-3, 3e-3, 4e-3)]
+    at = [value_at_push(d, f, x) for x in (1e-3, 2e-3, 3e-3, 4e-3)]
     return {"peak": f[k], "d_peak": d[k], "at": at, "reached": d.max(), "wall": wall, "status": status}
-
-
-def force_at(d: np.ndarray, f: np.ndarray, x: float) -> float:
-    """The force (N) where the push first reaches ``x`` (m), linear between the recorded steps; NaN where it never
-    does. The first crossing, since a run that ends in path-following attempts may record steps that go back."""
-    reached = np.nonzero(d >= x - 1e-9)[0]
-    if len(reached) == 0:
-        return np.nan
-    i = int(reached[0])
-    if i == 0 or d[i] == d[i - 1]:
-        return float(f[i])
-    return float(f[i - 1] + (f[i] - f[i - 1]) * (x - d[i - 1]) / (d[i] - d[i - 1]))
 
 
 def main(argv=None) -> int:

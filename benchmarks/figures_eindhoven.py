@@ -7,8 +7,8 @@ hysteresis of examples/eindhoven_J4D_cyclic.py.
 
 Writes eindhoven_J4D_curves.png, eindhoven_J4D_cracks_peak.png, eindhoven_J4D_cracks_end.png,
 eindhoven_J4D_cyclic.png, and for the higher precompressions of J6D and J7D (issue 36) eindhoven_walls_curves.png
-(the three held walls at the example's relaxation time and at a tenth of it) and eindhoven_J6D_cracks_peak.png, eindhoven_J6D_cracks_end.png, eindhoven_J7D_cracks_peak.png,
-eindhoven_J7D_cracks_end.png; prints the runs' figures (peak, plateau, wall time).
+(the three held walls at the example's relaxation time and at a tenth of it) and eindhoven_J6D_cracks_peak.png,
+eindhoven_J6D_cracks_end.png, eindhoven_J7D_cracks_peak.png, eindhoven_J7D_cracks_end.png; prints the runs' figures (peak, plateau, wall time).
 """
 from __future__ import annotations
 
@@ -23,7 +23,7 @@ import numpy as np
 
 import masonrydam
 from masonrydam.results.deformed import deformed_figure
-from masonrydam.results.pushover import pushover_data, pushover_figure
+from masonrydam.results.pushover import pushover_data, pushover_figure, value_at_push
 from masonrydam.scene.scene import Scene, set_key
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
@@ -86,30 +86,30 @@ def _higher_precompressions(held_j4d, out, plt):
     J4D's (eindhoven_walls_curves.png), at the example's relaxation time (solid) and at a tenth of it (dashed),
     and each wall's cracks at its peak (the force's first drop, or the end where it never drops) and at 4 mm
     (eindhoven_J6D_cracks_peak.png ...), at the example's relaxation time."""
-    runs = {"J4D": held_j4d}
-    finer = {}
-    for wall in ("J4D", *HIGHER_PRECOMPRESSIONS):
-        pressure = HIGHER_PRECOMPRESSIONS.get(wall, "0.30 MPa")
-        if wall != "J4D":
-            data = Scene.from_toml(EXAMPLES / "eindhoven_J4D.toml").data
-            set_key(data, "stages[0].loads[1].pressure", pressure)
-            runs[wall] = run(data, f"{wall}, top held, p = {pressure}")
+    pressures = {"J4D": "0.30 MPa", **HIGHER_PRECOMPRESSIONS}
+
+    def held_wall(wall, relaxation_time=None):
         data = Scene.from_toml(EXAMPLES / "eindhoven_J4D.toml").data
-        set_key(data, "stages[0].loads[1].pressure", pressure)
-        for name in ("bed_joints", "head_joints", "unit_cracks"):
-            set_key(data, f"joints.{name}.relaxation_time", FINER_RELAXATION_TIME)
-        finer[wall] = run(data, f"{wall}, top held, p = {pressure}, relaxation time {FINER_RELAXATION_TIME}")
+        set_key(data, "stages[0].loads[1].pressure", pressures[wall])
+        label = f"{wall}, top held, p = {pressures[wall]}"
+        if relaxation_time is not None:
+            for name in ("bed_joints", "head_joints", "unit_cracks"):
+                set_key(data, f"joints.{name}.relaxation_time", relaxation_time)
+            label += f", relaxation time {relaxation_time}"
+        return run(data, label)
+
+    runs = {"J4D": held_j4d, **{wall: held_wall(wall) for wall in HIGHER_PRECOMPRESSIONS}}
+    finer = {wall: held_wall(wall, FINER_RELAXATION_TIME) for wall in pressures}
     fig, ax = plt.subplots(figsize=(6.4, 4.2))
     for wall, ds in runs.items():
         d, f, _ = pushover_data(ds)
-        line, = ax.plot(d * 1e3, f / 1e3, "-o", ms=2.5, lw=1.2,
-                        label=f"{wall}, p = {HIGHER_PRECOMPRESSIONS.get(wall, '0.30 MPa')}, tau 0.0025 ms")
+        line, = ax.plot(d * 1e3, f / 1e3, "-o", ms=2.5, lw=1.2, label=f"{wall}, p = {pressures[wall]}, tau 0.0025 ms")
         d2, f2, _ = pushover_data(finer[wall])
         ax.plot(d2 * 1e3, f2 / 1e3, "--", lw=1.2, color=line.get_color(), label=f"{wall}, tau {FINER_RELAXATION_TIME}")
         for label, dd, ff in (("", d, f), (f", tau {FINER_RELAXATION_TIME}", d2, f2)):
             k = int(np.argmax(ff))
             print(f"  {wall}{label}: peak {ff[k] / 1e3:.2f} kN at {dd[k] * 1e3:.2f} mm, at 2 mm "
-                  f"{np.interp(2e-3, dd, ff) / 1e3:.2f} kN, at 4 mm {ff[-1] / 1e3:.2f} kN")
+                  f"{value_at_push(dd, ff, 2e-3) / 1e3:.2f} kN, at 4 mm {ff[-1] / 1e3:.2f} kN")
         if wall != "J4D":  # J4D's are drawn with its own figures
             _crack_figures(ds, wall, out)
     _save_curves(fig, ax, "Eindhoven walls, top held at its height (model only)", out / "eindhoven_walls_curves.png")

@@ -76,7 +76,7 @@ VARIANTS = {
 
 def run_variant(name: str) -> None:
     import masonrydam
-    from masonrydam.results.pushover import pushover_data
+    from masonrydam.results.pushover import pushover_data, value_at_push
     from masonrydam.scene.scene import Scene, set_key
 
     sc = Scene.from_toml(EXAMPLE)
@@ -104,7 +104,8 @@ def run_variant(name: str) -> None:
     mm = d * 1e3
 
     def at(x, values):
-        return f"{np.interp(x, mm, values) / 1e3:6.1f}" if mm[-1] >= x - 1e-9 else "     -"
+        value = value_at_push(d, values, x * 1e-3)
+        return "     -" if np.isnan(value) else f"{value / 1e3:6.1f}"
 
     k = int(np.argmax(h))
     print(f"{name:14s} peak {h[k] / 1e3:5.1f} kN at {mm[k]:4.2f} mm | H at 1/2/3/4 mm "

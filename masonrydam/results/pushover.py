@@ -3,7 +3,8 @@
 The actuator is the set of DOFs a static stage drives by prescribed displacements (the result's
 ``driven`` variable, 1 + the stage index). Its force is the sum of the reactions at those DOFs along the
 chosen component (N, the force the actuator applies to the structure), its displacement their mean
-(m). ``masonrydam plot OUT.nc --pushover`` draws it; :func:`pushover_data` gives the numbers.
+(m). ``masonrydam plot OUT.nc --pushover`` draws it; :func:`pushover_data` gives the numbers and
+:func:`value_at_push` reads a curve at a given displacement.
 """
 from __future__ import annotations
 
@@ -78,3 +79,17 @@ def pushover_figure(ds, component: str = "x", title: str | None = None):
         ax.set_title(title)
     fig.tight_layout()
     return fig
+
+
+def value_at_push(d: np.ndarray, values: np.ndarray, x: float) -> float:
+    """``values`` (n,) (a force, N, or any quantity recorded with the push) where the push ``d`` (n,) m first
+    reaches ``x`` m, linear between the recorded steps; NaN where it never does. The first crossing: the steps a
+    stalled run records in its path-following attempts can go back, and an interpolation over the whole record
+    would then read them."""
+    reached = np.flatnonzero(d >= x - 1e-9)
+    if len(reached) == 0:
+        return float("nan")
+    i = int(reached[0])
+    if i == 0 or d[i] == d[i - 1]:
+        return float(values[i])
+    return float(values[i - 1] + (values[i] - values[i - 1]) * (x - d[i - 1]) / (d[i] - d[i - 1]))

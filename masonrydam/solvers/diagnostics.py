@@ -115,9 +115,10 @@ def find_free_parts(model, constrained: np.ndarray, use_joint_state: bool = True
     return parts
 
 
-def _joint_states(model) -> list[tuple[np.ndarray, np.ndarray]]:
-    """Per nonlinear interface group: its law's own trial state codes and the result's states, (ne, nip) each."""
-    return [(g.state_codes(trial=True).copy(), g.result_states(trial=True).copy())
+def _joint_states(model) -> list[tuple[object, np.ndarray, np.ndarray]]:
+    """Per nonlinear interface group: the group, its law's own trial state codes and the result's states,
+    (ne, nip) each."""
+    return [(g, g.state_codes(trial=True).copy(), g.result_states(trial=True).copy())
             for g in model.igroups if g.nonlinear]
 
 
@@ -154,8 +155,7 @@ def newton_stall(model, u: np.ndarray, residual, solve=None) -> str:
     if after is None:
         return text
     counts, nearest = [], None
-    groups = [g for g in model.igroups if g.nonlinear]
-    for g, (codes0, res0), (codes1, res1) in zip(groups, before, after):
+    for (g, codes0, res0), (_, codes1, res1) in zip(before, after):
         switched = codes0 != codes1
         if not switched.any():
             continue

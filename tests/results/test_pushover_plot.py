@@ -14,7 +14,7 @@ import pytest
 import xarray as xr
 
 from masonrydam.errors import MasonrydamError
-from masonrydam.results.pushover import pushover_data, pushover_figure
+from masonrydam.results.pushover import pushover_data, pushover_figure, value_at_push
 
 
 @pytest.fixture(scope="module")
@@ -54,3 +54,14 @@ def test_pushover_cli_and_errors(wall, tmp_path):
         pushover_data(ds, "z")
     with pytest.raises(MasonrydamError, match="driven"):
         pushover_data(ds.drop_vars("driven"))
+
+
+def test_value_at_push_reads_the_first_crossing():
+    """Linear between the recorded steps where the push first reaches x; a record that goes back afterwards (the
+    path-following attempts of a stalled run) is not read; NaN where the push never gets there."""
+    d = np.array([0.0, 1.0, 2.0, 3.0, 1.5])
+    f = np.array([0.0, 10.0, 20.0, 30.0, -5.0])
+    assert value_at_push(d, f, 1.5) == pytest.approx(15.0, rel=1e-12)  # not -5 from the last record
+    assert value_at_push(d, f, 3.0) == 30.0
+    assert value_at_push(d, f, 0.0) == 0.0
+    assert np.isnan(value_at_push(d, f, 3.5))

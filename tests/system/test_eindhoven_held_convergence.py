@@ -16,25 +16,16 @@ runs of 40 push steps):
 """
 from __future__ import annotations
 
-import numpy as np
 import pytest
 
 import masonrydam
-from masonrydam.results.pushover import pushover_data
+from masonrydam.results.pushover import pushover_data, value_at_push
 from masonrydam.scene.scene import Scene, set_key
 from repository_paths import EXAMPLES
 
 #: the example's relaxation time and a tenth of it (ms)
 RELAXATION_TIMES = ("0.0025 ms", "0.00025 ms")
 COMPOSITE_SETS = ("bed_joints", "head_joints", "unit_cracks")
-
-
-def force_at(d: np.ndarray, f: np.ndarray, x: float) -> float:
-    """The horizontal force (N) where the push first reaches ``x`` (m), linear between recorded steps."""
-    i = int(np.nonzero(d >= x - 1e-9)[0][0])
-    if i == 0:
-        return float(f[0])
-    return float(f[i - 1] + (f[i] - f[i - 1]) * (x - d[i - 1]) / (d[i] - d[i - 1]))
 
 
 @pytest.fixture(scope="module")
@@ -57,7 +48,7 @@ def held_curves():
 @pytest.mark.reference
 @pytest.mark.parametrize("push", [1e-3, 2e-3])
 def test_held_j4d_force_converged_in_the_relaxation_time_up_to_2_mm(held_curves, push):
-    coarse, fine = (force_at(*held_curves[tau], push) for tau in RELAXATION_TIMES)
+    coarse, fine = (value_at_push(*held_curves[tau], push) for tau in RELAXATION_TIMES)
     assert coarse == pytest.approx(fine, rel=0.03)
     # the held top's added vertical force already shows: above the constant-load peak of 30 kN (the strut)
     assert fine > 40e3
@@ -69,5 +60,5 @@ def test_held_j4d_force_converged_in_the_relaxation_time_up_to_2_mm(held_curves,
                                        "time, through the overstress of the units' penalty-stiff cracks "
                                        "(80 kN at 0.0025 ms, 69 kN at 0.00025 ms; docs/masonry_softening.md)")
 def test_held_j4d_force_at_4_mm_converged_in_the_relaxation_time(held_curves):
-    coarse, fine = (force_at(*held_curves[tau], 4e-3) for tau in RELAXATION_TIMES)
+    coarse, fine = (value_at_push(*held_curves[tau], 4e-3) for tau in RELAXATION_TIMES)
     assert coarse == pytest.approx(fine, rel=0.03)

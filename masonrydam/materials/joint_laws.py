@@ -302,6 +302,11 @@ class JointLaw:
             return 0.0
         return float(params[:, self.relaxation_time_column].max())
 
+    def set_relaxation_time(self, params: np.ndarray, tau: float) -> None:
+        """Write the viscous relaxation time (s) into the rows, for a law that has one."""
+        if self.relaxation_time_column is not None:
+            params[:, self.relaxation_time_column] = tau
+
     def set_time_step(self, params: np.ndarray, dt: float) -> None:
         """Write the time of the step (s) into the rows, for a law that reads it."""
         if self.time_step_column is not None:

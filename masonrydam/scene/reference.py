@@ -31,7 +31,7 @@ from ..materials import joint_laws as jl
 from ..results.writer import OutputOptions
 from ..solvers.dynamic import ADAPTIVE_DEFAULT_LEVELS, INTEGRATORS, JOINT_SPACE_MODES, SCHEMES
 from ..solvers.linear.direct import LINEAR_SOLVERS
-from .schema import (AUTO_DT_MAX_DEFAULT, AUTO_TOLERANCE_DEFAULT, G_STANDARD, HYPOTHESES,
+from .schema import (AUTO_DT_MAX_DEFAULT, AUTO_TOLERANCE_DEFAULT, G_STANDARD, HYPOTHESES, LIMIT_POINTS,
                      PROCESSING_STEPS, STAGE_TYPES, STATIC_CONTROLS, SUPPORT_KINDS)
 
 __all__ = ["Key", "Section", "REQUIRED", "ABSENT", "SECTIONS", "keys", "render_markdown", "main"]
@@ -391,6 +391,10 @@ _STATIC = Section("[[stages]] type = \"static\"", "A static stage applies its lo
        "energy in the joints (the stage's own control until they dissipate); path following is refused on a stage "
        "with reservoir water", default="load",
        choices=STATIC_CONTROLS),
+    _k("stages[].limit_point", "string", "control `load` only, where a step finds no equilibrium after its cuts: "
+       "`follow` the path under arc-length control; `relax`: hold the step's loads and let the joints with a viscous "
+       "regularisation relax until they reach an equilibrium of their own law (the snap of a pushed wall; "
+       "docs/masonry_softening.md)", default="follow", choices=LIMIT_POINTS),
     _k("stages[].until_failure", "bool", "last stage only: run until no equilibrium is found and record the peak "
        "(a reservoir stage: the level reached)", default=False),
     _k("stages[].duration", "number", "physical time of the stage, for viscous blocks (Perzyna) or joints "

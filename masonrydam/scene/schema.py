@@ -62,6 +62,8 @@ def plain(value):
 #: static stage control: its own (load / displacement, arc-length where that stalls), arc-length from the start,
 #: indirect displacement control on the cracks' opening, or dissipation-based control
 STATIC_CONTROLS = ("load", "arc_length", "opening", "dissipation")
+#: what control "load" does where a step finds no equilibrium (masonrydam.solvers.static.relaxation)
+LIMIT_POINTS = ("follow", "relax")
 
 
 def _model(d):
@@ -646,7 +648,7 @@ def normalize(raw: dict) -> dict:
         if st and st[-1]["type"] in ("dynamic", "modal"):
             raise SceneError(f"{key}.type", "static stages must come before the modal and dynamic stages (they "
                                             "continue from the static state)")
-        _check_keys(s, {"name", "type", "steps", "loads", "until_failure", "duration", "control"}, key)
+        _check_keys(s, {"name", "type", "steps", "loads", "until_failure", "duration", "control", "limit_point"}, key)
         loads = s.get("loads", [])
         if not isinstance(loads, list):
             raise SceneError(f"{key}.loads", "expected an array of tables [[stages.loads]]")
@@ -656,6 +658,11 @@ def normalize(raw: dict) -> dict:
                    "loads": [_load(ld, f"{key}.loads[{j}]", dim) for j, ld in enumerate(loads)]})
         # "load" (the stage's loads and prescribed displacements, arc-length where that stalls) or "arc_length"
         st[-1]["control"] = _choice(s.get("control", "load"), STATIC_CONTROLS, f"{key}.control")
+        # where "load" control finds no equilibrium: follow the path (arc length) or relax the joints there
+        st[-1]["limit_point"] = _choice(s.get("limit_point", "follow"), LIMIT_POINTS, f"{key}.limit_point")
+        if st[-1]["limit_point"] == "relax" and st[-1]["control"] != "load":
+            raise SceneError(f"{key}.limit_point", f"\"relax\" acts where control \"load\" stalls; this stage's "
+                                                   f"control is \"{st[-1]['control']}\"")
         if "duration" in s:  # physical time, for rate-dependent (Perzyna) blocks
             st[-1]["duration"] = _positive(s["duration"], "time", f"{key}.duration")
         if st[-1]["until_failure"] and i != len(stages) - 1:

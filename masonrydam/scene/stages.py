@@ -84,7 +84,7 @@ def build_stages(scene: dict, mesh: Mesh, model: Model, base_dir: Path | None = 
         stages.append(StaticStage(st["name"], st["steps"], loads.force, loads.prescribed, loads.increment,
                                   supports.copy(), varying=loads.varying,
                                   until_failure=st.get("until_failure", False), duration=st.get("duration", 0.0),
-                                  control=st.get("control", "load")))
+                                  control=st.get("control", "load"), limit_point=st.get("limit_point", "follow")))
         held = loads.prescribed.copy()
     return stages
 

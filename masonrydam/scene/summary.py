@@ -182,13 +182,21 @@ def _model_lines(mesh, model, eff) -> list[str]:
     return lines + ["             " + e for e in eff[1:]]
 
 
+def _relaxed_words(points) -> str:
+    """The limit points a stage crossed by relaxing its joints (``[[stages]] limit_point = "relax"``), in words."""
+    at = ", ".join(f"{lf:.4g}" for lf, _ in points[:4]) + (", ..." if len(points) > 4 else "")
+    return (f"; past {len(points)} limit point(s) by relaxing the joints (at load factors {at}; "
+            f"{sum(n for _, n in points)} hold steps)")
+
+
 def _static_lines(solver, stats, model) -> list[str]:
     lines = []
     for ps in solver.stats.per_stage:
         lines.append(f"stage      : {ps['stage']}: {ps['steps']} steps, {ps['iterations']} Newton iterations, "
                      f"{ps['step_cuts']} step cuts"
                      + (f"; in its {ps['dissipation_control_steps']} steps under dissipation control the joints "
-                        f"dissipated {ps['joint_dissipation_J']:.4g} J" if "joint_dissipation_J" in ps else ""))
+                        f"dissipated {ps['joint_dissipation_J']:.4g} J" if "joint_dissipation_J" in ps else "")
+                     + (_relaxed_words(ps["relaxed_limit_points"]) if "relaxed_limit_points" in ps else ""))
     backend = resolve_backend(solver.s.linear_solver, n_dof=model.n_dof, dim=model.dim)
     if backend == "amg" and stats["newton_iterations"] and solver.s.method == "newton":
         lines.append(f"solver     : {solver.s.method}, {stats['newton_iterations']} general Newton iterations solved "

@@ -12,6 +12,8 @@ tensile strength ft and mode-I fracture energy GfI; Lourenco 1996, ch. 4, expone
 """
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
@@ -153,3 +155,48 @@ def test_bad_composite_joints():
     with pytest.raises(SceneError) as err:
         masonrydam.run(s)
     assert err.value.key == "stages[0].control"
+
+
+def test_a_snap_back_relaxed_lands_on_the_far_branch_at_the_same_end_displacement():
+    """``limit_point = "relax"`` (masonrydam/solvers/static/relaxation.py): the bar of the test above pulled under
+    displacement control, L = 10 m, four times its snap-back length. At the peak no equilibrium lies near the path;
+    held there, the joint relaxes (Duvaut-Lions flow at fixed end displacement) until its traction meets the
+    softening curve again: the far root of u(sigma) = u_peak on the softening branch, below the branch's turning
+    point sigma* = GfI / (ft (L/E + 1/kn)), where du/dsigma = 0 (closed form in the module docstring). From there the
+    pull goes on along the closed form."""
+    from scipy.optimize import brentq
+
+    from masonrydam.solvers.static import relaxation
+
+    L, width, u_end = 10.0, 0.5, 1.2e-3
+    scene = bar(L, u_end, width=width)
+    scene["stages"][0]["limit_point"] = "relax"
+    ds = masonrydam.run(scene)
+    u, sigma = end_curve(ds, L + width, width)
+    Lt = L + width  # (both blocks stretch)
+
+    def u_branch(s):
+        return s * Lt / E + s / KN - (GF / FT) * np.log(s / FT)
+
+    k = int(np.argmax(sigma))
+    # the last state before the snap: elastic, within the last nominal step below the strength
+    assert u[k] == pytest.approx(sigma[k] * (Lt / E + 1 / KN), rel=1e-9) and 0.95 * FT < sigma[k] <= FT
+    s_turn = GF / (FT * (Lt / E + 1 / KN))
+    s_far = brentq(lambda s: u_branch(s) - u[k + 1], 1e-3 * FT, s_turn)
+    # the snap: the force drops over one step, a nominal one (of 20) cut RELAX_AFTER_CUTS = 2 times at most
+    assert 0 < u[k + 1] - u[k] <= u_end / 20 / 2 ** relaxation.RELAX_AFTER_CUTS * (1 + 1e-9)
+    assert sigma[k + 1] == pytest.approx(s_far, rel=1e-6)
+    post = np.arange(len(u)) > k
+    np.testing.assert_allclose(u[post], u_branch(sigma[post]), rtol=0, atol=1e-9)
+    assert u[-1] == pytest.approx(u_end, rel=1e-9) and ds.attrs["completed"] == "true"
+    assert ds.attrs["arc_length_switches"] == 0
+    # the run says where it relaxed: one limit point, at the step after the last elastic one
+    (lf, holds), = json.loads(ds.attrs["per_stage"])[0]["relaxed_limit_points"]
+    assert holds > 0 and lf * u_end == pytest.approx(u[k + 1], rel=1e-9)
+
+
+def test_limit_point_relax_is_for_load_control():
+    scene = bar(1.0, 1e-4, control="opening")
+    scene["stages"][0]["limit_point"] = "relax"
+    with pytest.raises(SceneError, match=r'stages\[0\]\.limit_point.*control "load"'):
+        masonrydam.run(scene)

@@ -1,30 +1,27 @@
 """Nonlinear static solution in stages.
 
-Each stage ramps its own loads with a load factor lambda from 0 to 1 on top of the loads reached at
-the end of the previous stages (load control). Prescribed displacements are ramped the same way
-as increments from the stage's start (displacement control); their reactions are the load.
+Each stage ramps its own loads with a load factor lambda from 0 to 1 on top of the loads reached at the end of the
+previous stages (load control). Prescribed displacements are ramped the same way as increments from the stage's start
+(displacement control); their reactions are the load.
 
-Per step: full Newton (consistent tangent) or modified Newton (the initial elastic stiffness,
-factorized once for the whole analysis), each with an optional line search (Crisfield 1991,
-Non-linear Finite Element Analysis of Solids and Structures, vol. 1, sec. 9.3). A step that does
-not converge is cut in half and retried, and the step length grows back after successes; a stage
-fails when a step would become shorter than ``1 / (steps * 2**max_step_cuts)``. Convergence needs both the force
-residual ``||r|| <= force_tolerance * max(||f_ext||, ||f_int||, ||r_0||)`` (r_0: the step's first residual, so
-that a state with no force at all, such as an open joint, still has a scale) and the energy of the last correction
-``|du . r| <= energy_tolerance * |du_0 . r_0|``. The iterations run in the Newton loop shared with the dynamic
-steps (:func:`masonrydam.solvers.newton.newton_iterations`, over :class:`LoadStepNewton`), with its convergence
-test, secant line search and step cutting.
+Per step: full Newton (consistent tangent) or modified Newton (the initial elastic stiffness, factorized once for the
+whole analysis), each with an optional line search (Crisfield 1991, Non-linear Finite Element Analysis of Solids and
+Structures, vol. 1, sec. 9.3). A step that does not converge is cut in half and retried, and the step length grows
+back after successes; a stage fails when a step would become shorter than ``1 / (steps * 2**max_step_cuts)``.
+Convergence needs both the force residual ``||r|| <= force_tolerance * max(||f_ext||, ||f_int||, ||r_0||)`` (r_0: the
+step's first residual, so that a state with no force at all, such as an open joint, still has a scale) and the energy
+of the last correction ``|du . r| <= energy_tolerance * |du_0 . r_0|``. The iterations run in the Newton loop shared
+with the dynamic steps (:func:`masonrydam.solvers.newton.newton_iterations`, over :class:`LoadStepNewton`), with its
+convergence test, secant line search and step cutting.
 
-A factorization is reused while the tangent is unchanged (same values): a scene whose joints stay
-linear is therefore solved with a single factorization; a changed tangent is refactorized with the
-kept symbolic analysis (PARDISO).
+A factorization is reused while the tangent is unchanged (same values): a scene whose joints stay linear is therefore
+solved with a single factorization; a changed tangent is refactorized with the kept symbolic analysis (PARDISO).
 
-Joint space (``joint_space = "auto"``, full Newton): the blocks are linear, so each step is first
-solved on the relative displacements of the nonlinear joints, condensed from the all-stick stiffness
+Joint space (``joint_space = "auto"``, full Newton): the blocks are linear, so each step is first solved on the
+relative displacements of the nonlinear joints, condensed from the all-stick stiffness
 (:mod:`masonrydam.solvers.joint_space`, as the dynamic solver does), which needs no sparse factorization per
-iteration; the general Newton iterations then check the result against the full residual and go on
-from it where needed, or solve the step from its start where the joint-space iteration did not
-converge.
+iteration; the general Newton iterations then check the result against the full residual and go on from it where
+needed, or solve the step from its start where the joint-space iteration did not converge.
 """
 from __future__ import annotations
 
@@ -46,6 +43,7 @@ from ..linear.direct import SingularMatrix, SymmetricFactorization, make_solver,
 from ..newton import (ConvergenceTest, IterationFailed, StepCutting, force_scale, newton_iterations,
                       secant_line_search, within_step_stop)
 from .arc_length import ArcLengthStage
+from . import relaxation
 
 #: tangent factor of open joint points in ordinary Newton iterations: a tiny stiffness in the
 #: tangent only (tractions stay zero) so that a block resting on a single contact point does not make
@@ -108,6 +106,8 @@ class StaticStage:
     #: (:mod:`.arc_length`); "opening": indirect displacement control on the opening of the cracking joints;
     #: "dissipation": every step dissipates a chosen energy in the joints (:mod:`.dissipation`)
     control: str = "load"
+    #: where control "load" finds no equilibrium: "follow" the path (arc length) or "relax" (:mod:`.relaxation`)
+    limit_point: str = "follow"
 
 
 #: a static stage whose joint set is too large for the dense flexibility (JOINT_SPACE_MAX) is condensed
@@ -810,9 +810,17 @@ class StaticSolver:
                     # a step that can still be cut is cut where its joint-space iteration fails
                     can_cut = cutting.can_cut(cuts, dl)
                     self._where = f"{st.name}: load factor {target:.4g}" + (f" ({cuts} cuts)" if cuts else "")
+                    step_start = trial.copy()
                     ok, u_new, iters, f_int = self._newton(trial, f_ext, can_cut, state_load)
                 except SingularMatrix as exc:
                     ok, singular = False, exc
+                relax_failure = ""
+                if not ok and st.limit_point == "relax" and st.varying is None and (
+                        cuts >= relaxation.RELAX_AFTER_CUTS or not cutting.can_cut(cuts, dl)):
+                    m.revert()
+                    ok, u_new, f_int, relax_failure = relaxation.relax_past_limit(self, st, u, step_start, f_ext,
+                                                                                  target, stage_stats)
+                    dlam = nominal / 2.0 if ok else dlam  # after a snap the next step is a nominal one again
                 if ok:
                     last_du, last_dlam = (u_new - u)[m.dofmap.free], target - lam
                     u = u_new
@@ -844,7 +852,7 @@ class StaticSolver:
                 if final and self._law_failure:
                     hint += f"; in an attempt the joint or block law gave up: {self._law_failure}"
                 if final and not parts and singular is None and m.nonlinear:
-                    hint += self._stall_hint(u_new, f_ext)
+                    hint += f"; {relax_failure}" if relax_failure else self._stall_hint(u_new, f_ext)
                 m.revert()
                 if final and st.until_failure:
                     what = ("a part lost every support" if parts else "singular stiffness" if singular is not None
@@ -855,7 +863,7 @@ class StaticSolver:
                     self.stats.per_stage.append(dict(stage_stats, iterations=self.stats.iterations
                                                      + self.stats.joint_space_iterations - it_before))
                     return u
-                if final and not parts and st.varying is None and last_du is not None \
+                if final and not parts and st.varying is None and last_du is not None and not relax_failure \
                         and float(np.linalg.norm(last_du)) > 0:
                     # load control stalled (a limit point, a snap): the rest of the stage under arc-length
                     # control from the last converged state, with the arc of its last increment

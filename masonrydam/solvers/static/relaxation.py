@@ -1,0 +1,141 @@
+"""Past a limit point by relaxation: where a static stage's path has a limit point under its own control (the
+prescribed displacements of a push), hold the loads of the step that finds no equilibrium (after
+:data:`RELAX_AFTER_CUTS` cuts) and let the softening joints relax to an equilibrium there, then go on
+(``[[stages]] limit_point = "relax"``).
+
+Beyond a limit point no equilibrium lies near the path. A wall pushed by a stiff actuator snaps there to another
+state, at about the same displacement: its force drops at once. Path following (the default, ``"follow"``) traces
+the equilibrium path through the snap-back instead; where that path turns back to zero load or cannot be followed
+(the inviscid Eindhoven wall, docs/masonry_softening.md) the stage stops. The relaxation finds the state the
+snap lands on:
+
+- during the hold every joint set whose law has a viscous regularisation relaxes with one relaxation time ``tau``
+  (Duvaut-Lions, Simo & Hughes 1998, Computational Inelasticity, sec. 2.7), in pseudo-time steps ``dt = r tau``,
+  ``r`` from 1, doubling while the steps converge and a quarter where one does not, each committed; with ``r``
+  small the viscous tangent is nearly the elastic one, positive where the inviscid one is singular;
+- once the joints' own law leaves the relaxed state out of balance by less than :data:`RETRY_BELOW` of the force
+  scale, the stage's own step (the joints' own relaxation times, inviscid where they have none) is tried from it,
+  then after 1, 2, 4, ... more hold steps each time it fails; the first that converges ends the hold and is the
+  step recorded.
+
+The end state is an equilibrium of the joints' own law. Only ``r = dt / tau`` enters the hold, so the value of
+``tau`` does not matter, but the path the relaxation takes to the end state does: it is the viscous flow's, with
+one relaxation time for every set (docs/masonry_softening.md says what that picks). Viscous (Perzyna) blocks relax
+over the hold's pseudo-time too. Closed-form check: the snap-back bar of tests/solvers/test_composite_joints.py.
+
+Why not a library: the hold acts on the joints' own law state through their trial / commit protocol, which no
+solver library reaches.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..linear.direct import SingularMatrix
+
+#: a step of a stage with ``limit_point = "relax"`` that finds no equilibrium after this many cuts is held and relaxed
+RELAX_AFTER_CUTS = 2
+#: the first pseudo-time step of a hold, in relaxation times; it doubles after each converged step
+R_FIRST = 1.0
+#: the largest pseudo-time step, in relaxation times (a step this long is all but inviscid)
+R_MAX = 1e6
+#: the smallest, below which a hold that keeps failing gives up
+R_MIN = 1e-6
+#: hold steps before a hold gives up
+MAX_HOLD_STEPS = 400
+#: the relaxation time of the hold (s); only dt / tau enters, so any positive value gives the same steps
+TAU_HOLD = 1.0
+#: the stage's own step is tried once the joints' own residual at the relaxed state is below this fraction of the
+#: force scale (each try that fails costs a Newton solve; the hold steps alone are cheaper)
+RETRY_BELOW = 1e-2
+
+
+def _states(model) -> list[tuple[object, np.ndarray]]:
+    """The committed state arrays of every group that has one, copied (restored where a hold gives up)."""
+    return [(g, g.state_committed.copy()) for g in (*model.cgroups, *model.igroups)
+            if getattr(g, "state_committed", None) is not None]
+
+
+def _out_of_balance(model, u, f_ext) -> float:
+    """The residual of the joints' own law at ``u`` (free DOFs) from the committed state, over the force scale (the
+    larger of the external and internal forces' norms over all DOFs: the reactions of a push count); the trial
+    state is reverted."""
+    try:
+        f_int, _ = model.evaluate(u, want_tangent=False)
+    finally:
+        model.revert()
+    free = model.dofmap.free
+    scale = max(float(np.linalg.norm(f_ext)), float(np.linalg.norm(f_int)), 1e-30)
+    return float(np.linalg.norm((f_ext - f_int)[free])) / scale
+
+
+def _step(solver, trial, f_ext):
+    """One Newton step from ``trial`` at ``f_ext``: ``(converged, u, f_int)``; a singular tangent is a step that
+    did not converge (the inviscid tangent at the limit point is nearly singular)."""
+    try:
+        ok, u_new, _, f_int = solver._newton(trial.copy(), f_ext, False, None)
+    except SingularMatrix:
+        return False, trial, None
+    return ok, u_new, f_int
+
+
+def relax_past_limit(solver, st, u: np.ndarray, trial: np.ndarray, f_ext: np.ndarray, load_factor: float,
+                     stage_stats: dict):
+    """Hold the loads of a step that found no equilibrium and relax the joints until the stage's step converges.
+
+    ``solver``: the :class:`~masonrydam.solvers.static.stepping.StaticSolver`, at the last converged state ``u``
+    (n_dof,) m; ``st``: the stage; ``trial`` (n_dof,) m: ``u`` with the step's prescribed displacements;
+    ``f_ext`` (n_dof,) N: the step's external forces, at ``load_factor``; the model's ``time_step`` (s) is the
+    step's own (the joints' own relaxation). Returns ``(ok, u_new, f_int, words)``: on success the converged
+    displacements and internal forces, committed, with ``[load_factor, hold steps]`` appended to
+    ``stage_stats["relaxed_limit_points"]``; else the state of ``u`` restored and what was tried, in words."""
+    m = solver.model
+    step_time = m.time_step
+    viscous = [g for g in m.igroups if g.joint_law.relaxation_time_column is not None]
+    if not viscous:
+        return False, u, None, ("limit_point = \"relax\" needs joints whose law relaxes (a viscous "
+                                   "regularisation: law = \"composite\"); this model has none")
+    own = [g.params_table.copy() for g in viscous]
+    saved = _states(m)
+    where = solver._where
+    r, steps, failed, next_try, gap = R_FIRST, 0, 0, 0, 1
+    try:
+        while steps < MAX_HOLD_STEPS and r >= R_MIN:
+            for g in viscous:
+                g.joint_law.set_relaxation_time(g.params_table, TAU_HOLD)
+            m.time_step = r * TAU_HOLD
+            solver._where = f"{where}, relaxing (hold step {steps + 1}, dt = {r:.3g} tau)"
+            ok, u_hold = _step(solver, trial, f_ext)[:2]
+            for g, p in zip(viscous, own):
+                g.params_table[:] = p
+            if not ok:
+                m.revert()
+                failed += 1
+                r /= 4.0
+                continue
+            m.commit()
+            steps += 1
+            trial = u_hold
+            m.time_step = step_time
+            # the stage's own step: once near the joints' own equilibrium, after 1, 2, 4, ... hold steps more
+            # each time it fails (a try that fails costs a whole Newton solve, a hold step a few iterations)
+            if steps >= next_try and _out_of_balance(m, u_hold, f_ext) <= RETRY_BELOW:
+                solver._where = f"{where}, after {steps} hold step(s)"
+                ok, u_new, f_int = _step(solver, trial, f_ext)
+                if ok:
+                    m.commit()
+                    stage_stats.setdefault("relaxed_limit_points", []).append([float(load_factor), steps])
+                    return True, u_new, f_int, ""
+                m.revert()
+                gap *= 2
+                next_try = steps + gap
+            r = min(2.0 * r, R_MAX)
+    finally:
+        for g, p in zip(viscous, own):
+            g.params_table[:] = p
+        solver._where, m.time_step = where, step_time
+    for g, state in saved:
+        g.state_committed[:] = state
+    m.revert()
+    return False, u, None, (f"relaxing the joints at the step's loads did not reach an equilibrium of "
+                                   f"their own law ({steps} hold steps, {failed} that did not converge, the last "
+                                   f"dt = {r:.3g} tau)")

@@ -10,12 +10,14 @@ of push steps and the mesh, for both vertical conditions of the top beam:
 Each case is the example with ``--set`` style changes: ``relaxation_time`` of the three composite joint sets
 (0: the inviscid law), the push's ``steps``, the generator's ``elements_per_unit`` and the push's ``control``
 (``load``: displacement control with the automatic switches; ``dissipation``: dissipation-based path
-following), and the precompression of the wall (``--walls``): J4D and J5D 0.30 MPa (two specimens of one
+following; ``--limit-points relax``: displacement control that relaxes the joints past a limit point,
+``[[stages]] limit_point = "relax"``), and the precompression of the wall (``--walls``): J4D and J5D 0.30 MPa (two specimens of one
 wall: the model cannot tell them apart), J6D 1.21 MPa, J7D 2.12 MPa (Raijmakers & Vermeltfoort 1992, as
 modelled by Lourenco & Rots 1997). The first case runs once before the timings (numba compilation and cache).
 
     python benchmarks/bench_eindhoven.py [--walls J4D J6D J7D] [--cases held constant]
         [--taus 0.25 0.025 0.0025 0] [--steps 40 80] [--elements 2 4] [--controls load dissipation]
+        [--limit-points follow relax]
 
 Prints per case: the peak force and its displacement, the force at 1, 2, 3 and 4 mm, how far the run got,
 the wall time of the run, and the peak's change against the case with the smallest relaxation time of the
@@ -48,10 +50,12 @@ JOINT_SETS = ("bed_joints", "head_joints", "unit_cracks")
 PRECOMPRESSION = {"J4D": "0.30 MPa", "J5D": "0.30 MPa", "J6D": "1.21 MPa", "J7D": "2.12 MPa"}
 
 
-def scene(case: str, tau_ms: float, steps: int, elements: int, control: str = "load", wall: str = "J4D") -> dict:
+def scene(case: str, tau_ms: float, steps: int, elements: int, control: str = "load", wall: str = "J4D",
+          limit_point: str = "follow") -> dict:
     data = Scene.from_toml(EXAMPLE).data
     set_key(data, "stages[0].loads[1].pressure", PRECOMPRESSION[wall])
     set_key(data, "stages[1].control", control)
+    set_key(data, "stages[1].limit_point", limit_point)
     for name in JOINT_SETS:
         if tau_ms > 0:
             set_key(data, f"joints.{name}.relaxation_time", f"{tau_ms:g} ms")
@@ -93,6 +97,8 @@ def main(argv=None) -> int:
     ap.add_argument("--steps", nargs="+", type=int, default=[40])
     ap.add_argument("--elements", nargs="+", type=int, default=[2])
     ap.add_argument("--controls", nargs="+", default=["load"], choices=["load", "dissipation"])
+    ap.add_argument("--limit-points", nargs="+", default=["follow"], choices=["follow", "relax"],
+                    help="control load: where a step finds no equilibrium, follow the path or relax the joints")
     args = ap.parse_args(argv)
     with tempfile.TemporaryDirectory() as folder:
         warm = scene(args.cases[0], 0.025, 4, 2)
@@ -101,16 +107,18 @@ def main(argv=None) -> int:
         print(f"{'wall':4s} {'case':9s} {'control':11s} {'tau ms':>7s} {'steps':>5s} {'el/unit':>7s} {'peak kN':>8s} {'at mm':>6s} "
               f"{'F(1) kN':>8s} {'F(2)':>6s} {'F(3)':>6s} {'F(4)':>6s} {'reached':>8s} {'wall s':>7s} "
               f"{'peak vs smallest tau':>21s}  status")
-        for wall, case, control, steps, elements in itertools.product(args.walls, args.cases, args.controls,
-                                                                      args.steps, args.elements):
+        for wall, case, control, limit, steps, elements in itertools.product(
+                args.walls, args.cases, args.controls, args.limit_points, args.steps, args.elements):
+            if control != "load" and limit != "follow":
+                continue
             rows = []
             for tau in sorted(args.taus, reverse=True):
-                r = run_case(scene(case, tau, steps, elements, control, wall), folder)
+                r = run_case(scene(case, tau, steps, elements, control, wall, limit), folder)
                 rows.append((tau, r))
             ref = rows[-1][1]["peak"]
             for tau, r in rows:
                 at = " ".join(f"{v / 1e3:6.2f}" for v in r["at"])
-                print(f"{wall:4s} {case:9s} {control:11s} {tau:7.4g} {steps:5d} {elements:7d} {r['peak'] / 1e3:8.2f} {r['d_peak'] * 1e3:6.2f} "
+                print(f"{wall:4s} {case:9s} {control + ('+relax' if limit == 'relax' else ''):11s} {tau:7.4g} {steps:5d} {elements:7d} {r['peak'] / 1e3:8.2f} {r['d_peak'] * 1e3:6.2f} "
                       f"{at:>29s} {r['reached'] * 1e3:6.2f}mm {r['wall']:7.1f} {100 * (r['peak'] / ref - 1):+20.2f}%  "
                       f"{r['status']}", flush=True)
     return 0

@@ -21,6 +21,10 @@ Variants (``--list`` prints them with their changes):
 - ``tau_0.00025``: every composite set's relaxation time a tenth of the example's (0.00025 ms);
 - ``unit_k_1e4``, ``unit_k_1e4_tau_0.00025``: the units' potential cracks with a penalty stiffness of 1e4 N/mm3
   (1e6 in the example), at the example's relaxation time and at a tenth of it.
+- ``one_viscosity_0.25``, ``one_viscosity_0.025``, ``one_viscosity_0.0025``: one viscosity ``tau kn`` for every
+  set: the mortar joints at the relaxation time named, the unit cracks at it times 82 / 1e6 (their stiffness ratio);
+- ``unit_k_1e4_one_viscosity_0.025`` (``_0.0025``, ``_0.00025``): the same with the unit cracks' penalty at 1e4 N/mm3
+  (their relaxation time the mortar joints' times 82 / 1e4).
 
 Each run also prints, per joint set, the largest traction beyond the set's virgin strength over the push: the
 normal traction beyond ``ft`` and the shear beyond ``c - tan(phi) t_n`` (MPa). The inviscid law never goes
@@ -28,7 +32,7 @@ beyond them (softening only lowers the surfaces), so what is printed is the visc
 (at least).
 
 A study, not a test: it prints what each run gives, including a run that stops (its error's class and where).
-One process, one thread; about twelve minutes for all of them on a 2-core AMD EPYC.
+One process, one thread; about twenty-two minutes for all of them on a 2-core AMD EPYC.
 """
 from __future__ import annotations
 
@@ -71,6 +75,17 @@ VARIANTS = {
     "unit_k_1e4_tau_0.00025": {"joints.unit_cracks.normal_stiffness": "1e4 N/mm3",
                                "joints.unit_cracks.shear_stiffness": "1e4 N/mm3",
                                **{f"joints.{s}.relaxation_time": "0.00025 ms" for s in (*CAP_SETS, "unit_cracks")}},
+    # one viscosity eta = tau kn for every set: the unit cracks' relaxation time is the mortar joints' times
+    # 82 / 1e6 (their stiffness ratio), so that both carry the same overstress eta * plastic rate
+    **{f"one_viscosity_{t}": {**_both("relaxation_time", f"{t} ms"),
+                              "joints.unit_cracks.relaxation_time": f"{float(t) * 82e-6:.4g} ms"}
+       for t in ("0.25", "0.025", "0.0025")},
+    # the same with the unit cracks' penalty at 1e4 N/mm3 (their relaxation time the mortar's times 82 / 1e4)
+    **{f"unit_k_1e4_one_viscosity_{t}": {**_both("relaxation_time", f"{t} ms"),
+                                         "joints.unit_cracks.normal_stiffness": "1e4 N/mm3",
+                                         "joints.unit_cracks.shear_stiffness": "1e4 N/mm3",
+                                         "joints.unit_cracks.relaxation_time": f"{float(t) * 82e-4:.4g} ms"}
+       for t in ("0.025", "0.0025", "0.00025")},
 }
 
 

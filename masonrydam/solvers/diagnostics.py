@@ -9,7 +9,7 @@ with its element groups, its bounding box and the joint sets around it that open
 A static step whose Newton iterations do not converge is described by :func:`newton_stall`: the DOF its last
 iterate leaves most out of balance and the joint points whose state its next correction would switch, the
 signature of Newton cycling between joint-state patterns at a non-smooth point of a joint law (the Eindhoven
-wall's inviscid stall at a unit crack's tensile corner, docs/masonry_softening.md).
+wall's inviscid stall at a softened unit crack, docs/masonry_softening.md).
 """
 from __future__ import annotations
 

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...errors import NumericalError
 from ..linear.direct import SingularMatrix
 
 #: a step of a stage with ``limit_point = "relax"`` that finds no equilibrium after this many cuts is held and relaxed
@@ -61,6 +62,8 @@ def _out_of_balance(model, u, f_ext) -> float:
     state is reverted."""
     try:
         f_int, _ = model.evaluate(u, want_tangent=False)
+    except NumericalError:  # a law that gives up there: far from it
+        return float("inf")
     finally:
         model.revert()
     free = model.dofmap.free
@@ -69,11 +72,11 @@ def _out_of_balance(model, u, f_ext) -> float:
 
 
 def _step(solver, trial, f_ext):
-    """One Newton step from ``trial`` at ``f_ext``: ``(converged, u, f_int)``; a singular tangent is a step that
-    did not converge (the inviscid tangent at the limit point is nearly singular)."""
+    """One Newton step from ``trial`` at ``f_ext``: ``(converged, u, f_int)``; a singular tangent (the inviscid
+    one at the limit point is nearly singular) or a law that gives up is a step that did not converge."""
     try:
         ok, u_new, _, f_int = solver._newton(trial.copy(), f_ext, False, None)
-    except SingularMatrix:
+    except (SingularMatrix, NumericalError):
         return False, trial, None
     return ok, u_new, f_int
 
@@ -93,7 +96,7 @@ def relax_past_limit(solver, st, u: np.ndarray, trial: np.ndarray, f_ext: np.nda
     viscous = [g for g in m.igroups if g.joint_law.relaxation_time_column is not None]
     if not viscous:
         return False, u, None, ("limit_point = \"relax\" needs joints whose law relaxes (a viscous "
-                                   "regularisation: law = \"composite\"); this model has none")
+                                "regularisation: law = \"composite\"); this model has none")
     own = [g.params_table.copy() for g in viscous]
     saved = _states(m)
     where = solver._where
@@ -137,5 +140,5 @@ def relax_past_limit(solver, st, u: np.ndarray, trial: np.ndarray, f_ext: np.nda
         g.state_committed[:] = state
     m.revert()
     return False, u, None, (f"relaxing the joints at the step's loads did not reach an equilibrium of "
-                                   f"their own law ({steps} hold steps, {failed} that did not converge, the last "
-                                   f"dt = {r:.3g} tau)")
+                            f"their own law ({steps} hold steps, {failed} that did not converge, the last "
+                            f"dt = {r:.3g} tau)")

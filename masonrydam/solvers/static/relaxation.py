@@ -32,6 +32,7 @@ import numpy as np
 
 from ...errors import NumericalError
 from ..linear.direct import SingularMatrix
+from ..newton import force_scale
 
 #: a step of a stage with ``limit_point = "relax"`` that finds no equilibrium after this many cuts is held and relaxed
 RELAX_AFTER_CUTS = 2
@@ -67,7 +68,7 @@ def _out_of_balance(model, u, f_ext) -> float:
     finally:
         model.revert()
     free = model.dofmap.free
-    scale = max(float(np.linalg.norm(f_ext)), float(np.linalg.norm(f_int)), 1e-30)
+    scale = force_scale(float(np.linalg.norm(f_ext)), float(np.linalg.norm(f_int)))
     return float(np.linalg.norm((f_ext - f_int)[free])) / scale
 
 

@@ -851,7 +851,7 @@ class StaticSolver:
                     hint += st.varying.failure_hint()
                 if final and self._law_failure:
                     hint += f"; in an attempt the joint or block law gave up: {self._law_failure}"
-                if final and not parts and singular is None and m.nonlinear:
+                if final and (relax_failure or not parts and singular is None and m.nonlinear):
                     hint += f"; {relax_failure}" if relax_failure else self._stall_hint(u_new, f_ext)
                 m.revert()
                 if final and st.until_failure:

@@ -297,7 +297,8 @@ def add_point(fe_out, ke_out, e, N, g, ns, dim, ndof_half, R, t, C, jwh, want_ta
 
 
 @njit(cache=True, inline="always")
-def joint_law_at(params_table, pidx, state_committed, state_trial, delta_out, traction_out, e, g, dim, C, law):
+def joint_law_at(params_table, pidx, state_committed, state_trial, delta_out, traction_out, e, g, dim, C, law,
+                 want_tangent=True):
     """The joint law at point ``g`` of element ``e`` from its local relative displacement
     ``delta_out[e, g]`` and committed state: writes ``state_trial[e, g]``, ``traction_out[e, g]`` and the
     tangent ``C`` (dim, dim); returns the law's status. Shared by the small- and large-displacement
@@ -306,10 +307,12 @@ def joint_law_at(params_table, pidx, state_committed, state_trial, delta_out, tr
 
     ``law``: None for the seed's Mohr-Coulomb law, an int (``JointLaw.kernel_id``) for another. Why None:
     numba prunes the ``law is not None`` branch of a None argument before typing, so the Mohr-Coulomb
-    kernels never compile the composite law (it doubled the first, compiling run of the default scene)."""
+    kernels never compile the composite law (it doubled the first, compiling run of the default scene).
+    ``want_tangent`` False: a law may leave ``C`` uncomputed (the composite law does, where it would cost a third
+    of a plastic point); the forces and states are the same."""
     if law is not None:
         return composite_point(params_table, pidx, delta_out, dim - 1, state_committed, state_trial, e, g,
-                               traction_out, C)
+                               traction_out, C, want_tangent)
     (status, code, broken, slip1, slip2, back1, back2, tau1, tau2, t_n, C11, C12, C21, C22, C1n, C2n,
      Cnn) = mohr_coulomb_point(
         params_table[pidx, P_KS], params_table[pidx, P_KN], params_table[pidx, P_COHESION],
@@ -438,7 +441,7 @@ def interface_evaluate(
                 delta_out[e, g, r] = s
 
             status = joint_law_at(params_table, pidx, state_committed, state_trial, delta_out, traction_out, e, g,
-                                  dim, C, law)
+                                  dim, C, law, want_tangent)
             if status != STATUS_OK:
                 info[0] = e
                 return status
@@ -490,7 +493,7 @@ def interface_forces(conn, u, N, frame, jw, thickness, params_table, param_index
                     s += R[r, k] * Dug[k]
                 delta_out[e, g, r] = s
             status = joint_law_at(params_table, pidx, state_committed, state_trial, delta_out, traction_out, e, g,
-                                  dim, C, law)
+                                  dim, C, law, False)
             if status != STATUS_OK:
                 info[0] = e
                 return status

@@ -251,7 +251,7 @@ def interface_large_evaluate(coords, conn, u, N, dN, weights, thickness, params_
                     s += R[r, k] * dvec[k]
                 delta_out[e, g, r] = s - delta0[r]
             status = joint_law_at(params_table, pidx, state_committed, state_trial, delta_out, traction_out, e, g,
-                                  dim, C, law)
+                                  dim, C, law, want_tangent)
             if status != STATUS_OK:
                 info[0] = e
                 return status

@@ -55,3 +55,37 @@ def test_forces_only_kernel_is_interface_evaluate_without_tangent(name, paramete
         assert np.abs(out["forces"][0]).max() > 0
     # the displacements put points in more than one state (stick / slip / open), so the law's branches ran
     assert len(codes) >= 2, codes
+
+
+@pytest.mark.parametrize("time_step", [None, 2.5e-8])
+def test_composite_law_forces_do_not_depend_on_whether_the_tangent_is_wanted(time_step):
+    """The composite law skips its consistent tangent where none is wanted (a line search's evaluations): the
+    forces, tractions and trial states are those of the evaluation with the tangent, bit for bit, inviscid
+    (``time_step`` None: the example's relaxation time removed) and with the Duvaut-Lions regularisation
+    (the example's 0.0025 ms over a step of a tenth of it)."""
+    model = example_model("eindhoven_J4D.toml")
+    rng = np.random.default_rng(11)
+    u = rng.normal(scale=2e-5, size=model.n_dof)
+    codes = set()
+    composite = [g for g in model.igroups if g.law_id is not None and g.kinematics == "small"]
+    assert composite
+    for g in composite:
+        if time_step is None:
+            g.params_table[:, g.joint_law.relaxation_time_column] = 0.0
+        else:
+            g.joint_law.set_time_step(g.params_table, time_step)
+        out = {}
+        for want in (True, False):
+            g.state_trial[...] = 0.0
+            n = g.conn.shape[1] * model.dim  # (2 ns nodes, dim components each)
+            ke = np.empty((g.conn.shape[0], n, n)) if want else np.empty((0, 0, 0))
+            st = interface_evaluate(model.coords, g.conn, u, g.N, g.dN, g.weights, g.thickness, g.params_table,
+                                    g.param_index, g.state_base, g.state_trial, g.delta, g.traction, g.fe, ke, want,
+                                    g.info, g.law_id)
+            assert st == 0
+            out[want] = (g.fe.copy(), g.traction.copy(), g.delta.copy(), g.state_trial.copy())
+        for a, b in zip(out[True], out[False]):
+            np.testing.assert_array_equal(a, b)
+        codes |= set(np.unique(out[False][3][..., 0]).tolist())
+    # plastic returns ran (the codes of tension, shear and their corner among them), where the tangent is skipped
+    assert len(codes - {0.0}) >= 2, codes

@@ -45,7 +45,7 @@ def _write_failure(state_committed, state_trial, e, g, traction_out, C, ns):
 
 
 @njit(cache=True)
-def composite_point(params, p, delta, ns, state_committed, state_trial, e, g, traction_out, C):
+def composite_point(params, p, delta, ns, state_committed, state_trial, e, g, traction_out, C, want_tangent=True):
     """The composite interface law at point ``g`` of element ``e``.
 
     Parameters
@@ -58,6 +58,9 @@ def composite_point(params, p, delta, ns, state_committed, state_trial, e, g, tr
     state_trial : same shape, written at ``[e, g]``.
     traction_out : float64 (n_elem, nip, ns+1), written at ``[e, g]``: ``[tau1, (tau2,) t_n]`` (Pa).
     C : float64 (ns+1, ns+1), out: the consistent tangent ``d t / d delta`` (Pa/m).
+    want_tangent : bool; where False a plastic point's ``C`` is not computed (zeros, or the elastic part of the
+        viscous tangent). Why: the consistent tangent costs about a third of a plastic point (a complex-step
+        Jacobian of the local system and a solve per component), and a line search evaluates forces only.
 
     Returns
     -------
@@ -270,7 +273,11 @@ def composite_point(params, p, delta, ns, state_committed, state_trial, e, g, tr
     # ---- consistent tangent: dx/d delta_j = -J^-1 dR/d delta_j; outputs by directional complex steps
     ot = params[p, P_OPEN_TANGENT]
     is_open = (act1 and abs(tn) <= TOL_NEWTON * sref * 10.0 and abs(x[1]) <= TOL_NEWTON * sref * 10.0)
-    if is_open and ot != 0.0:
+    if not want_tangent:
+        for i in range(n):
+            for j in range(n):
+                C[i, j] = 0.0
+    elif is_open and ot != 0.0:
         for i in range(n):
             for j in range(n):
                 C[i, j] = 0.0

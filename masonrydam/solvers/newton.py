@@ -70,20 +70,22 @@ class ConvergenceTest:
         return force_ok and work_ok
 
 
-def secant_line_search(directional_residual, g0: float, max_tries: int = 6) -> tuple[float, bool]:
+def secant_line_search(directional_residual, g0: float, max_tries: int = 6, first: float | None = None
+                       ) -> tuple[float, bool]:
     """Secant line search on ``g(s) = du . r(u + s du)`` (Crisfield 1991, sec. 9.3.1): the step length ``s``
     in [0.1, 1] where ``|g(s)| <= |g0| / 2``, from at most ``max_tries`` evaluations.
 
     ``directional_residual(s)`` returns ``g(s)`` (N m), or raises :class:`~masonrydam.errors.NumericalError`
-    where a material law gives up at that trial point (a shorter step is then taken); ``g0 = g(0)``. Returns
-    (s, searched): ``searched`` says whether the search moved away from the full step in a way worth counting.
+    where a material law gives up at that trial point (a shorter step is then taken); ``g0 = g(0)``; ``first``:
+    ``g(1)`` where the caller has it already (it counts as the first evaluation). Returns (s, searched):
+    ``searched`` says whether the search moved away from the full step in a way worth counting.
     """
     if g0 <= 0:
         return 1.0, False
     s_prev, g_prev, s = 0.0, g0, 1.0
     for k in range(max_tries):
         try:
-            g = directional_residual(s)
+            g = first if k == 0 and first is not None else directional_residual(s)
         except NumericalError:  # a law gave up at this trial point: a shorter step
             return (0.5 if k == 0 else s_prev if s_prev > 0 else 0.1), False
         if not np.isfinite(g):

@@ -40,10 +40,9 @@ from ..diagnostics import find_free_parts, newton_stall
 from ..joint_space import MAX_INITIAL_STIFFNESS_ITERATIONS, JointSpace, joint_space_size, lazy_flexibility
 from ..linear.iterative import clear_pattern_caches, rigid_body_modes
 from ..linear.direct import SingularMatrix, SymmetricFactorization, make_solver, resolve_backend
-from ..newton import (ConvergenceTest, IterationFailed, StepCutting, force_scale, newton_iterations,
-                      secant_line_search, within_step_stop)
+from ..newton import ConvergenceTest, IterationFailed, StepCutting, force_scale, newton_iterations, within_step_stop
 from .arc_length import ArcLengthStage
-from . import relaxation
+from . import line_search, relaxation
 
 #: tangent factor of open joint points in ordinary Newton iterations: a tiny stiffness in the
 #: tangent only (tractions stay zero) so that a block resting on a single contact point does not make
@@ -280,11 +279,11 @@ class LoadStepNewton:
         self._last_residual_norm = None  # the residual norm and forcing term of the last inexact correction
         self._last_forcing = None
 
-    def evaluate(self, u) -> LoadStepIterate:
+    def evaluate(self, u, latch=True) -> LoadStepIterate:
         """The iterate at ``u``; :class:`~masonrydam.solvers.newton.IterationFailed` where a law's return mapping
         gives up there (an iterate far off the path, or a trial increment too large for it: the attempt failed and
         the step is cut like one that does not converge; the last such message goes into the error if the cuts
-        do not help)."""
+        do not help). ``latch`` False: the bonds the iterate breaks are not latched while the guard stabilizes."""
         m, solver = self.model, self.solver
         want_K = self.s.method == "newton" or solver._initial is None
         try:
@@ -292,7 +291,7 @@ class LoadStepNewton:
         except NumericalError as exc:
             solver._law_failure = str(exc)
             raise IterationFailed(str(exc)) from None
-        if self.guard.stabilized:
+        if self.guard.stabilized and latch:
             m.latch_broken_bonds()
         f_now = solver._with_state_load(self.f_ext)
         r_full = f_now - f_int
@@ -352,14 +351,9 @@ class LoadStepNewton:
         return eta
 
     def advance(self, iterate, du):
-        """The iterate at ``u + s du``, ``s`` from the secant line search (1 without); the work ``|s du . r|``."""
-        step = 1.0
-        if self.s.line_search:
-            step = self.solver._line_search(iterate.u, du, iterate.r, self.f_ext)
-        u = iterate.u.copy()
-        u[self.free] += step * du
-        work = abs(step * float(du @ iterate.r))
-        return self.evaluate(u), work, work
+        """The iterate at ``u + s du``, ``s`` from the secant line search (1 without); the work ``|s du . r|``
+        (:func:`.line_search.advance`)."""
+        return line_search.advance(self, iterate, du)
 
 
 class StaticSolver:
@@ -700,22 +694,6 @@ class StaticSolver:
         finally:
             self.model.set_open_tangent(OPEN_TANGENT_REGULAR)
 
-    def _line_search(self, u, du, r0, f_ext, max_tries=6):
-        """The step length along the correction ``du`` from ``u`` (residual ``r0`` there): the secant line search
-        of :func:`masonrydam.solvers.newton.secant_line_search` on g(s) = du . r(u + s du)."""
-        m, free = self.model, self.model.dofmap.free
-
-        def directional_residual(s):
-            trial = u.copy()
-            trial[free] += s * du
-            f_int, _ = m.evaluate(trial, want_tangent=False)
-            return float(du @ (self._with_state_load(f_ext) - f_int)[free])
-
-        step, searched = secant_line_search(directional_residual, float(du @ r0), max_tries)
-        if searched:
-            self.stats.line_searches += 1
-        return step
-
     def _stall_hint(self, u, f_ext) -> str:
         """Where a failed step's last iterate ``u`` is out of balance (:func:`~..diagnostics.newton_stall`)."""
         def residual(v, tangent):
@@ -811,16 +789,16 @@ class StaticSolver:
                     can_cut = cutting.can_cut(cuts, dl)
                     self._where = f"{st.name}: load factor {target:.4g}" + (f" ({cuts} cuts)" if cuts else "")
                     step_start = trial.copy()
-                    ok, u_new, iters, f_int = self._newton(trial, f_ext, can_cut, state_load)
+                    ok, u_new, iters, f_int = relaxation.attempt(self, st, dl, nominal, can_cut, trial, f_ext,
+                                                                 state_load)
                 except SingularMatrix as exc:
                     ok, singular = False, exc
                 relax_failure = ""
-                if not ok and st.limit_point == "relax" and st.varying is None and (
-                        cuts >= relaxation.RELAX_AFTER_CUTS or not cutting.can_cut(cuts, dl)):
+                if not ok and relaxation.holds(st, dl, nominal, cutting.can_cut(cuts, dl)):
                     m.revert()
                     ok, u_new, f_int, relax_failure = relaxation.relax_past_limit(self, st, u, step_start, f_ext,
                                                                                   target, stage_stats)
-                    dlam = nominal / 2.0 if ok else dlam  # after a snap the next step is a nominal one again
+                    dlam = dl / 2.0 if ok else dlam  # after a snap the next step is as long (doubled below)
                 if ok:
                     last_du, last_dlam = (u_new - u)[m.dofmap.free], target - lam
                     u = u_new

@@ -190,6 +190,10 @@ def test_a_snap_back_relaxed_lands_on_the_far_branch_at_the_same_end_displacemen
     np.testing.assert_allclose(u[post], u_branch(sigma[post]), rtol=0, atol=1e-9)
     assert u[-1] == pytest.approx(u_end, rel=1e-9) and ds.attrs["completed"] == "true"
     assert ds.attrs["arc_length_switches"] == 0
+    # after the hold the pull goes on with a step as long as the held one, and the steps grow back to the nominal
+    steps = np.diff(u)
+    assert steps[k + 1] == pytest.approx(steps[k], rel=1e-6)
+    assert steps[k + 1:].max() == pytest.approx(u_end / 20, rel=1e-6)
     # the run says where it relaxed: one limit point, at the step after the last elastic one
     (lf, holds), = json.loads(ds.attrs["per_stage"])[0]["relaxed_limit_points"]
     assert holds > 0 and lf * u_end == pytest.approx(u[k + 1], rel=1e-9)

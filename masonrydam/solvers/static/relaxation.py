@@ -1,6 +1,6 @@
 """Past a limit point by relaxation: where a static stage's path has a limit point under its own control (the
-prescribed displacements of a push), hold the loads of the step that finds no equilibrium (after
-:data:`RELAX_AFTER_CUTS` cuts) and let the softening joints relax to an equilibrium there, then go on
+prescribed displacements of a push), hold the loads of the step that finds no equilibrium (once it is
+cut to a quarter, :data:`RELAX_AFTER_CUTS`) and let the softening joints relax to an equilibrium there, then go on
 (``[[stages]] limit_point = "relax"``).
 
 Beyond a limit point no equilibrium lies near the path. A wall pushed by a stiff actuator snaps there to another
@@ -16,7 +16,13 @@ snap lands on:
 - once the joints' own law leaves the relaxed state out of balance by less than :data:`RETRY_BELOW` of the force
   scale, the stage's own step (the joints' own relaxation times, inviscid where they have none) is tried from it,
   then after 1, 2, 4, ... more hold steps each time it fails; the first that converges ends the hold and is the
-  step recorded.
+  step recorded;
+- the next step is as long as the held one, and grows back after steps that converge without a hold.
+
+What it costs (docs/masonry_softening.md): past the Eindhoven wall's peak nearly every quarter step is held. The
+Newton iterations of the attempts that end in a hold, of the hold steps and of the tries from the relaxed state are
+capped (:data:`RETRY_MAX_ITERATIONS`, :data:`HOLD_MAX_ITERATIONS`) below the stage's own budget, at counts that
+none of the converged ones reached there.
 
 The end state is an equilibrium of the joints' own law. Only ``r = dt / tau`` enters the hold, so the value of
 ``tau`` does not matter, but the path the relaxation takes to the end state does: it is the viscous flow's, with
@@ -28,13 +34,16 @@ solver library reaches.
 """
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from ...errors import NumericalError
 from ..linear.direct import SingularMatrix
 from ..newton import force_scale
 
-#: a step of a stage with ``limit_point = "relax"`` that finds no equilibrium after this many cuts is held and relaxed
+#: a step of a stage with ``limit_point = "relax"`` that finds no equilibrium is held and relaxed where it is no
+#: longer than the nominal step cut this many times (:func:`holds`)
 RELAX_AFTER_CUTS = 2
 #: the first pseudo-time step of a hold, in relaxation times; it doubles after each converged step
 R_FIRST = 1.0
@@ -49,6 +58,38 @@ TAU_HOLD = 1.0
 #: the stage's own step is tried once the joints' own residual at the relaxed state is below this fraction of the
 #: force scale (each try that fails costs a Newton solve; the hold steps alone are cheaper)
 RETRY_BELOW = 1e-2
+#: Newton iterations of a hold step before it counts as failed (and ``r`` is quartered). Why: on the inviscid
+#: Eindhoven wall J4D (docs/masonry_softening.md) every converged hold step took 3 to 8 iterations and none that
+#: ran past 8 converged by 30, where a failed step cost 30; a third of the hold's iterations went into them
+HOLD_MAX_ITERATIONS = 10
+#: Newton iterations of a try of the stage's own step from the relaxed state (there 4 to 15 converged, none later)
+RETRY_MAX_ITERATIONS = 20
+
+
+def holds(st, size: float, nominal: float, can_cut: bool) -> bool:
+    """Whether a step of load-factor length ``size`` of stage ``st`` that found no equilibrium is held
+    (:func:`relax_past_limit`) rather than cut: with ``limit_point = "relax"`` (and loads proportional to the load
+    factor), where it is no longer than the nominal step ``nominal`` cut :data:`RELAX_AFTER_CUTS` times, or
+    cannot be cut again (``can_cut`` False). After a hold the next step is as long as the held one (the step
+    grows back after steps that converge without one): past a peak nearly every step crosses a limit point,
+    and each longer attempt that fails first costs a whole Newton solve."""
+    return st.limit_point == "relax" and st.varying is None and (
+        size <= nominal / 2.0 ** RELAX_AFTER_CUTS * (1.0 + 1e-9) or not can_cut)
+
+
+def attempt(solver, st, size: float, nominal: float, can_cut: bool, trial, f_ext, state_load):
+    """The stage's step from ``trial`` (:meth:`StaticSolver._newton`, its ``(ok, u, iterations, f_int)``): where a
+    failure would be held (:func:`holds`), with at most :data:`RETRY_MAX_ITERATIONS` Newton iterations. Why: past
+    the Eindhoven wall's peak four in five of these steps fail and go to a hold, each after the stage's whole
+    iteration budget (30), and none of those that converged took more than 20."""
+    if not holds(st, size, nominal, can_cut):
+        return solver._newton(trial, f_ext, can_cut, state_load)
+    settings = solver.s
+    solver.s = replace(settings, max_iterations=min(RETRY_MAX_ITERATIONS, settings.max_iterations))
+    try:
+        return solver._newton(trial, f_ext, can_cut, state_load)
+    finally:
+        solver.s = settings
 
 
 def _states(model) -> list[tuple[object, np.ndarray]]:
@@ -72,13 +113,18 @@ def _out_of_balance(model, u, f_ext) -> float:
     return float(np.linalg.norm((f_ext - f_int)[free])) / scale
 
 
-def _step(solver, trial, f_ext):
-    """One Newton step from ``trial`` at ``f_ext``: ``(converged, u, f_int)``; a singular tangent (the inviscid
-    one at the limit point is nearly singular) or a law that gives up is a step that did not converge."""
+def _step(solver, trial, f_ext, max_iterations: int):
+    """One Newton step from ``trial`` at ``f_ext``, at most ``max_iterations`` (and the stage's own limit):
+    ``(converged, u, f_int)``; a singular tangent (the inviscid one at the limit point is nearly singular) or a law
+    that gives up is a step that did not converge."""
+    settings = solver.s
+    solver.s = replace(settings, max_iterations=min(max_iterations, settings.max_iterations))
     try:
         ok, u_new, _, f_int = solver._newton(trial.copy(), f_ext, False, None)
     except (SingularMatrix, NumericalError):
         return False, trial, None
+    finally:
+        solver.s = settings
     return ok, u_new, f_int
 
 
@@ -108,7 +154,7 @@ def relax_past_limit(solver, st, u: np.ndarray, trial: np.ndarray, f_ext: np.nda
                 g.joint_law.set_relaxation_time(g.params_table, TAU_HOLD)
             m.time_step = r * TAU_HOLD
             solver._where = f"{where}, relaxing (hold step {steps + 1}, dt = {r:.3g} tau)"
-            ok, u_hold = _step(solver, trial, f_ext)[:2]
+            ok, u_hold = _step(solver, trial, f_ext, HOLD_MAX_ITERATIONS)[:2]
             for g, p in zip(viscous, own):
                 g.params_table[:] = p
             if not ok:
@@ -124,7 +170,7 @@ def relax_past_limit(solver, st, u: np.ndarray, trial: np.ndarray, f_ext: np.nda
             # each time it fails (a try that fails costs a whole Newton solve, a hold step a few iterations)
             if steps >= next_try and _out_of_balance(m, u_hold, f_ext) <= RETRY_BELOW:
                 solver._where = f"{where}, after {steps} hold step(s)"
-                ok, u_new, f_int = _step(solver, trial, f_ext)
+                ok, u_new, f_int = _step(solver, trial, f_ext, RETRY_MAX_ITERATIONS)
                 if ok:
                     m.commit()
                     stage_stats.setdefault("relaxed_limit_points", []).append([float(load_factor), steps])

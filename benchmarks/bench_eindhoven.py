@@ -20,8 +20,9 @@ modelled by Lourenco & Rots 1997). The first case runs once before the timings (
         [--limit-points follow relax]
 
 Prints per case: the peak force and its displacement, the force at 1, 2, 3 and 4 mm, how far the run got,
-the wall time of the run, and the peak's change against the case with the smallest relaxation time of the
-same steps and mesh. One process, one thread. A benchmark, not a test: it never fails on a slow figure.
+the wall time of the run, the failure mechanisms at the peak and at the end (:mod:`masonrydam.results.wall_cracks`:
+diagonal cracking, toe crushing, sliding), and the peak's change against the case with the smallest relaxation
+time of the same steps and mesh. One process, one thread. A benchmark, not a test: it never fails on a slow figure.
 """
 from __future__ import annotations
 
@@ -42,6 +43,7 @@ import numpy as np
 
 import masonrydam
 from masonrydam.results.pushover import pushover_data, value_at_push
+from masonrydam.results.wall_cracks import wall_cracks
 from masonrydam.scene.scene import Scene, set_key
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "eindhoven_J4D.toml"
@@ -83,10 +85,12 @@ def run_case(data: dict, folder: str) -> dict:
     import xarray as xr
 
     with xr.open_dataset(out) as ds:
-        d, f, _ = pushover_data(ds)
-    k = int(np.argmax(f))
+        d, f, steps = pushover_data(ds)
+        k = int(np.argmax(f))
+        mechanisms = {when: wall_cracks(ds, step).mechanisms for when, step in (("peak", int(steps[k])), ("end", -1))}
     at = [value_at_push(d, f, x) for x in (1e-3, 2e-3, 3e-3, 4e-3)]
-    return {"peak": f[k], "d_peak": d[k], "at": at, "reached": d.max(), "wall": wall, "status": status}
+    return {"peak": f[k], "d_peak": d[k], "at": at, "reached": d.max(), "wall": wall, "status": status,
+            "mechanisms": mechanisms}
 
 
 def main(argv=None) -> int:
@@ -121,6 +125,8 @@ def main(argv=None) -> int:
                 print(f"{wall:4s} {case:9s} {control + ('+relax' if limit == 'relax' else ''):11s} {tau:7.4g} {steps:5d} {elements:7d} {r['peak'] / 1e3:8.2f} {r['d_peak'] * 1e3:6.2f} "
                       f"{at:>29s} {r['reached'] * 1e3:6.2f}mm {r['wall']:7.1f} {100 * (r['peak'] / ref - 1):+20.2f}%  "
                       f"{r['status']}", flush=True)
+                for when, names in r["mechanisms"].items():
+                    print(f"     at the {when}: {'; '.join(names) or 'no failure mechanism'}", flush=True)
     return 0
 
 

@@ -4,11 +4,18 @@ examples/eindhoven_J4D.toml with the top beam held at its height (the reference 
 hysteresis of examples/eindhoven_J4D_cyclic.py.
 
     python benchmarks/figures_eindhoven.py [--out docs/figures]
+    python benchmarks/figures_eindhoven.py --relaxed [--results DIR] [--out docs/figures]
 
 Writes eindhoven_J4D_curves.png, eindhoven_J4D_cracks_peak.png, eindhoven_J4D_cracks_end.png,
 eindhoven_J4D_cyclic.png, and for the higher precompressions of J6D and J7D (issue 36) eindhoven_walls_curves.png
 (the three held walls at the example's relaxation time and at a tenth of it) and eindhoven_J6D_cracks_peak.png,
 eindhoven_J6D_cracks_end.png, eindhoven_J7D_cracks_peak.png, eindhoven_J7D_cracks_end.png; prints the runs' figures (peak, plateau, wall time).
+
+With ``--relaxed``, only the held walls J4D, J6D and J7D with the inviscid law relaxed past their limit points
+(examples/eindhoven_walls.py, the converged curves; issue 36): eindhoven_walls_relaxed_curves.png, with J4D's
+regularised example curve for comparison, and eindhoven_<wall>_relaxed_cracks_peak.png and _end.png (at the
+largest force and at 4 mm); ``--results DIR`` reads the walls' eindhoven_<wall>.nc written by that example instead
+of running them (about 6 minutes for J4D on one core).
 """
 from __future__ import annotations
 
@@ -40,12 +47,19 @@ def run(data, label):
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--out", default=str(Path(__file__).resolve().parents[1] / "docs" / "figures"))
+    ap.add_argument("--relaxed", action="store_true", help="only the walls relaxed past their limit points")
+    ap.add_argument("--results", help="with --relaxed: a folder with the walls' eindhoven_<wall>.nc to read")
     args = ap.parse_args(argv)
     out = Path(args.out)
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
+    if args.relaxed:
+        _relaxed_walls(out, plt, None if args.results is None else Path(args.results))
+        print(f"wrote the figures in {out}")
+        return 0
 
     held = run(Scene.from_toml(EXAMPLES / "eindhoven_J4D.toml").data, "J4D, top held")
     free = Scene.from_toml(EXAMPLES / "eindhoven_J4D.toml").data
@@ -113,6 +127,37 @@ def _higher_precompressions(held_j4d, out, plt):
         if wall != "J4D":  # J4D's are drawn with its own figures
             _crack_figures(ds, wall, out)
     _save_curves(fig, ax, "Eindhoven walls, top held at its height (model only)", out / "eindhoven_walls_curves.png")
+
+
+def _relaxed_walls(out, plt, results):
+    """The held walls with the inviscid law relaxed past their limit points (examples/eindhoven_walls.py): their
+    curves beside J4D's regularised example, and each wall's cracks at its largest force and at 4 mm."""
+    import xarray as xr
+
+    spec = importlib.util.spec_from_file_location("eindhoven_walls", EXAMPLES / "eindhoven_walls.py")
+    walls = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(walls)
+    fig, ax = plt.subplots(figsize=(6.4, 4.2))
+    for wall in walls.PRECOMPRESSION:
+        path = None if results is None else results / f"eindhoven_{wall}.nc"
+        if path is not None and path.exists():
+            ds = xr.load_dataset(path)
+        else:
+            t0 = time.perf_counter()
+            ds = run(walls.wall_scene(wall), f"{wall}, top held, inviscid, relaxed past its limit points")
+            print(walls.report(wall, ds, time.perf_counter() - t0))
+        d, f, steps = pushover_data(ds)
+        ax.plot(d * 1e3, f / 1e3, "-", lw=1.4, label=f"{wall}, p = {walls.PRECOMPRESSION[wall]}, inviscid, relaxed")
+        peak = int(steps[int(np.argmax(f))])
+        for step, name, scale in ((peak, "peak", 100.0), (-1, "end", 30.0)):
+            crack_fig = deformed_figure(ds, step=step, scale=scale, title=f"{wall}, top held, inviscid: {name}")
+            crack_fig.savefig(out / f"eindhoven_{wall}_relaxed_cracks_{name}.png", dpi=90)
+            plt.close(crack_fig)
+    example = run(Scene.from_toml(EXAMPLES / "eindhoven_J4D.toml").data, "J4D, the example (tau 0.0025 ms)")
+    d, f, _ = pushover_data(example)
+    ax.plot(d * 1e3, f / 1e3, ":", color="0.4", lw=1.2, label="J4D, the example's regularised law (tau 0.0025 ms)")
+    _save_curves(fig, ax, "Eindhoven walls, top held at its height (model only)",
+                 out / "eindhoven_walls_relaxed_curves.png")
 
 
 def _save_curves(fig, ax, title, path):

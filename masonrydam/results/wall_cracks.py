@@ -13,8 +13,9 @@ The mechanisms are named from the open, slipping and crushing points, by these r
   :data:`DIAGONAL_CORRELATION`);
 - **toe crushing**: at least :data:`TOE_POINTS` bed-joint points on the compression cap (state 3) in a corner of
   the wall (within :data:`TOE_HEIGHT_FRACTION` of its height from the bottom or the top and
-  :data:`TOE_LENGTH_FRACTION` of its length from either end); cap points elsewhere (along the compressed strut) are
-  counted, not named: the cap is where compression hardens, and its softening is not in the result;
+  :data:`TOE_LENGTH_FRACTION` of its length from either end), and at least :data:`TOE_SHARE` of all the cap points
+  (a corner that crushes, not a corner of a band); where the cap points spread along the compressed strut instead,
+  the band is named as such. The cap is where compression hardens; its softening is not in the result;
 - **sliding**: a row of bed joints whose plastic slip exceeds :data:`SLIDING_SLIP` over at least
   :data:`SLIDING_ROW_FRACTION` of its points.
 """
@@ -36,6 +37,7 @@ DIAGONAL_CORRELATION = 0.5
 TOE_POINTS = 3
 TOE_HEIGHT_FRACTION = 0.2
 TOE_LENGTH_FRACTION = 0.25
+TOE_SHARE = 0.25
 #: a bed-joint row slides where its points' plastic slip exceeds this (m) ...
 SLIDING_SLIP = 0.1e-3
 #: ... over at least this fraction of its points
@@ -109,13 +111,17 @@ def wall_cracks(ds, step: int = -1) -> WallCracks:
         out.crushing_at = (float(x[crushing].mean()), float(y[crushing].mean()))
         height, length = wall_top - wall_bottom, wall_right - wall_left
         near_y = np.minimum(y - wall_bottom, wall_top - y) <= TOE_HEIGHT_FRACTION * height
+        toes = []
         for x_end in (wall_left, wall_right):
             toe = crushing & near_y & (np.abs(x - x_end) <= TOE_LENGTH_FRACTION * length)
-            if toe.sum() >= TOE_POINTS:
+            if toe.sum() >= max(TOE_POINTS, TOE_SHARE * crushing.sum()):
                 corner = ("bottom" if y[toe].mean() < 0.5 * (wall_bottom + wall_top) else "top") + " " + \
                          ("left" if x_end == wall_left else "right")
-                out.mechanisms.append(f"toe crushing at the {corner} corner ({int(toe.sum())} bed-joint points "
-                                      "on the cap)")
+                toes.append(f"toe crushing at the {corner} corner ({int(toe.sum())} bed-joint points on the cap)")
+        if not toes and crushing.sum() >= TOE_POINTS:
+            toes.append(f"a band of bed joints on the compression cap ({int(crushing.sum())} points, centred at "
+                        f"x = {out.crushing_at[0]:.2f} m, y = {out.crushing_at[1]:.2f} m)")
+        out.mechanisms.extend(toes)
     rows = np.round(y[bed], 6)
     for row in np.unique(rows):
         on_row = slip[bed][rows == row]

@@ -61,15 +61,20 @@ def test_a_stair_case_crack_a_crushed_toe_and_a_sliding_row_are_named():
     assert w.open_heights == pytest.approx((0.05, 0.95))
 
 
-def test_a_vertical_crack_cap_points_along_the_strut_and_a_partly_slipping_row_are_not_mechanisms():
+def test_a_vertical_crack_a_partly_slipping_row_and_cap_points_along_the_strut_are_not_a_toe_or_a_slide():
     vertical = [(0.5, 0.05 + 0.1 * k) for k in range(10)]
     strut = [(0.5, 0.5), (0.45, 0.4), (0.55, 0.6)]
     w = wall_cracks(wall_result(open_head=vertical, cap=strut, slip_rows=[(5, 0.7)]))
-    assert w.mechanisms == []
+    assert len(w.mechanisms) == 1 and w.mechanisms[0].startswith("a band of bed joints on the compression cap (3")
     assert w.counts["bed_joints"]["crushing"] == 3 and w.counts["head_joints"]["open"] == 10
     assert w.crushing_at == pytest.approx((0.5, 0.5), abs=0.03)
     # a short diagonal (a third of the height) is not the wall's stair-case either
     assert wall_cracks(wall_result(open_head=STAIR[:3])).mechanisms == []
+    # nor is a corner of a band that runs along the strut a crushed toe: 4 of its 20 cap points are in the corner
+    band = [(0.975, 0.0), (0.925, 0.0), (0.875, 0.0), (0.975, 0.1)] + [(0.325 + 0.05 * (k % 4), 0.3 + 0.1 * (k // 4))
+                                                                        for k in range(16)]
+    w = wall_cracks(wall_result(cap=band))
+    assert len(w.mechanisms) == 1 and w.mechanisms[0].startswith("a band of bed joints on the compression cap (20")
 
 
 def test_a_result_without_the_joints_or_the_step_is_refused_by_name():

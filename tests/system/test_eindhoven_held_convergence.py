@@ -14,8 +14,8 @@ runs of 40 push steps):
 - at 4 mm it is not (80 against 69 kN): a strict expected failure, so that a change that makes it converge is
   seen (the test then passes unexpectedly and fails the suite, and the marker must go).
 
-And the inviscid law with ``limit_point = "relax"``, which crosses the limit point where Newton stalls at 1.82 mm,
-against its own converged run (40, 80 and 160 push steps).
+And the inviscid law with ``limit_point = "relax"``, which crosses the limit point where Newton stalls at 1.82 mm
+and every later one: its 40-step curve against its 80-step run, to 4 mm.
 """
 from __future__ import annotations
 
@@ -71,34 +71,38 @@ def test_held_j4d_force_at_4_mm_converged_in_the_relaxation_time(held_curves):
     assert coarse == pytest.approx(fine, rel=0.03)
 
 
+#: the inviscid held J4D relaxed past its limit points at 80 push steps (docs/masonry_softening.md, "The inviscid wall
+#: past its limit points"; 2-core AMD EPYC): the peak (N) and the force (N) at 1, 2, 3 and 4 mm
+PEAK_80_STEPS = 55.85e3
+FORCE_80_STEPS = {1e-3: 47.25e3, 2e-3: 53.18e3, 3e-3: 45.78e3, 4e-3: 40.33e3}
+
+
 @pytest.mark.slow
 @pytest.mark.reference
-def test_inviscid_held_j4d_relaxed_past_its_limit_point_to_the_converged_peak():
+def test_inviscid_held_j4d_relaxed_past_its_limit_points_converged_to_4_mm():
     """The inviscid law (no relaxation time) stops at 1.82 mm under displacement control: a limit point of its path
     (docs/masonry_softening.md, "Why the inviscid law stops at 1.82 mm"). With ``limit_point = "relax"`` it crosses
-    it, and the curve converges in the step: 40, 80 and 160 push steps give a peak of 55.88, 55.84 and 55.79 kN at
-    2.17-2.18 mm and 53.05, 53.23 and 53.22 kN at 2 mm (2-core AMD EPYC; docs/masonry_softening.md, "The inviscid
-    wall past its limit points"). Checked here to 2.3 mm at the example's step (0.1 mm): the peak and the force at
-    2 mm within 3 % of the 160-step run's, and past the stall. The scene is the example examples/eindhoven_walls.py
-    builds, and at 2.3 mm the wall shows the diagonal stair-case crack through head joints and units that the tests
-    and the micro-model of Lourenço & Rots (1997) show. About a minute and a half on one core."""
+    it and every later one to 4 mm, and the curve converges in the step: the example's 40 push steps give the peak
+    and the force at 1, 2, 3 and 4 mm of 80 steps within 3 % (measured 0.1 % at the peak and 0.03 to 1.8 % at the
+    four points). The scene is the one examples/eindhoven_walls.py builds; past its peak the wall softens, and at
+    4 mm it shows the diagonal stair-case crack through head joints and units that the tests and the micro-model of
+    Lourenço & Rots (1997) show. About five and a half minutes on one core."""
     spec = importlib.util.spec_from_file_location("eindhoven_walls", EXAMPLES / "eindhoven_walls.py")
     walls = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(walls)
     data = walls.wall_scene("J4D")
-    assert "relaxation_time" not in data["joints"]["unit_cracks"]
-    set_key(data, "stages[1].loads[0].value", ["2.3 mm", "0 mm"])
-    set_key(data, "stages[1].steps", 23)
+    assert "relaxation_time" not in data["joints"]["unit_cracks"] and data["stages"][1]["steps"] == 40
     ds = masonrydam.run(data)
     assert ds.attrs["completed"] == "true"
     d, f, _ = pushover_data(ds, "x")
-    assert d[-1] == pytest.approx(2.3e-3, abs=1e-8)
+    assert d[-1] == pytest.approx(4e-3, abs=1e-8)
     relaxed = json.loads(ds.attrs["per_stage"])[1]["relaxed_limit_points"]
     # the stall's limit point is crossed by a hold (holds come earlier too, where a quarter step finds no equilibrium)
-    assert any(abs(lf * 2.3e-3 - 1.82e-3) <= 0.03e-3 for lf, _ in relaxed)
-    assert f.max() == pytest.approx(55.79e3, rel=0.03)
-    assert value_at_push(d, f, 2e-3) == pytest.approx(53.22e3, rel=0.03)
-    assert f[-1] < f.max() - 1e3  # past the peak the wall softens
+    assert any(abs(lf * 4e-3 - 1.82e-3) <= 0.03e-3 for lf, _ in relaxed)
+    assert f.max() == pytest.approx(PEAK_80_STEPS, rel=0.03)
+    for push, force in FORCE_80_STEPS.items():
+        assert value_at_push(d, f, push) == pytest.approx(force, rel=0.03), push
+    assert f[-1] < 0.8 * f.max()  # past the peak the wall softens
     cracks = wall_cracks(ds, -1)
     assert any(m.startswith("diagonal stair-case cracking") for m in cracks.mechanisms), cracks.words()
     assert cracks.counts["unit_cracks"]["open"] > 0 and "J4D (p = 0.30 MPa): peak" in walls.report("J4D", ds, 0.0)

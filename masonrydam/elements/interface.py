@@ -308,8 +308,8 @@ def joint_law_at(params_table, pidx, state_committed, state_trial, delta_out, tr
     ``law``: None for the seed's Mohr-Coulomb law, an int (``JointLaw.kernel_id``) for another. Why None:
     numba prunes the ``law is not None`` branch of a None argument before typing, so the Mohr-Coulomb
     kernels never compile the composite law (it doubled the first, compiling run of the default scene).
-    ``want_tangent`` False: a law may leave ``C`` uncomputed (the composite law does, where it would cost a third
-    of a plastic point); the forces and states are the same."""
+    ``want_tangent`` False: a law may leave ``C`` uncomputed (the composite law does: its tangent is a complex-step
+    Jacobian of its local system and a solve per component); the forces and states are the same."""
     if law is not None:
         return composite_point(params_table, pidx, delta_out, dim - 1, state_committed, state_trial, e, g,
                                traction_out, C, want_tangent)

@@ -59,8 +59,8 @@ def composite_point(params, p, delta, ns, state_committed, state_trial, e, g, tr
     traction_out : float64 (n_elem, nip, ns+1), written at ``[e, g]``: ``[tau1, (tau2,) t_n]`` (Pa).
     C : float64 (ns+1, ns+1), out: the consistent tangent ``d t / d delta`` (Pa/m).
     want_tangent : bool; where False a plastic point's ``C`` is not computed (zeros, or the elastic part of the
-        viscous tangent). Why: the consistent tangent costs about a third of a plastic point (a complex-step
-        Jacobian of the local system and a solve per component), and a line search evaluates forces only.
+        viscous tangent). Why: the consistent tangent is a complex-step Jacobian of the local system and a solve
+        per component, and a line search evaluates forces only (the relaxed J4D wall ran 10 % faster without it).
 
     Returns
     -------

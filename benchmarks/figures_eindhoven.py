@@ -15,7 +15,7 @@ With ``--relaxed``, only the held walls J4D, J6D and J7D with the inviscid law r
 (examples/eindhoven_walls.py, the converged curves; issue 36): eindhoven_walls_relaxed_curves.png, with J4D's
 regularised example curve for comparison, and eindhoven_<wall>_relaxed_cracks_peak.png and _end.png (at the
 largest force and at 4 mm); ``--results DIR`` reads the walls' eindhoven_<wall>.nc written by that example instead
-of running them (about 6 minutes for J4D on one core).
+of running them (J4D, J6D and J7D take about 5.5, 12 and 19 minutes on one core).
 """
 from __future__ import annotations
 

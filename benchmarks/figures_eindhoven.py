@@ -76,10 +76,7 @@ def main(argv=None) -> int:
     _save_curves(fig, ax, "Eindhoven wall J4D, p = 0.30 MPa", out / "eindhoven_J4D_curves.png")
     _crack_figures(held, "J4D", out)
     _higher_precompressions(held, out, plt)
-    spec = importlib.util.spec_from_file_location("cyclic", EXAMPLES / "eindhoven_J4D_cyclic.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    cyc = run(mod.cyclic_scene(), "J4D cyclic, constant vertical load")
+    cyc = run(_example("eindhoven_J4D_cyclic").cyclic_scene(), "J4D cyclic, constant vertical load")
     fig = pushover_figure(cyc, "x", title="Eindhoven J4D, constant vertical load, cyclic push")
     fig.savefig(out / "eindhoven_J4D_cyclic.png", dpi=90)
     print(f"wrote the figures in {out}")
@@ -129,14 +126,20 @@ def _higher_precompressions(held_j4d, out, plt):
     _save_curves(fig, ax, "Eindhoven walls, top held at its height (model only)", out / "eindhoven_walls_curves.png")
 
 
+def _example(name):
+    """The example script examples/<name>.py, imported as a module."""
+    spec = importlib.util.spec_from_file_location(name, EXAMPLES / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
 def _relaxed_walls(out, plt, results):
     """The held walls with the inviscid law relaxed past their limit points (examples/eindhoven_walls.py): their
     curves beside J4D's regularised example, and each wall's cracks at its largest force and at 4 mm."""
     import xarray as xr
 
-    spec = importlib.util.spec_from_file_location("eindhoven_walls", EXAMPLES / "eindhoven_walls.py")
-    walls = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(walls)
+    walls = _example("eindhoven_walls")
     fig, ax = plt.subplots(figsize=(6.4, 4.2))
     for wall in walls.PRECOMPRESSION:
         path = None if results is None else results / f"eindhoven_{wall}.nc"

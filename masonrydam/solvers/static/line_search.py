@@ -12,8 +12,6 @@ step cannot be evaluated (a law that gives up, a residual that is not finite) th
 """
 from __future__ import annotations
 
-import numpy as np
-
 from ...errors import NumericalError
 from ..newton import IterationFailed, secant_line_search
 
@@ -51,13 +49,13 @@ def advance(step, iterate, du):
 
 def _full_step(step, iterate, du):
     """The iterate at ``u + du`` evaluated with its tangent and no bonds latched; None where a law gives up there or
-    the residual is not finite (the search then evaluates it again, and shortens the step as before)."""
+    the residual is not finite (``evaluate`` raises; the search then evaluates it again, and shortens the step as
+    before)."""
     u = iterate.u.copy()
     u[step.free] += du
     law_failure = step.solver._law_failure
     try:
-        full = step.evaluate(u, latch=False)
+        return step.evaluate(u, latch=False)
     except (IterationFailed, NumericalError):
         step.solver._law_failure = law_failure  # (not an attempt that failed: the search shortens the step)
         return None
-    return full if np.isfinite(full.residual_norm) else None

@@ -34,6 +34,7 @@ solver library reaches.
 """
 from __future__ import annotations
 
+from contextlib import contextmanager
 from dataclasses import replace
 
 import numpy as np
@@ -84,10 +85,17 @@ def attempt(solver, st, size: float, nominal: float, can_cut: bool, trial, f_ext
     iteration budget (30), and none of those that converged took more than 20."""
     if not holds(st, size, nominal, can_cut):
         return solver._newton(trial, f_ext, can_cut, state_load)
-    settings = solver.s
-    solver.s = replace(settings, max_iterations=min(RETRY_MAX_ITERATIONS, settings.max_iterations))
-    try:
+    with _at_most(solver, RETRY_MAX_ITERATIONS):
         return solver._newton(trial, f_ext, can_cut, state_load)
+
+
+@contextmanager
+def _at_most(solver, max_iterations: int):
+    """The solver's Newton steps within the block take at most ``max_iterations`` (and the stage's own limit)."""
+    settings = solver.s
+    solver.s = replace(settings, max_iterations=min(max_iterations, settings.max_iterations))
+    try:
+        yield
     finally:
         solver.s = settings
 
@@ -117,14 +125,11 @@ def _step(solver, trial, f_ext, max_iterations: int):
     """One Newton step from ``trial`` at ``f_ext``, at most ``max_iterations`` (and the stage's own limit):
     ``(converged, u, f_int)``; a singular tangent (the inviscid one at the limit point is nearly singular) or a law
     that gives up is a step that did not converge."""
-    settings = solver.s
-    solver.s = replace(settings, max_iterations=min(max_iterations, settings.max_iterations))
     try:
-        ok, u_new, _, f_int = solver._newton(trial.copy(), f_ext, False, None)
+        with _at_most(solver, max_iterations):
+            ok, u_new, _, f_int = solver._newton(trial.copy(), f_ext, False, None)
     except (SingularMatrix, NumericalError):
         return False, trial, None
-    finally:
-        solver.s = settings
     return ok, u_new, f_int
 
 

@@ -13,6 +13,21 @@ from .grid import Rect, rectangles_to_mesh
 from .grid3d import Box, boxes_to_mesh, rotation_matrix
 
 
+#: the most cells a block model may have (about a gigabyte of mesh arrays): more is an element size slipped by
+#: orders of magnitude (1e-30 m), refused before any array is sized
+MAX_CELLS = 10_000_000
+
+
+def _check_cell_count(extents, element_size: float, key: str) -> None:
+    """Refuse an ``element_size`` (m) that would cut the model's ``extents`` (m, one per axis) into more than
+    :data:`MAX_CELLS` cells."""
+    cells = math.prod(max(1.0, math.ceil(e / element_size)) for e in extents)
+    if not cells <= MAX_CELLS:
+        raise SceneError(f"{key}.element_size", f"{element_size:.3g} m cuts the {' x '.join(f'{e:.3g}' for e in extents)} "
+                                                f"m model into about {cells:.3g} elements, more than {MAX_CELLS:.0e}: "
+                                                "a unit slipped?")
+
+
 def _coordinate(block: dict, name: str, key: str) -> float:
     """A block coordinate (m, or a length with its unit): finite and plausible, errors name the key."""
     return quantity(block[name], "length", f"{key}.{name}")
@@ -53,6 +68,8 @@ def blocks_2d(
         rects.append(r)
     if not element_size > 0:
         raise SceneError(f"{key}.element_size", f"must be > 0, got {element_size}")
+    _check_cell_count([max(r.x1 for r in rects) - min(r.x0 for r in rects),
+                       max(r.y1 for r in rects) - min(r.y0 for r in rects)], element_size, key)
     mesh = rectangles_to_mesh(rects, element_size, order=order, element=element,
                               classify_joint=lambda a, b, o: joint_name)
     if rotation_deg:
@@ -100,6 +117,8 @@ def blocks_3d(
         boxes.append(box)
     if not element_size > 0:
         raise SceneError(f"{key}.element_size", f"must be > 0, got {element_size}")
+    _check_cell_count([max(b.hi()[a] for b in boxes) - min(b.lo()[a] for b in boxes) for a in range(3)],
+                      element_size, key)
     mesh = boxes_to_mesh(boxes, element_size, order=order, classify_joint=lambda a, b, axis: joint_name)
     if rotation_deg is not None:
         if not isinstance(rotation_deg, (list, tuple)) or len(rotation_deg) != 3:

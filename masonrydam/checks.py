@@ -29,11 +29,14 @@ def choice(value, options, key):
     return value
 
 
-def integer(value, key, minimum=None):
+def integer(value, key, minimum=None, maximum=None, why=""):
+    """An integer scene value in ``[minimum, maximum]`` (None: unbounded); ``why`` says what the maximum guards."""
     if isinstance(value, bool) or not isinstance(value, int):
         raise SceneError(key, f"expected an integer, got {value!r}")
     if minimum is not None and value < minimum:
         raise SceneError(key, f"must be >= {minimum}, got {value}")
+    if maximum is not None and value > maximum:
+        raise SceneError(key, f"must be <= {maximum:.0e}, got {value}" + (f": {why}" if why else ""))
     return value
 
 

@@ -72,6 +72,11 @@ class AccuracyWarning(UserWarning):
     the warning names the likely cause and the result attributes record it."""
 
 
+class SceneWarning(UserWarning):
+    """A valid scene that is probably not what was meant (a dynamic stage that runs on long after its record has
+    ended): the message names the scene key and the value it was compared with; the run goes on."""
+
+
 class RunStopped(KeyboardInterrupt):
     """A run stopped on request: Ctrl-C (SIGINT) or SIGTERM, at the end of a converged step, or at once
     on a second request. Every converged step is kept (see :func:`masonrydam.run`).

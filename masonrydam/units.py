@@ -66,7 +66,8 @@ _GROUND_ACCELERATION = Plausible(
     "a ground acceleration", "acceleration", None, 100.0, "",
     "did you give cm/s2 (gal) or mm/s2 as m/s2? write m/s2, or g as e.g. '0.3 g'")
 _TIME_STEP = Plausible(
-    "a time step", "time", None, 1.0, "",
+    "a time step", "time", 1e-9, 1.0,
+    "steps below a nanosecond would take more than a billion steps a second of motion: is the value in another unit?",
     "seismic records and analyses use 0.0001-0.05 s: did you give milliseconds as seconds? write e.g. '{v:g} ms'")
 
 #: Plausibility ranges of the physical scene keys (the one table of them), by dotted key with the list

@@ -59,19 +59,32 @@ def _cmd_run(args):
     return 0
 
 
-def _cmd_check(args):
-    from ..scene import Scene, build_mesh, build_model, build_stages, effects
+def check_scene(scene) -> list[str]:
+    """What ``masonrydam check`` does with ``scene`` (a :class:`~masonrydam.scene.Scene`, a dict or a TOML path):
+    validate it, build its mesh, model and stages and the solver's mechanism check, nothing solved; returns the
+    lines it prints. Raises what the run would raise before its first step."""
+    from ..scene import build_mesh, build_model, build_stages, effects
+    from ..scene.recording import output_selection
+    from ..scene.scene import as_scene
     from ..solvers.static.stepping import check_mechanisms
 
-    sc = Scene.from_toml(_scene_arg(args))
+    sc = as_scene(scene)
     mesh = build_mesh(sc.normalized, sc.base_dir)
     model = build_model(sc.normalized, mesh)
     stages = build_stages(sc.normalized, mesh, model, sc.base_dir)
+    output_selection(sc.normalized, mesh, model)  # the recorded node and joint sets exist
     check_mechanisms(model, stages)  # the solver's own check before each static stage (MechanismError)
-    print(f"scene '{sc.name}' is valid: {model.n_nodes} nodes, {model.n_dof} DOFs, "
-          f"{mesh.n_elements()} elements, {mesh.n_interfaces()} interfaces")
-    for e in effects(sc.normalized, model):
-        print("  effect:", e)
+    return ([f"scene '{sc.name}' is valid: {model.n_nodes} nodes, {model.n_dof} DOFs, "
+             f"{mesh.n_elements()} elements, {mesh.n_interfaces()} interfaces"]
+            + [f"  effect: {e}" for e in effects(sc.normalized, model)])
+
+
+def _cmd_check(args):
+    from ..scene import Scene
+    from ..scene.scene import with_overrides
+
+    for line in check_scene(with_overrides(Scene.from_toml(_scene_arg(args)), args.set)):
+        print(line)
     return 0
 
 
@@ -350,6 +363,8 @@ def main(argv=None) -> int:
     c = sub.add_parser("check", help="validate a scene and build its model without solving")
     c.add_argument("scene", nargs="?")
     c.add_argument("--default", action="store_true")
+    c.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="change a scene key before checking, as for run")
     c.set_defaults(func=_cmd_check)
     e = sub.add_parser("export-mesh", help="write the scene's mesh (meshio formats: .vtu, .msh, .xdmf)")
     e.add_argument("scene", nargs="?")

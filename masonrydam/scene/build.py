@@ -13,7 +13,7 @@ import numpy as np
 from ..assembly.dofmap import DofMap
 from ..assembly.groups import ContinuumGroup, InterfaceGroup
 from ..assembly.model import Model
-from ..errors import SceneError
+from ..errors import MasonrydamError, SceneError
 from ..materials.continuum_laws import ELASTIC_LAW, continuum_law
 from ..materials.joint_laws import joint_law, joint_laws
 from ..materials.elastic import elasticity_matrix
@@ -29,7 +29,14 @@ def build_mesh(scene: dict, base_dir: Path) -> Mesh:
         # (generators imports masonrydam, whose __init__ imports this module: a top-level import would be a cycle)
         from generators import GENERATORS
 
-        return GENERATORS[spec["generator"]](**spec["parameters"])
+        try:
+            return GENERATORS[spec["generator"]](**spec["parameters"])
+        except MasonrydamError:
+            raise
+        except (MemoryError, OverflowError, ValueError) as exc:  # numbers the generator could not mesh
+            raise SceneError("mesh.parameters", f"generator '{spec['generator']}' cannot mesh these parameters "
+                                                f"({type(exc).__name__}: {exc}): a size far too small or too large?"
+                             ) from exc
     path = Path(spec["file"])
     if not path.is_absolute():
         path = base_dir / path

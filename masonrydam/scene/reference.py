@@ -383,7 +383,7 @@ _STATIC = Section("[[stages]] type = \"static\"", "A static stage applies its lo
                   "from the state the previous stages left.", _for(("static",), (
     _STAGE_NAME,
     _type_row("static"),
-    _k("stages[].steps", "integer", "load increments", default=1),
+    _k("stages[].steps", "integer", "load increments (at most 10^6)", default=1),
     _k("stages[].loads", "list", "the stage's loads `[[stages.loads]]`", default=[]),
     _k("stages[].control", "string", "`load`: load and displacement control, switching to arc length where a step "
        "finds no equilibrium; `arc_length`: Crisfield's cylindrical arc length from the start; `opening`: indirect "
@@ -437,7 +437,8 @@ _MODAL = Section("[[stages]] type = \"modal\"", "At most one, after the static s
     ("modal",), (
         _STAGE_NAME,
         _type_row("modal"),
-        _k("stages[].modes", "integer", "number of modes", default=6),
+        _k("stages[].modes", "integer", "number of modes: fewer than the free DOFs at the stage (checked before any "
+           "stage runs)", default=6),
         _k("stages[].mass", "string", "mass matrix", default="consistent", choices=("lumped", "consistent")),
     )), "type")
 
@@ -451,8 +452,10 @@ _DYNAMIC = Section("[[stages]] type = \"dynamic\"", "A time history from the sta
        "by their local error, never crossing a multiple of dt_max; central_difference takes the largest stable step "
        "that divides the output interval (`output.dt`, default 0.01 s), its reason in the run summary", "s", TIME,
        REQUIRED),
-    _k("stages[].steps", "integer", "number of steps (of dt_max with dt = \"auto\"); or give `duration`"),
-    _k("stages[].duration", "number", "length of the stage; or give `steps`", "s", TIME),
+    _k("stages[].steps", "integer", "number of steps (of dt_max with dt = \"auto\"; at most 10^9); or give "
+       "`duration`"),
+    _k("stages[].duration", "number", "length of the stage (at most 10^9 steps of dt, or of dt_max; a warning where "
+       "it runs past ten times its longest ground motion); or give `steps`", "s", TIME),
     _k("stages[].tolerance", "number", "dt = \"auto\": relative local error per step", default=AUTO_TOLERANCE_DEFAULT),
     _k("stages[].dt_max", "number", "dt = \"auto\": largest step (the output grid)", "s", TIME,
        default_text=f"output dt, else {AUTO_DT_MAX_DEFAULT:g}"),
@@ -588,8 +591,9 @@ _STAGE_OUTPUT = Section("[stages.output]", "What a dynamic stage records. Every 
     _k("stages[].output.stride", "integer", "record every k-th step", default=1),
     _k("stages[].output.dt", "number", "output interval instead of `stride`: a whole multiple of dt (or dt_max)",
        "s", TIME),
-    _k("stages[].output.nodes", "string or list", "`\"all\"` or node sets", default_text="[output] nodes"),
-    _k("stages[].output.joints", "string or list", "`\"all\"` or joint sets", default_text="[output] joints"),
+    _k("stages[].output.nodes", "string or list", "`\"all\"` or one or more node sets", default_text="[output] nodes"),
+    _k("stages[].output.joints", "string or list", "`\"all\"` or one or more joint sets",
+       default_text="[output] joints"),
 ))
 
 _SOLVER = Section("[solver]", "The static solver (Newton with step cutting; the dynamic stages have their own "
@@ -613,8 +617,9 @@ _SOLVER = Section("[solver]", "The static solver (Newton with step cutting; the 
 _OUT = OutputOptions()
 _OUTPUT = Section("[output]", "What the result file records, and how steps reach it: they are collected in memory "
                   "and written in blocks.", (
-    _k("output.nodes", "string or list", "`\"all\"` or node sets whose nodes are recorded", default="all"),
-    _k("output.joints", "string or list", "`\"all\"` or joint sets whose points are recorded", default="all"),
+    _k("output.nodes", "string or list", "`\"all\"` or one or more node sets whose nodes are recorded", default="all"),
+    _k("output.joints", "string or list", "`\"all\"` or one or more joint sets whose points are recorded",
+       default="all"),
     _k("output.stress", "string", "`element`: the continuum stress of every element (mean of its integration "
        "points) at every recorded step", default="none", choices=("none", "element")),
     _k("output.precision", "string", "`single`: nodal and joint fields as float32 (half the size)",

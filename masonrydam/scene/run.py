@@ -29,7 +29,7 @@ from ..solvers.dynamic import DynamicSolver, DynamicStage, DynamicTerms, ModalSt
 from ..solvers.linear.direct import resolve_backend
 from ..solvers.static.stepping import SolverSettings, StaticSolver
 from .build import build_mesh, build_model, effects
-from .progress import Progress
+from .progress import DynamicProgress, Progress
 from .recording import (block_cells, driven_dofs, dynamic_attrs, element_info, ground_records, joint_points,
                         joint_results, output_selection, pushover_stages)
 from .scene import as_scene
@@ -217,6 +217,7 @@ class _Run:
             for e in self.effects:
                 e.after_static(model, u)
             if self.modal_stage is not None and solver.limit is None:
+                bar.status(f"{self.modal_stage.name}: the {self.modal_stage.modes} lowest modes", force=True)
                 self.run_modal(u)
                 bar(self.stages.index(self.modal_stage), 1.0)
             if self.dyn_stages and solver.limit is None:
@@ -316,9 +317,8 @@ class _Run:
             status = stopper.requested()
             if k and status is not None:
                 raise RunStopped(status, f"after stage '{self.dyn_stages[k - 1].name}'")
-            solver = DynamicSolver(model, st.settings, mass=masses[lumped],
-                                   progress=lambda fraction, si=si: bar(si, fraction),
-                                   stop_requested=stopper.requested)
+            solver = DynamicSolver(model, st.settings, mass=masses[lumped], stop_requested=stopper.requested)
+            solver.progress = DynamicProgress(bar, si, st, solver, t)
             self.dyn_solvers.append(solver)
             if st.initial_velocity is not None:  # the stage starts with these velocities where they are given
                 given = ~np.isnan(st.initial_velocity) & ~st.supports

@@ -225,12 +225,17 @@ def _selection(value, key):
         return "all"
     if isinstance(value, str):
         return [value]
-    if isinstance(value, list) and all(isinstance(v, str) for v in value):
+    if isinstance(value, list) and value and all(isinstance(v, str) for v in value):
         return value
-    raise SceneError(key, f"expected 'all' or a list of set names, got {value!r}")
+    raise SceneError(key, f"expected 'all' or a list of one or more set names, got {value!r}")
 
 
 STAGE_TYPES = ("static", "modal", "dynamic")
+#: the most load steps of a static stage, and time steps of a dynamic one (more would run for days: a slipped
+#: exponent); a dynamic stage given by its duration is held to the same count (scene.stages._dynamic_stage)
+MAX_STATIC_STEPS = 10**6
+MAX_DYNAMIC_STEPS = 10**9
+STEPS_WHY = "more would run for days (a slipped exponent?)"
 #: damping models of a dynamic stage: viscous Rayleigh damping, local (non-viscous) damping of an explicit step
 DAMPING_MODELS = ("rayleigh", "local")
 #: keys of a dynamic stage that apply to dt = "auto" only
@@ -498,7 +503,7 @@ def _dynamic_stage(s, key, dim, index):
     out["output_dt"] = out_dt
     if "steps" in s and "duration" in s:
         raise SceneError(f"{key}.steps", "give 'steps' or 'duration', not both")
-    out["steps"] = _int(s["steps"], f"{key}.steps", 1) if "steps" in s else None
+    out["steps"] = _int(s["steps"], f"{key}.steps", 1, MAX_DYNAMIC_STEPS, STEPS_WHY) if "steps" in s else None
     out["duration"] = _time(s["duration"], f"{key}.duration") if "duration" in s else None
     integ = _choice(s.get("integrator", "hht"), INTEGRATORS, f"{key}.integrator")
     out["integrator"] = integ
@@ -653,7 +658,7 @@ def normalize(raw: dict) -> dict:
         if not isinstance(loads, list):
             raise SceneError(f"{key}.loads", "expected an array of tables [[stages.loads]]")
         st.append({"name": str(s.get("name", f"stage{i + 1}")), "type": "static",
-                   "steps": _int(s.get("steps", 1), f"{key}.steps", 1),
+                   "steps": _int(s.get("steps", 1), f"{key}.steps", 1, MAX_STATIC_STEPS, STEPS_WHY),
                    "until_failure": _bool(s.get("until_failure", False), f"{key}.until_failure"),
                    "loads": [_load(ld, f"{key}.loads[{j}]", dim) for j, ld in enumerate(loads)]})
         # "load" (the stage's loads and prescribed displacements, arc-length where that stalls) or "arc_length"

@@ -6,20 +6,23 @@ A stage asks the effects for what its loads add (:func:`masonrydam.effects.stage
 """
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import numpy as np
 
 from ..assembly.damping import RayleighDamping
+from ..assembly.dofmap import DofMap
 from ..assembly.model import Model
 from ..effects import DynamicStageParts, ModelContext, StaticStageLoads, build_dynamic_stage, finish_static_stage
 from ..effects import stage_load_builders
-from ..errors import SceneError
+from ..errors import SceneError, SceneWarning
 from ..mesh.model import Mesh
 from ..mesh.sets import node_set
 from ..solvers.dynamic import ADAPTIVE_DEFAULT_LEVELS, DynamicSettings, DynamicStage, ModalStage
 from ..solvers.linear.direct import DIRECT_SOLVERS
 from ..solvers.static.stepping import StaticStage
+from .schema import MAX_DYNAMIC_STEPS
 
 
 def build_stages(scene: dict, mesh: Mesh, model: Model, base_dir: Path | None = None) -> list:
@@ -43,6 +46,7 @@ def build_stages(scene: dict, mesh: Mesh, model: Model, base_dir: Path | None = 
     carried = {}  # what the load types keep from one static stage to the next (e.g. the water level)
     for i, st in enumerate(scene["stages"]):
         if st["type"] == "modal":
+            check_mode_count(model, st["modes"], supports | held, f"stages[{i}].modes")
             stages.append(ModalStage(st["name"], st["modes"], st["mass"] == "lumped", supports | held))
             continue
         if st["type"] == "dynamic":
@@ -107,6 +111,12 @@ def _dynamic_stage(context: ModelContext, st: dict, i: int, supports: np.ndarray
         duration = st["duration"]
     else:
         duration = max(g.duration for g in gms)
+    length_key = f"stages[{i}].{'steps' if st['steps'] is not None else 'duration'}"
+    fewest = duration / settings.dt  # steps of dt (fixed), or of dt_max (dt = "auto": it takes no fewer)
+    if not fewest <= MAX_DYNAMIC_STEPS:
+        raise SceneError(length_key, f"a stage of {duration:.4g} s in steps of {settings.dt:.3g} s takes at least "
+                                     f"{fewest:.3g} steps, more than {MAX_DYNAMIC_STEPS:.0e}: a unit slipped?")
+    warn_long_past_records(duration, gms, length_key)
     v0 = None if st.get("initial_velocity") is None else \
         initial_velocity_field(model, st["initial_velocity"], f"stages[{i}].initial_velocity")
     u0 = None if st.get("initial_displacement") is None else \
@@ -114,6 +124,33 @@ def _dynamic_stage(context: ModelContext, st: dict, i: int, supports: np.ndarray
                                "displacement", "rotation")
     return DynamicStage(st["name"], duration, supports, gms, settings, st["output"]["stride"], initial_velocity=v0,
                         loads=parts.loads, initial_displacement=u0)
+
+
+#: a dynamic stage that runs longer than this many times its longest ground motion is warned about (a sliding block
+#: after a pulse runs on for 3 times the pulse, free vibration after a record for a fraction of it)
+LONG_PAST_RECORD_FACTOR = 10.0
+
+
+def check_mode_count(model: Model, modes: int, held: np.ndarray, key: str) -> None:
+    """A modal stage's ``modes`` against the free DOFs it has (``held`` (n_dof,) bool: the supports and the DOFs the
+    last static stage prescribed), before any stage runs (the eigensolver finds at most one fewer)."""
+    n_free = DofMap(model.n_nodes, model.dim, held).n_eq
+    if not 1 <= modes < n_free:
+        raise SceneError(key, f"asks for {modes} modes, but the model has {n_free} free DOFs at this stage: "
+                              f"ask for 1 to {max(n_free - 1, 1)}")
+
+
+def warn_long_past_records(duration: float, ground_motions: list, key: str) -> None:
+    """A :class:`~masonrydam.errors.SceneWarning` where a dynamic stage of ``duration`` (s) runs on for more than
+    :data:`LONG_PAST_RECORD_FACTOR` times its longest ground motion (free vibration after a record is fine, a
+    stage a thousand times as long is a slip: it steps on at rest); none without ground motions."""
+    if not ground_motions:
+        return
+    end = max(g.duration for g in ground_motions)
+    if end > 0 and duration > LONG_PAST_RECORD_FACTOR * end:
+        warnings.warn(f"scene key '{key}': the stage runs {duration:.4g} s, but its ground motion ends at {end:.4g} s; "
+                      f"after that it steps on at rest (free vibration). Set the stage's duration near the record's "
+                      f"end unless that is meant", SceneWarning, stacklevel=2)
 
 
 def dynamic_settings(st: dict, index: int, linear_solver: str = "auto"):

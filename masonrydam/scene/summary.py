@@ -274,7 +274,8 @@ def _dynamic_lines(dyn_solvers, stats, model) -> list[str]:
 
 def _end_lines(ds, stats, effects) -> list[str]:
     lines = []
-    if "joint_state" in ds and ds.sizes.get("joint_point", 0):
+    stepped = ds.sizes.get("step", 0) > 0  # (a scene of modal stages alone records modes, no step)
+    if stepped and "joint_state" in ds and ds.sizes.get("joint_point", 0):
         last = ds.joint_state.isel(step=-1).values
         crushed = int((last == 3).sum())
         lines.append(f"joints end : {int((last == 0).sum())} stick, {int((last == 1).sum())} slip, "
@@ -292,7 +293,9 @@ def _end_lines(ds, stats, effects) -> list[str]:
                          + "  ".join(f"{100 * v:6.2f}" for v in r))
     for effect in effects:
         lines += effect.summary_lines(ds)
-    u = ds.displacement.isel(step=-1)
-    umax = float(np.abs(u).max())
-    lines.append(f"max |u|    : {umax:.4g} m")
+    if stepped:
+        umax = float(np.abs(ds.displacement.isel(step=-1)).max())
+        lines.append(f"max |u|    : {umax:.4g} m")
+    else:
+        lines.append("steps      : none (modes only; the model at rest, joints as built)")
     return lines

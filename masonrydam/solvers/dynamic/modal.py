@@ -27,7 +27,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ...assembly.mass import MassMatrix
-from ...errors import MechanismError, SceneError
+from ...errors import MechanismError, NumericalError, SceneError
 from ..linear.direct import Factorization, SingularMatrix
 
 
@@ -127,8 +127,21 @@ def modal_analysis(model, n_modes: int, lumped: bool = False, u: np.ndarray | No
         raise MechanismError(f"modal analysis: singular shifted stiffness ({exc})") from None
     OPinv = spla.LinearOperator((n, n), matvec=fact.solve, dtype=np.float64)
     k = min(n_modes, n - 1)
-    lam, phi = spla.eigsh(K, k=k, M=M, sigma=sigma, which="LM", OPinv=OPinv, tol=1e-10)
+    try:
+        lam, phi = spla.eigsh(K, k=k, M=M, sigma=sigma, which="LM", OPinv=OPinv, tol=1e-10)
+    except (spla.ArpackError, spla.ArpackNoConvergence) as exc:
+        raise NumericalError(_eigensolver_failure(model, k, exc)) from None
     return _modal_result(model, mass, M, lam, phi)
+
+
+def _eigensolver_failure(model, k: int, exc: Exception) -> str:
+    """Why the eigensolver may have found no modes, in words: its own error's first sentence, and the element groups
+    without mass (their infinite eigenvalues make the shift-invert iteration fragile)."""
+    massless = sorted({g.name for g in model.cgroups if not (np.asarray(g.density) > 0).any()})
+    first = str(exc).split(". ")[0].rstrip(".")
+    return (f"modal analysis: the eigensolver (ARPACK) did not find the {k} lowest modes ({first})"
+            + (f"; element groups {massless} have no mass (density 0): give them their density, or ask for fewer "
+               "modes" if massless else "; ask for fewer modes"))
 
 
 @dataclass
@@ -168,5 +181,8 @@ def coupled_modal_analysis(model, n_modes: int, fluid, lumped: bool = False, u: 
     lu = spla.splu((A - sigma * B).tocsc())
     op = spla.LinearOperator((n + n_p, n + n_p), matvec=lambda x: lu.solve(B @ x), dtype=np.float64)
     k = min(n_modes, n + n_p - 2)
-    nu, vec = spla.eigs(op, k=k, which="LM", tol=1e-10)
+    try:
+        nu, vec = spla.eigs(op, k=k, which="LM", tol=1e-10)
+    except (spla.ArpackError, spla.ArpackNoConvergence) as exc:
+        raise NumericalError(_eigensolver_failure(model, k, exc)) from None
     return _modal_result(model, mass, M, (sigma + 1.0 / nu).real, vec[:n].real)

@@ -47,6 +47,7 @@ def build_stages(scene: dict, mesh: Mesh, model: Model, base_dir: Path | None = 
     for i, st in enumerate(scene["stages"]):
         if st["type"] == "modal":
             check_mode_count(model, st["modes"], supports | held, f"stages[{i}].modes")
+            check_modal_mass(model, scene)
             stages.append(ModalStage(st["name"], st["modes"], st["mass"] == "lumped", supports | held))
             continue
         if st["type"] == "dynamic":
@@ -138,6 +139,15 @@ def check_mode_count(model: Model, modes: int, held: np.ndarray, key: str) -> No
     if not 1 <= modes < n_free:
         raise SceneError(key, f"asks for {modes} modes, but the model has {n_free} free DOFs at this stage: "
                               f"ask for 1 to {max(n_free - 1, 1)}")
+
+
+def check_modal_mass(model: Model, scene: dict) -> None:
+    """A modal stage needs mass: refused before any stage where no element group has a density and no reservoir
+    adds its water's mass (the modal analysis would refuse it after the static stages)."""
+    water = (scene.get("reservoir") or {}).get("dynamic", "none") != "none"
+    if not water and not any((np.asarray(g.density) > 0).any() for g in model.cgroups):
+        raise SceneError("materials", "a modal stage needs mass: give the materials their density (kg/m3); "
+                                      "massless parts are allowed beside parts with mass")
 
 
 def warn_long_past_records(duration: float, ground_motions: list, key: str) -> None:

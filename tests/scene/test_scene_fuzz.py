@@ -133,6 +133,8 @@ FOUND_BY_FUZZING = [
     ("block_on_incline", [("set", ("stages", 1, "steps"), 10**9)], "stages[1].steps"),
     # a recorded node set that does not exist: refused by the run, not by the check
     ("tiny_wall", [("set", ("output",), {"nodes": ["nowhere"]})], "output.nodes"),
+    # modes of a model without mass: refused by the modal analysis after the static stages, not by the check
+    ("tiny_wall", [("set", ("materials", "units", "density"), 0.0)], "materials"),
 ]
 
 

@@ -27,6 +27,7 @@ from contextlib import contextmanager
 import numpy as np
 
 from masonrydam.elements.shapes import GMSH_TO_MESHIO_ORDER
+from masonrydam.errors import MissingDependencyError
 
 _LOCK = threading.RLock()
 _COUNTER = itertools.count()
@@ -47,11 +48,22 @@ DETERMINISTIC_OPTIONS = {
 }
 
 
+#: the Debian / Ubuntu packages of the system libraries the gmsh wheel links to, absent on many headless machines
+GMSH_SYSTEM_PACKAGES = ("libglu1-mesa", "libxcursor1", "libxft2", "libxinerama1")
+
+
 def _import_gmsh():
+    """The gmsh module; a :class:`~masonrydam.errors.MissingDependencyError` that says what to install where the
+    package is missing or its shared library cannot load (``OSError: libGLU.so.1: cannot open shared object file``)."""
     try:  # gmsh only for the dam generators: the wall, block and grid generators work without it
         import gmsh
-    except ImportError as exc:  # pragma: no cover - gmsh is a dependency of the generators
-        raise ImportError("the dam generators need the gmsh Python package (pip install gmsh)") from exc
+    except ImportError as exc:
+        raise MissingDependencyError("the dam generators need the gmsh Python package: pip install gmsh") from exc
+    except OSError as exc:  # the wheel's library links to system libraries (OpenGL, X11) a server may not have
+        first = str(exc).split(":")[0]
+        raise MissingDependencyError(
+            f"gmsh (the dam generators' mesher) cannot load its library: {first} is missing. On Debian or Ubuntu: "
+            f"sudo apt-get install {' '.join(GMSH_SYSTEM_PACKAGES)}") from exc
     return gmsh
 
 

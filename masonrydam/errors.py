@@ -66,6 +66,11 @@ class OutputError(MasonrydamError, OSError):
     read-only folder), or an input file that is not what it should be. Raised before any work is done."""
 
 
+class MissingDependencyError(MasonrydamError, ImportError):
+    """A library that a part of masonrydam needs is not installed or cannot load (gmsh without the system libraries
+    it links to on a headless machine): the message names what to install."""
+
+
 class AccuracyWarning(UserWarning):
     """A finished run whose numbers say it is not converged (an energy balance whose error exceeds 1 % of
     its largest term, or that needs energy created at contact events to close): the results are kept,

@@ -4,7 +4,7 @@ Continuum blocks joined by zero-thickness interface elements that stick, slide (
 residual shear stiffness) and open (no tension) and close again, after Tzamtzis & Asteris.
 
 >>> import masonrydam
->>> ds = masonrydam.run("examples/wall_push.toml")   # doctest: +SKIP
+>>> ds = masonrydam.run("examples/block_on_incline.toml")   # doctest: +SKIP
 """
 import time as _time
 

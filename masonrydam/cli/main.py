@@ -1,8 +1,8 @@
 """``masonrydam`` command line.
 
-    masonrydam run SCENE.toml -o OUT.nc      run a scene, print a summary, write netCDF
+    masonrydam run SCENE.toml -o OUT.nc [--set KEY=VALUE ..]   run a scene, print a summary, write netCDF
     masonrydam run --default -o OUT.nc       run the bundled default scene
-    masonrydam check SCENE.toml              validate a scene and build its model, without solving
+    masonrydam check SCENE.toml [--set KEY=VALUE ..]   validate a scene and build its model, without solving
     masonrydam export-mesh SCENE.toml -o M.vtu   write the scene's mesh (units and joints) for ParaView
     masonrydam export-results OUT.nc -o R.xdmf|R.pvd [--joints V] [--every K]   results as a ParaView time series
     masonrydam records list                  the bundled ground-motion records
@@ -12,6 +12,8 @@
     masonrydam plot OUT.nc --mode N [--scale S] -o PNG   mode shape N of a result with a modal stage
     masonrydam plot OUT.nc --deformed [--step N] [--scale S] [--slice y=V] -o PNG   deformed blocks, joint states
     masonrydam assess OUT.nc [--step N] [--condition C] [--csv F]  stability of the joint lines (dams)
+    masonrydam ensemble ENSEMBLE.toml -o ENS.nc [--workers N]   records x intensities x parameters on dask, resumable
+    masonrydam ensemble-report ENS.nc [--demand VAR --limit X]   IDA and fragility curves of an ensemble
 """
 from __future__ import annotations
 

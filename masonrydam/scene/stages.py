@@ -12,7 +12,6 @@ from pathlib import Path
 import numpy as np
 
 from ..assembly.damping import RayleighDamping
-from ..assembly.dofmap import DofMap
 from ..assembly.model import Model
 from ..effects import DynamicStageParts, ModelContext, StaticStageLoads, build_dynamic_stage, finish_static_stage
 from ..effects import stage_load_builders
@@ -135,7 +134,7 @@ LONG_PAST_RECORD_FACTOR = 10.0
 def check_mode_count(model: Model, modes: int, held: np.ndarray, key: str) -> None:
     """A modal stage's ``modes`` against the free DOFs it has (``held`` (n_dof,) bool: the supports and the DOFs the
     last static stage prescribed), before any stage runs (the eigensolver finds at most one fewer)."""
-    n_free = DofMap(model.n_nodes, model.dim, held).n_eq
+    n_free = int(np.count_nonzero(~held))
     if not 1 <= modes < n_free:
         raise SceneError(key, f"asks for {modes} modes, but the model has {n_free} free DOFs at this stage: "
                               f"ask for 1 to {max(n_free - 1, 1)}")

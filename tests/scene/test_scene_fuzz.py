@@ -20,6 +20,7 @@ from masonrydam.cli.main import check_scene
 from masonrydam.errors import SceneError, SceneWarning
 from masonrydam.scene.progress import DynamicProgress, dynamic_status
 from scene_fuzzing import BASE_SCENES, OPERATIONS, mutate, outcome, tiny_wall
+from scenes import merged
 
 #: examples the seeded suite tries (most are refused by the check in milliseconds; the runs take a second or two)
 FUZZ_EXAMPLES = 100
@@ -84,6 +85,8 @@ def test_a_stage_long_past_its_record_is_warned_about():
 
 
 class _FakeBar:
+    enabled = True
+
     def __init__(self):
         self.texts, self.positions = [], []
 
@@ -117,40 +120,32 @@ def test_the_progress_of_a_dynamic_stage_tells_its_name_time_step_refusals_and_t
     assert dynamic_status("quake", 1.0, 2.0, None, None, None) == "quake: t = 1 of 2 s"
 
 
-#: the defects the fuzzing found (benchmarks/fuzz_scenes.py, seeds 3 to 5), each a scene that used to end in a
-#: traceback, now refused in one line naming its key: (base scene, mutations as mutate() takes them, the key)
+#: the defects the fuzzing found (benchmarks/fuzz_scenes.py, seeds 3 to 9), each a scene that used to end in a
+#: traceback or to be refused only by the run, now refused by the check in one line naming its key: (base scene, the
+#: changes as scenes.merged takes them, the key)
 FOUND_BY_FUZZING = [
     # ValueError "Maximum allowed size exceeded" while meshing 1e60 elements
-    ("block_on_incline", [("set", ("mesh", "parameters", "element_size"), 1e-30)], "mesh.parameters.element_size"),
-    ("block_3d_oblique", [("set", ("mesh", "parameters", "element_size"), 1e-30)], "mesh.parameters.element_size"),
+    ("block_on_incline", {"mesh.parameters.element_size": 1e-30}, "mesh.parameters.element_size"),
+    ("block_3d_oblique", {"mesh.parameters.element_size": 1e-30}, "mesh.parameters.element_size"),
     # OverflowError sampling a pulse at a step of 1e-30 s
-    ("sliding_block_pulse", [("set", ("stages", 1, "dt_max"), 1e-30)], "stages[1].dt_max"),
-    ("sliding_block_pulse", [("set", ("stages", 1, "dt_min"), 1e-30)], "stages[1].dt_min"),
+    ("sliding_block_pulse", {"stages.1.dt_max": 1e-30}, "stages[1].dt_max"),
+    ("sliding_block_pulse", {"stages.1.dt_min": 1e-30}, "stages[1].dt_min"),
     # ValueError "need at least one array to concatenate": no node set recorded
-    ("sliding_block_pulse", [("set", ("stages", 1, "output"), {"nodes": []})], "stages[1].output.nodes"),
-    ("tiny_wall", [("set", ("output",), {"joints": []})], "output.joints"),
+    ("sliding_block_pulse", {"stages.1.output.nodes": []}, "stages[1].output.nodes"),
+    ("tiny_wall", {"output.joints": []}, "output.joints"),
     # a static stage of a billion steps (it would run for days)
-    ("block_on_incline", [("set", ("stages", 1, "steps"), 10**9)], "stages[1].steps"),
+    ("block_on_incline", {"stages.1.steps": 10**9}, "stages[1].steps"),
     # a recorded node set that does not exist: refused by the run, not by the check
-    ("tiny_wall", [("set", ("output",), {"nodes": ["nowhere"]})], "output.nodes"),
+    ("tiny_wall", {"output.nodes": ["nowhere"]}, "output.nodes"),
     # modes of a model without mass: refused by the modal analysis after the static stages, not by the check
-    ("tiny_wall", [("set", ("materials", "units", "density"), 0.0)], "materials"),
+    ("tiny_wall", {"materials.units.density": 0.0}, "materials"),
 ]
 
 
-def _apply(scene, changes):
-    for _, path, value in changes:
-        node = scene
-        for k in path[:-1]:
-            node = node[k]
-        node[path[-1]] = copy.deepcopy(value)
-    return scene
-
-
 @pytest.mark.parametrize("base, changes, key", FOUND_BY_FUZZING,
-                         ids=[f"{b}-{c[0][1][-1]}" for b, c, _ in FOUND_BY_FUZZING])
+                         ids=[f"{b}-{next(iter(c))}" for b, c, _ in FOUND_BY_FUZZING])
 def test_a_defect_the_fuzzing_found_is_refused_by_the_check(base, changes, key):
-    scene = _apply(BASE_SCENES[base](), changes)
+    scene = merged(BASE_SCENES[base](), changes)
     with pytest.raises(SceneError) as ei:
         check_scene(scene)
     assert ei.value.key == key and "\n" not in str(ei.value)

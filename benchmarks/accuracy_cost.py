@@ -1,4 +1,4 @@
-"""Accuracy against cost of the seismic analyses (issue 14, part 2): what each knob that trades accuracy
+"""Accuracy against cost of the seismic analyses: what each knob that trades accuracy
 for speed buys, measured against converged references or closed forms.
 
     python benchmarks/accuracy_cost.py                 # the full study (about 15 min on one core)

@@ -1,4 +1,4 @@
-"""Modal study of the arch dam of ``examples/arch_dam_earthquake.toml`` (issue 34, item 5): the first six
+"""Modal study of the arch dam of ``examples/arch_dam_earthquake.toml``: the first six
 frequencies under mesh refinement (hex8 and hex20, element sizes halving) with the reservoir empty and full
 (Westergaard's added mass), for docs/arch_dams.md.
 

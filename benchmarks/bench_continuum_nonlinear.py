@@ -1,4 +1,4 @@
-"""What nonlinear blocks cost per dynamic step (issue 17): the Koyna section of
+"""What nonlinear blocks cost per dynamic step: the Koyna section of
 ``examples/koyna_el_centro.toml`` (103 m, 10 lift joints and the dam-rock joint with Mohr-Coulomb
 joints, quad4, about 7 700 DOF; El Centro 1940 at 0.5 g, HHT) on a short window of the record, with
 

@@ -1,4 +1,4 @@
-"""3D dams in strong shaking (issue 33, items 2-4 and 6): the explicit step against a sparse product, the water and
+"""3D dams in strong shaking: the explicit step against a sparse product, the water and
 the rock against the dry dam, the example's 20 s, and how converged the answer is.
 
     . .venv/bin/activate
@@ -18,24 +18,24 @@ mass, rock with mass and absorbing boundaries, motion within the rock), changed 
 subprocess of its own with one thread for numba, OpenMP, MKL and OpenBLAS, after an untimed run of the same scene
 on a coarse mesh that fills the numba cache.
 
-Printed: the CPU model, then per case the figures and the row of the issue's table it answers, with the figure
-before (main fc33963, from the issue: on the 2-core EPYC of docs/performance.md, or on a 2-core Xeon at 2.5 GHz
+Printed: the CPU model, then per case the figures and the target it answers, with the figure
+of an earlier version (on the 2-core EPYC of docs/performance.md, or on a 2-core Xeon at 2.5 GHz
 where marked, about 2.6x slower).
 
-* ``step``: the dry dam (no water in the shaking, rock with density on a fixed base, no damping: the issue's row),
+* ``step``: the dry dam (no water in the shaking, rock with density on a fixed base, no damping: the target's case),
   0.5 s of shaking: ms per step of the explicit loop (its set-up excluded), the time of one product of the blocks'
   stiffness K_c and of the all-stick stiffness K (blocks and joints, free DOFs) with a vector, measured in the same
   process, and the ratio. Then the same with 5 % local damping (no effect on the step) and with 5 % Rayleigh
   damping at 2 and 10 Hz (its stiffness part cuts the stable step; the program's step and its reason).
 * ``water``: seconds of wall per simulated second, dry (as ``step``) and with the example's water and rock (the
-  issue's "water at most 2x the dry cost").
+  target: "water at most 2x the dry cost").
 * ``acoustic``: seconds of wall per simulated second of the example's shaking (its rock with mass and absorbing
   boundaries, local damping) with no water in the shaking (``dynamic = "none"``: the static pressure stays),
   with Westergaard's added mass (the example) and with the acoustic reservoir (compressible water, c = 1440 m/s,
   3 H long, Sommerfeld far end, rigid bottom) stepped with the dam's central difference
-  (masonrydam/solvers/dynamic/fluid.py, ExplicitAcoustic); the stable step and its reason for each (issue: the
+  (masonrydam/solvers/dynamic/fluid.py, ExplicitAcoustic); the stable step and its reason for each (target: the
   water at most 2x the dry cost per simulated second).
-* ``example``: the whole example: wall time per stage, total, peak memory (issue: at most 10 minutes).
+* ``example``: the whole example: wall time per stage, total, peak memory (target: at most 10 minutes).
 * ``large``: the dry dam at element_size 3 (about 166 000 DOF): the gravity stage's time and the run's peak memory,
   then ``--large-duration`` s (default 0.1) of the shaking: ms per step and the 20 s record projected.
 * ``accuracy``: the first ``--window`` s (default 4) of the example's shaking at the program's step, at half of it
@@ -370,7 +370,7 @@ def main():
     for c in cases:
         if c not in known:
             ap.error(f"unknown case {c!r}: one of {', '.join(known)}")
-    print(f"# 3D dam in an earthquake (issue 33); {cpu_model()}, 1 thread", flush=True)
+    print(f"# 3D dam in an earthquake; {cpu_model()}, 1 thread", flush=True)
     for c in cases:
         {"step": case_step, "water": case_water, "acoustic": case_acoustic, "example": case_example,
          "large": case_large, "accuracy": case_accuracy, "schemes": case_schemes}[c](a)

@@ -1,4 +1,4 @@
-"""Gravity stage of a 3D gravity dam of monoliths (issue 21): ``examples/dam_3d_gravity.toml``, a 60 m
+"""Gravity stage of a 3D gravity dam of monoliths: ``examples/dam_3d_gravity.toml``, a 60 m
 dam of 8 monoliths across a valley 60 m wide at the base and 160 m at the crest, lifts every 6 m, a
 rock foundation block, Mohr-Coulomb lift, base and contraction joints, self-weight in 4 steps.
 
@@ -8,9 +8,9 @@ rock foundation block, Mohr-Coulomb lift, base and contraction joints, self-weig
     python benchmarks/bench_dam_3d_gravity.py --reference           # also a tight-tolerance reference run
     python benchmarks/bench_dam_3d_gravity.py --reference --reference-dir /tmp/dam3d_ref   # keep / reuse it
 
-Targets of the issue: the gravity stage under 20 s at element_size 6 and under 2 minutes and 8 GB at
-element_size 3, with the same final joint states as a tight-tolerance reference run. Measured when
-the issue was filed (one core): 273 s at element_size 6 (204 Newton iterations, 5 step cuts, one
+Targets: the gravity stage under 20 s at element_size 6 and under 2 minutes and 8 GB at
+element_size 3, with the same final joint states as a tight-tolerance reference run. Measured in an
+earlier version (one core): 273 s at element_size 6 (204 Newton iterations, 5 step cuts, one
 PARDISO factorization each); at element_size 3 (AMG) no load step had converged after 20 minutes,
 at 14.5 GB peak.
 
@@ -366,7 +366,7 @@ def main():
             report(r, ref)
             results.append({k: v for k, v in r.items() if not isinstance(v, np.ndarray)})
             sys.stdout.flush()
-    print("\ntargets (issue 21): solve under 20 s at element_size 6, under 120 s and 8 GB at element_size 3, "
+    print("\ntargets: solve under 20 s at element_size 6, under 120 s and 8 GB at element_size 3, "
           "with the reference's final joint states")
     if args.json:
         Path(args.json).write_text(json.dumps(results, indent=1, default=float))

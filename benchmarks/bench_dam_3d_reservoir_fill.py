@@ -1,4 +1,4 @@
-"""Filling the reservoir of a 3D dam (issue 33, item 1): the static reservoir stage against the gravity stage.
+"""Filling the reservoir of a 3D dam: the static reservoir stage against the gravity stage.
 
     . .venv/bin/activate
     python benchmarks/bench_dam_3d_reservoir_fill.py                 # the 8-monolith dam, then the 20-monolith one
@@ -7,7 +7,7 @@
 
 ``fill8``: ``examples/dam_3d_gravity.toml`` (8 monoliths, about 42 000 DOF, 8 096 joint points) with the
 ``[reservoir]`` of ``examples/dam_3d_reservoir.toml`` (level 57 m, tailwater 3 m, uplift with drains, full head in
-cracks) and its second stage (``reservoir``, 2 steps). Before issue 33 it stopped at about 51-52 m with "no
+cracks) and its second stage (``reservoir``, 2 steps). Earlier versions stopped at about 51-52 m with "no
 convergence" while every joint line held with margin (lowest sliding factor 5.3): points at the tip of the crack
 in the cohesive dam-rock joint flipped between open (bond broken, no shear) and closed (bond intact, shear up to
 c) from one joint-space iteration to the next. ``reservoir20``: ``examples/dam_3d_reservoir.toml`` as it is (20
@@ -27,8 +27,8 @@ not converge), and the final joint states and displacements are compared with it
 another state and max_i |u_i - u_ref,i| / max_i |u_ref,i| over the nodes (Euclidean norms per node);
 ``--reference-dir`` keeps and reuses the reference runs.
 
-The figures before (``BEFORE``) are printed with those measured now: on main before issue 33 the 8-monolith dam
-stopped at about 51-52 m; after the bond latch (a26e3bd) it filled in 9 steps, 807 iterations, 8 cuts and 8
+The figures before (``BEFORE``) are printed with those measured now: in an earlier version the 8-monolith dam
+stopped at about 51-52 m; after the joint space's bond latch was added it filled in 9 steps, 807 iterations, 8 cuts and 8
 joint-space splits (reservoir 101.5 s against gravity 28.5 s); the 20-monolith scene took 192 s dry and 515 s wet.
 
 This is a benchmark, not a test: it never fails on a slow figure.
@@ -46,13 +46,13 @@ import tomllib
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-#: figures measured before (one thread): on main before issue 33, and after a26e3bd (the bond latch of the joint space)
+#: figures measured before (one thread): in an earlier version, and with the bond latch of the joint space
 BEFORE = {
-    "fill8": ["main before issue 33: stopped at about 51-52 m, 'no convergence' (lowest sliding factor 5.3)",
-              "a26e3bd: level 57 m; gravity 28.5 s; reservoir 101.5 s, 9 steps, 807 it, 8 cuts, 8 joint-space splits "
+    "fill8": ["earlier version: stopped at about 51-52 m, 'no convergence' (lowest sliding factor 5.3)",
+              "with the bond latch: level 57 m; gravity 28.5 s; reservoir 101.5 s, 9 steps, 807 it, 8 cuts, 8 joint-space splits "
               "(ratio 3.57)"],
-    "reservoir20": ["main before issue 33: gravity 192 s, reservoir 515 s (ratio 2.68)"],
-    "fill8_large": ["5c902af: the reservoir's first step cut at 30 iterations, its halves converging by 10-25 % an "
+    "reservoir20": ["earlier version: gravity 192 s, reservoir 515 s (ratio 2.68)"],
+    "fill8_large": ["earlier version: the reservoir's first step cut at 30 iterations, its halves converging by 10-25 % an "
                     "iteration: not at the shaking after 13 minutes (gravity 119.5-122.6 s)"],
 }
 #: solver settings of the tight-tolerance reference runs, tightest first (the first that converges is used)

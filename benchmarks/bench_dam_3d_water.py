@@ -7,7 +7,7 @@ lines) against the same dam without water (no ``[reservoir]``, the gravity stage
     python benchmarks/bench_dam_3d_water.py --linear-solver amg      # another [solver] linear_solver
     python benchmarks/bench_dam_3d_water.py --element-size 8         # a coarser mesh (quicker)
 
-Target of the issue: the run with reservoir and uplift statically in under 2x the dry run. Printed per
+Target: the run with reservoir and uplift statically in under 2x the dry run. Printed per
 run (each in a subprocess of its own, one thread for numba, OpenMP, MKL and OpenBLAS, after an
 untimed warm-up run of a small 2D dam with water that compiles the kernels):
 

@@ -5,7 +5,7 @@
 Cases (each run in a fresh subprocess, so gmsh, numpy and the imports start cold the same way and
 the peak resident memory is the case's own):
 
-* ``3d``: the Koyna section (reference problem 5) as 20 monoliths of 20 m across a trapezoidal
+* ``3d``: the Koyna benchmark section (Chopra & Chakrabarti 1973) as 20 monoliths of 20 m across a trapezoidal
   valley 100 m wide at the base and 400 m at the crest, 10 lifts of 10.3 m, a rock foundation
   250 m (upstream-downstream) x 100 m deep, hexahedra of ``--size3d`` m (default 5 m);
 * ``2d``: the Koyna section with 10 lifts on no foundation, at the element size that gives about

@@ -9,11 +9,11 @@
 Each run is ``masonrydam run --default -o <tmp>/wall_push.nc --no-progress`` in a temporary working
 directory. Reported: the process wall time (interpreter start, imports, JIT or cache load, build,
 solve, netCDF writing, summary) and the figures the run prints itself in its summary ("wall time" = the
-process's from its start to the summary since issue 35, before it ``masonrydam.run`` from scene to dataset;
+process's from its start to the summary (in earlier versions ``masonrydam.run`` from scene to dataset;
 "solve" = the static solver), plus steps, iterations and
 factorizations, so that a change in the Newton path is visible next to a change in speed.
 
-Before them, ``masonrydam --version`` and ``masonrydam --help`` are timed as whole processes (issue 35's target:
+Before them, ``masonrydam --version`` and ``masonrydam --help`` are timed as whole processes (target:
 under 0.3 s on any machine; the commands import the solvers, xarray and numba only when a command needs them).
 
 Then, in this process, one more warm run with a few package functions wrapped (benchmark-only
@@ -192,7 +192,7 @@ def main():
         ps = [d["process"] for n, d in rows if n.startswith(kind)]
         if ps:
             print(f"{kind}: process wall min {min(ps):.2f} s, median {statistics.median(ps):.2f} s over {len(ps)} run(s)")
-    print("process = whole subprocess, timed here; run() = the 'wall time' the summary prints (since issue 35 the "
+    print("process = whole subprocess, timed here; run() = the 'wall time' the summary prints (now the "
           "process's own clock from its start to the summary, JIT included when cold; before, scene to dataset); "
           "solve = static solver; outside run() = what the summary does not count (fork and exec).")
     if not a.no_breakdown:

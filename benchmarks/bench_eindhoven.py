@@ -1,8 +1,8 @@
-"""The Eindhoven walls J4D to J7D (examples/eindhoven_J4D.toml, reference problem 6): what their curves cost
-and how they converge (issues 18 and 36): the relaxation time of the joints' viscous regularisation, the number
+"""The Eindhoven walls J4D to J7D (examples/eindhoven_J4D.toml; Lourenco & Rots 1997): what their curves cost
+and how they converge: the relaxation time of the joints' viscous regularisation, the number
 of push steps and the mesh, for both vertical conditions of the top beam:
 
-- ``held``: the reference loading (PROBLEMS.md; Lourenco & Rots 1997): the top beam kept level and at its
+- ``held``: the reference loading (Lourenco & Rots 1997): the top beam kept level and at its
   height, so the vertical force grows as the wall rocks;
 - ``constant``: the top beam kept level but free to rise, the vertical load constant (0.30 MPa): the wall
   peaks and slides on a bed joint at H = tan(phi) N (22.9 kN here).

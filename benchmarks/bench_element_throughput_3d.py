@@ -1,5 +1,5 @@
-"""3D element throughput, single thread, after JIT: H8 stiffness and the seed's 8-node surface
-interface (4 + 4 nodes), evaluation and assembly into the CSR pattern as the solver does it.
+"""3D element throughput, single thread, after JIT: H8 stiffness and the 8-node surface
+interface of Tzamtzis & Asteris (4 + 4 nodes), evaluation and assembly into the CSR pattern as the solver does it.
 
     /work/venv/bin/python benchmarks/bench_element_throughput_3d.py [--units NX NY NZ] [--repeats R]
 

@@ -1,4 +1,4 @@
-"""What the moving reservoir costs per step (issue 16, sec. 4): the Koyna section of
+"""What the moving reservoir costs per step: the Koyna section of
 ``examples/koyna_el_centro.toml`` (El Centro at 0.5 g, nonlinear lift joints, HHT, fixed dt) run with
 the reservoir empty and at its 1967 level of 91.75 m with the water's dynamics
 
@@ -13,7 +13,7 @@ the reservoir empty and at its 1967 level of 91.75 m with the water's dynamics
 
 Prints ms per step of the dynamic stage (the whole stage's wall time over its steps), Newton and
 joint-space iterations per step and the crest's peak displacement, and the ratio of each case to the
-empty run, all in one process on one thread. Target of the issue: the acoustic run at most 2x the
+empty run, all in one process on one thread. Target: the acoustic run at most 2x the
 empty one per step. A benchmark, not a test: it never fails on a slow figure.
 """
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Seismic benchmark of the issue: a 2D gravity-dam section (Koyna profile, reference problem 5)
+"""Seismic benchmark: a 2D gravity-dam section (the Koyna benchmark section, Chopra & Chakrabarti 1973)
 cut by 10 lift joints and a dam-foundation joint, about 7 500 DOF, self-weight then El Centro
 (NGA-West2 RSN6 horizontal component) scaled to a PGA of 0.5 g, 4 000 steps of 0.01 s with nonlinear
 Mohr-Coulomb joints; and the same with every joint linear.
@@ -6,7 +6,7 @@ Mohr-Coulomb joints; and the same with every joint linear.
     /work/venv/bin/python benchmarks/bench_koyna_seismic.py [--steps 4000] [--element-size 1.3]
 
 Prints wall time, ms per step, Newton iterations per step, factorizations and the joint states at
-the end, for both runs. Target of the issue: under 5 ms per step for the nonlinear run on one core.
+the end, for both runs. Target: under 5 ms per step for the nonlinear run on one core.
 A benchmark, not a test: it never fails on a slow figure.
 
 The scene is ``examples/koyna_el_centro.toml`` (its header gives the data and their sources); the

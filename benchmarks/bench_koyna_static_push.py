@@ -1,17 +1,17 @@
-"""Static push of the Koyna section with lift joints (issue 21): self-weight, then the crest pushed
+"""Static push of the Koyna section with lift joints: self-weight, then the crest pushed
 downstream under displacement control until lifts slide; the cost of a static Newton iteration on
 the joint unknowns against one substitution of the all-stick matrix.
 
     python benchmarks/bench_koyna_static_push.py [--push 0.05] [--steps 40] [--element-size 1.45]
                                                  [--kernel compiled|python]
 
-The scene is ``examples/koyna_el_centro.toml`` (the Koyna section, reference problem 5) with its
+The scene is ``examples/koyna_el_centro.toml`` (the Koyna benchmark section, Chopra & Chakrabarti 1973) with its
 dynamic stage replaced by a static stage that moves the ``crest`` nodes by ``--push`` m in x. Runs
 the push with ``joint_space = "auto"`` (steps solved on the joint unknowns, condensed from the
 all-stick stiffness) and ``"off"`` (the general Newton path, a tangent factorization per
 iteration) and prints, for each: wall time of the static solve, steps, cuts, iterations (general
 and joint-space), factorizations, time per iteration, the joint states at the end and the reaction
-at the crest. Then times one substitution (L D L^T) of the all-stick matrix. Target of the issue:
+at the crest. Then times one substitution (L D L^T) of the all-stick matrix. Target:
 the time per iteration at most 3x one substitution. A benchmark, not a test: it never fails on a
 slow figure.
 """

@@ -1,22 +1,22 @@
-"""Seismic steps of models with large joint sets (issue 21): the 8 x 4 m dry-joint wall and the 3D dam.
+"""Seismic steps of models with large joint sets: the 8 x 4 m dry-joint wall and the 3D dam.
 
     . .venv/bin/activate
     python benchmarks/bench_large_seismic.py                          # both cases, joint space on (default)
-    python benchmarks/bench_large_seismic.py --case wall --duration 4 # the issue's wall figure
+    python benchmarks/bench_large_seismic.py --case wall --duration 4 # the wall's target figure
     python benchmarks/bench_large_seismic.py --case dam3d --joint-space off   # the general Newton path
 
 Cases (each run in a subprocess of its own, one thread for numba, MKL and OpenBLAS, after an untimed
 run of a small model that fills the numba cache):
 
-* ``wall``: ``examples/wall_el_centro.toml`` scaled to a wall 8 m long and 4 m high (the issue's
+* ``wall``: ``examples/wall_el_centro.toml`` scaled to a wall 8 m long and 4 m high (a
   56 000-DOF, 20 400-joint-point wall), El Centro 1940 NS at 0.7 g with the vertical component, HHT
-  with the example's dt = "auto" (or ``--wall-dt``, a fixed step: the issue's figure was at 0.005 s),
-  ``--duration`` seconds of the record (default 4, the issue's window). Also printed: the dynamic stage's time
-  over the flexibility columns' (issue 35's target for the wall: at most 2x).
+  with the example's dt = "auto" (or ``--wall-dt``, a fixed step: the earlier figure was at 0.005 s),
+  ``--duration`` seconds of the record (default 4, the target's window). Also printed: the dynamic stage's time
+  over the flexibility columns' (target for the wall: at most 2x).
 * ``dam3d``: ``examples/dam_3d_gravity.toml`` at element_size 6 (42 021 DOF, 8 096 joint points)
   after its gravity stage, El Centro 1940 NS along y (upstream-downstream) and EW along x (the dam
   axis), HHT at dt 0.01 s, 5 % Rayleigh damping at 2 and 10 Hz on the blocks. Two intensities:
-  ``--dam-weak-pga`` (default 0.02 g: every joint point sticks, the issue's "while joints stick") and
+  ``--dam-weak-pga`` (default 0.02 g: every joint point sticks, the target's "while joints stick") and
   ``--dam-strong-pga`` (default 0.5 g, strong shaking), over ``--dam-duration`` seconds (default 3).
 
 Printed per run: DOF, joint unknowns, steps, ms per step of the time stepping (the result's
@@ -27,9 +27,9 @@ flexibility columns computed when first needed and their time, general Newton it
 factorizations, peak resident memory, and the peak displacement of the monitored nodes (top of the
 wall, dam crest) as a check that the runs compared are the same analysis.
 
-Targets of the issue (2-core machine, one thread): the wall at most 40 ms per step over the first 4 s
-at 0.7 g (171 ms when filed); the 3D dam at most 100 ms per step while its joints stick and 300 ms
-per step in strong shaking (1.27 s when filed). This is a benchmark, not a test: it never fails on a
+Targets (2-core machine, one thread): the wall at most 40 ms per step over the first 4 s
+at 0.7 g (171 ms in an earlier version); the 3D dam at most 100 ms per step while its joints stick and 300 ms
+per step in strong shaking (1.27 s in an earlier version). This is a benchmark, not a test: it never fails on a
 slow figure.
 """
 from __future__ import annotations
@@ -139,7 +139,7 @@ def run_case(label, case, scene, timeout):
           f"peak displacement {1e3 * r['peak_displacement_m']:.3f} mm, completed {r['completed']} "
           f"(process {time.perf_counter() - t0:.0f} s)", flush=True)
     if case == "wall" and r["dynamic_joint_space_flexibility_s"]:
-        # issue 35, target 2: the wall's stepping against the flexibility columns it had to compute
+        # the target for the wall: its stepping against the flexibility columns it had to compute
         print(f"[{label}] dynamic stage {r['dynamic_wall_time_s']:.1f} s = "
               f"{r['dynamic_wall_time_s'] / r['dynamic_joint_space_flexibility_s']:.2f}x its flexibility-column "
               "work (target: at most 2x)", flush=True)
@@ -152,7 +152,7 @@ def main():
     ap.add_argument("--joint-space", choices=("auto", "off"), default="auto")
     ap.add_argument("--duration", type=float, default=4.0, help="seconds of the record for the wall")
     ap.add_argument("--wall-dt", type=float, default=None,
-                    help="a fixed step for the wall (s; the issue's figure: 0.005); default the example's dt = auto")
+                    help="a fixed step for the wall (s; the earlier figure: 0.005); default the example's dt = auto")
     ap.add_argument("--dam-duration", type=float, default=3.0)
     ap.add_argument("--dam-weak-pga", type=float, default=0.02)
     ap.add_argument("--dam-strong-pga", type=float, default=0.5)

@@ -23,7 +23,7 @@ Zhu, McKenna & Scott 2018) node for node:
 For each code and each dt the script times the dynamic analysis (gravity excluded), records the crest's
 horizontal displacement relative to the base every 0.01 s, and compares it with the same code's finest run: the
 RMS of the difference over the RMS of the finest history. It prints, per code, the largest dt within 5 % of its
-own finest run and its wall time, and the ratio of the two codes' times at those dt (issue 35, item 4). OpenSees
+own finest run and its wall time, and the ratio of the two codes' times at those dt. OpenSees
 steps that do not converge with Newton are retried with Krylov-Newton, then with the initial stiffness, then
 halved (up to 4 times); a step that fails all of these ends that run (reported). A benchmark: it prints its
 figures and never fails on them.

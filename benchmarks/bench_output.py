@@ -1,4 +1,4 @@
-"""What writing results costs (issue 21): the Koyna example with output stride 10 and stride 1, and a
+"""What writing results costs: the Koyna example with output stride 10 and stride 1, and a
 small jointed dam (the Koyna section meshed at 10 m, about 450 DOF) recording every node at every one
 of 4 000 steps.
 
@@ -7,7 +7,7 @@ of 4 000 steps.
 
 Prints, per run: the whole run's wall time, the dynamic stage's time, the time spent in the output
 callback (``dynamic_output_time_s``: collecting a step's values and writing them), its share of the
-run, and the file size. Targets of the issue: Koyna at stride 1 at most 10 % slower than at stride 10;
+run, and the file size. Targets: Koyna at stride 1 at most 10 % slower than at stride 10;
 the small dam writes for at most 25 % of its run. A benchmark, not a test: it never fails on a slow
 figure.
 """

@@ -1,4 +1,4 @@
-"""Throughput of the continuum plasticity laws (issue 17 sec. 3): points per second of the point
+"""Throughput of the continuum plasticity laws: points per second of the point
 kernels (von Mises, Drucker-Prager, Tresca and Mohr-Coulomb, plane strain and 3D, with the consistent
 tangent), on random strains that put most points in the plastic range (a return mapping at each; the
 share is printed), and of the elasto-plastic element (quad8 in plane strain, 9 Gauss points) on a

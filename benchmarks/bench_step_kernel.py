@@ -12,7 +12,7 @@ example itself (element_size 1.45 m, about 7 500 DOF, 588 joint points, dt = "au
 timing noise is about 10 %), and prints per path: ms a step of the dynamic stage, the joint-space solve's share
 (not separable inside the loop) and whether the datasets are equal bit for bit.
 
-Then, for the coarse section, the floor the issue measures against (issue 35, target 1): one substitution with
+Then, for the coarse section, the floor a step is measured against (target 1): one substitution with
 the all-stick factor plus one pass of the joint law over every point, timed here, and the step's cost as a
 multiple of it; and the step's own joint-space arithmetic (the compiled kernel's time: capacitance LU
 factorizations and updates, law passes of the line search) as a multiple of the same floor. For the example,
@@ -231,7 +231,7 @@ def main():
                      "calls with their Python, records excluded; the rest is the steps handed back and halved)"
                      if loop_steps else ""))
         else:
-            # issue 35, target 2: the run against the substitutions and law passes its steps made (counted in
+            # target 2: the run against the substitutions and law passes its steps made (counted in
             # the Python loop, which does the same arithmetic), each at its cost timed here
             counts = figures["python"][0]
             floor_s = 1e-6 * (counts["substitutions"] * sub + counts["law_passes"] * law)

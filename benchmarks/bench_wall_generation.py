@@ -18,7 +18,7 @@ is the case's own), Eindhoven bricks 210 x 52 x 100 mm with 10 mm joints (expand
 
 Printed per case: best wall time of ``--repeats`` calls (first call also shown), peak Python/numpy
 allocations of one call (tracemalloc) and the process's peak resident set size (ru_maxrss, the
-imports included), model size. A benchmark, not a test. Target (generators issue): a 3D wall of
+imports included), model size. A benchmark, not a test. Target: a 3D wall of
 10 000 units in under 30 s.
 """
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Figures of docs/arch_dams.md (issue 34) from a result of examples/arch_dam_earthquake.toml.
+"""Figures of docs/arch_dams.md from a result of examples/arch_dam_earthquake.toml.
 
     masonrydam run examples/arch_dam_earthquake.toml -o arch_eq.nc
     python benchmarks/figures_arch_dam.py arch_eq.nc

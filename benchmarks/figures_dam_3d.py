@@ -1,4 +1,4 @@
-"""Figures of docs/dam_3d.md (issue 33, item 6) from a result of examples/dam_3d_earthquake.toml.
+"""Figures of docs/dam_3d.md from a result of examples/dam_3d_earthquake.toml.
 
     masonrydam run examples/dam_3d_earthquake.toml -o dam3d_eq.nc       # about 10 minutes
     python benchmarks/figures_dam_3d.py dam3d_eq.nc

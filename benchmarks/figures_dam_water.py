@@ -1,4 +1,4 @@
-"""Figures and figures' numbers of docs/dam_reservoir_foundation.md (issue 16): the moving reservoir
+"""Figures and figures' numbers of docs/dam_reservoir_foundation.md: the moving reservoir
 and the foundation with mass.
 
     python benchmarks/figures_dam_water.py [--koyna-duration 20] [--dts 0.005 0.0025]

@@ -1,4 +1,4 @@
-"""Figures of the Eindhoven wall J4D for docs/masonry_softening.md (issue 18): the load-displacement curves of
+"""Figures of the Eindhoven wall J4D for docs/masonry_softening.md: the load-displacement curves of
 examples/eindhoven_J4D.toml with the top beam held at its height (the reference loading) and free to rise
 (constant vertical load), the crack patterns of the held wall at its first peak and at the end, and the
 hysteresis of examples/eindhoven_J4D_cyclic.py.
@@ -7,12 +7,12 @@ hysteresis of examples/eindhoven_J4D_cyclic.py.
     python benchmarks/figures_eindhoven.py --relaxed [--results DIR] [--out docs/figures]
 
 Writes eindhoven_J4D_curves.png, eindhoven_J4D_cracks_peak.png, eindhoven_J4D_cracks_end.png,
-eindhoven_J4D_cyclic.png, and for the higher precompressions of J6D and J7D (issue 36) eindhoven_walls_curves.png
+eindhoven_J4D_cyclic.png, and for the higher precompressions of J6D and J7D eindhoven_walls_curves.png
 (the three held walls at the example's relaxation time and at a tenth of it) and eindhoven_J6D_cracks_peak.png,
 eindhoven_J6D_cracks_end.png, eindhoven_J7D_cracks_peak.png, eindhoven_J7D_cracks_end.png; prints the runs' figures (peak, plateau, wall time).
 
 With ``--relaxed``, only the held walls J4D, J6D and J7D with the inviscid law relaxed past their limit points
-(examples/eindhoven_walls.py, the converged curves; issue 36): eindhoven_walls_relaxed_curves.png, with J4D's
+(examples/eindhoven_walls.py, the converged curves): eindhoven_walls_relaxed_curves.png, with J4D's
 regularised example curve for comparison, and eindhoven_<wall>_relaxed_cracks_peak.png and _end.png (at the
 largest force and at 4 mm); ``--results DIR`` reads the walls' eindhoven_<wall>.nc written by that example instead
 of running them (J4D, J6D and J7D take about 5.5, 12 and 19 minutes on one core).
@@ -83,17 +83,17 @@ def main(argv=None) -> int:
     return 0
 
 
-#: the walls of the series besides J4D (J5D repeats J4D's 0.30 MPa): their precompressions (PROBLEMS.md, problem 6)
+#: the walls of the series besides J4D (J5D repeats J4D's 0.30 MPa): their precompressions (Raijmakers & Vermeltfoort 1992)
 HIGHER_PRECOMPRESSIONS = {"J6D": "1.21 MPa", "J7D": "2.12 MPa"}
 
 
-#: the relaxation time the walls' curves are drawn at besides the example's, a tenth of it (issue 36: past 3 mm
+#: the relaxation time the walls' curves are drawn at besides the example's, a tenth of it (past 3 mm
 #: the held walls' force depends on it; docs/masonry_softening.md)
 FINER_RELAXATION_TIME = "0.00025 ms"
 
 
 def _higher_precompressions(held_j4d, out, plt):
-    """The example with the precompressions of J6D and J7D (issue 36, item 2): the held walls' curves beside
+    """The example with the precompressions of J6D and J7D: the held walls' curves beside
     J4D's (eindhoven_walls_curves.png), at the example's relaxation time (solid) and at a tenth of it (dashed),
     and each wall's cracks at its peak (the force's first drop, or the end where it never drops) and at 4 mm
     (eindhoven_J6D_cracks_peak.png ...), at the example's relaxation time."""

@@ -1,4 +1,4 @@
-"""Modal study of the Koyna non-overflow section (reference problem 5) with and without its reservoir,
+"""Modal study of the Koyna non-overflow section (Chopra & Chakrabarti 1973) with and without its reservoir,
 for the comparison with published frequencies in docs/koyna_modes.md.
 
     python benchmarks/koyna_modes.py [--cases NAME ...] [--sizes 2.9 1.45 0.725] [--list]

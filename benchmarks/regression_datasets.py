@@ -1,6 +1,6 @@
 """Run every example scene and the default scene, and compare two such sets of results variable by variable.
 
-A refactoring that must not change results (issue 32) is checked with it: run the scenes on the code before
+A refactoring that must not change results is checked with it: run the scenes on the code before
 the change and on the code after it, then compare.
 
     python benchmarks/regression_datasets.py run OUT_DIR [--only NAME ...]

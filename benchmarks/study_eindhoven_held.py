@@ -1,4 +1,4 @@
-"""Why the held Eindhoven wall J4D hardens past its first peak (issue 36, item 1): the reference loading
+"""Why the held Eindhoven wall J4D hardens past its first peak: the reference loading
 (examples/eindhoven_J4D.toml: the top beam kept level and at its height, Lourenco & Rots 1997) against variants
 of one parameter or of the geometry each, printing for every run the horizontal force H and the vertical
 force V that holding the top adds (kN, the reactions on the driven top nodes; V = 0 at the start of the push,
@@ -11,7 +11,7 @@ Variants (``--list`` prints them with their changes):
 
 - ``example``: the example as it is (relaxation time 0.0025 ms, 40 push steps, 2 elements per unit);
 - ``fc_7.5``, ``fc_5``: the cap's compressive strength of the bed and head joints (10.5 MPa in the example,
-  PROBLEMS.md 6);
+  Lourenco & Rots 1997);
 - ``kappa_p_0.02``: the cap's peak plastic relative displacement (0.09 mm in the example, an assumption);
 - ``gfc_1``: the cap's fracture energy 1 N/mm (5 N/mm);
 - ``css_1``: the cap's shear factor 1 (9);

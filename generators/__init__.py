@@ -4,7 +4,7 @@
 - :mod:`generators.walls`, :mod:`generators.walls3d`: masonry walls in 2D and 3D (stretcher, stack,
   header, English and Flemish bonds; openings with lintels; beams; Lourenço's unit cracks);
 - :mod:`generators.grid3d`: the same for axis-aligned boxes with hexahedra (3D);
-- :mod:`generators.blocks`: named rectangular blocks or boxes, optionally rotated (reference problems);
+- :mod:`generators.blocks`: named rectangular blocks or boxes, optionally rotated (sliding, rocking and incline checks);
 - :mod:`generators.extrude`: a 2D jointed model extruded into a 3D slab;
 - :mod:`generators.dams`: gravity dam sections (2D; Koyna preset) and dams of monoliths across a
   valley (3D), with lift, base and contraction joints, meshed with gmsh;

@@ -1,5 +1,5 @@
 """Block models from rectangles (2D) or boxes (3D), optionally rotated: blocks on joints for
-reference problems (block on an incline, direct shear, sliding and rocking blocks)."""
+closed-form checks (block on an incline, direct shear, sliding and rocking blocks)."""
 from __future__ import annotations
 
 import math

@@ -9,11 +9,10 @@ Coordinates (m):
   section's y). This is the generators' convention (docs/architecture.md).
 
 The section is given by a few numbers (:func:`gravity_dam_2d`: height, crest width, elevation of
-the downstream kink, slopes), by a polyline, or by a named preset (``"koyna"``: reference problem 5,
-the non-overflow monolith of Koyna dam; Chopra & Chakrabarti 1973, BSSA 63(2), fig. 1, as listed in
-shared/reference/PROBLEMS.md). Lift joints are horizontal, at a spacing or at listed heights; an
-optional foundation block lies under the dam (a dam-foundation joint between them); galleries are
-rectangular openings.
+the downstream kink, slopes), by a polyline, or by a named preset (``"koyna"``: the Koyna benchmark
+section, the non-overflow monolith of Koyna dam; Chopra & Chakrabarti 1973, BSSA 63(2), fig. 1).
+Lift joints are horizontal, at a spacing or at listed heights; an optional foundation block lies under
+the dam (a dam-foundation joint between them); galleries are rectangular openings.
 
 Meshing: gmsh with the OpenCASCADE kernel (no display, deterministic options, always finalised:
 :mod:`generators._gmsh`). The section is cut by the lift planes into lift pieces (boolean
@@ -88,8 +87,7 @@ from ._gmsh import entity_elements, get_nodes, gmsh_session, tags_to_index
 
 #: Named sections. Koyna dam, non-overflow monolith: Chopra & Chakrabarti (1973), "The Koyna
 #: earthquake and the damage to Koyna dam", BSSA 63(2) 381-397, fig. 1; the same profile in
-#: Bhattacharjee & Leger (1993) EESD 22 and Lee & Fenves (1998) EESD 27 (shared/reference/PROBLEMS.md,
-#: problem 5). Reservoir level at the 1967 earthquake: 91.75 m.
+#: Bhattacharjee & Leger (1993) EESD 22 and Lee & Fenves (1998) EESD 27. Reservoir level at the 1967 earthquake: 91.75 m.
 PRESETS = {
     "koyna": {
         "polyline": [(0.0, 0.0), (70.0, 0.0), (19.25, 66.5), (14.8, 103.0), (0.0, 103.0)],
@@ -806,7 +804,7 @@ def gravity_dam_2d(
       below the kink and ``downstream_upper_slope`` above it. The heel is at (0, 0);
     - ``polyline``: the section's vertices [[x, y], ...] (either orientation), with a horizontal base
       edge at the lowest y and a horizontal crest edge at the highest y, faces rising monotonically;
-    - ``preset``: ``"koyna"`` (reference problem 5; its reservoir level 91.75 m is the default
+    - ``preset``: ``"koyna"`` (the Koyna benchmark section; its reservoir level 91.75 m is the default
       ``reservoir_level``).
 
     Lift joints at every multiple of ``lift_spacing`` below the crest, or at ``lift_heights`` (m

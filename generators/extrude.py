@@ -2,11 +2,11 @@
 
 A 2D model in the (x, y) plane (y up) becomes a 3D model with x kept, the 2D y axis as the 3D z
 axis (up) and the thickness along 3D y in ``[0, depth]``. quad4 elements become hex8, 2-node line
-interfaces become the seed's 8-node (4 + 4) surface interfaces. The interface faces are ordered so
+interfaces become 8-node (4 + 4) surface interfaces (Tzamtzis & Asteris). The interface faces are ordered so
 that the 3D local frame is the 2D one extended: normal = the 2D normal, first shear direction = the
 2D tangent (so ``t1`` is the in-plane slip of the 2D model) and second shear direction = +y (out of
 plane). With the out-of-plane displacement held on both faces, the slab is in plane strain and must
-reproduce the 2D plane-strain answer (tested in tests/test_interface3d.py).
+reproduce the 2D plane-strain answer (tested in tests/elements/test_interface3d.py).
 """
 from __future__ import annotations
 
@@ -79,7 +79,7 @@ def extrude_2d(mesh: Mesh, depth: float, layers: int = 1) -> Mesh:
 
 def extruded(generator: str, parameters: dict, depth: float, layers: int = 1, key: str = "mesh.parameters") -> Mesh:
     """Scene generator: run the 2D ``generator`` with ``parameters`` (plain SI numbers) and
-    extrude its model to a slab of thickness ``depth`` (m) with ``layers`` elements through it."""
+    extrude its model to a slab of thickness ``depth`` (m) along y with ``layers`` elements through it."""
     # generators/__init__.py builds GENERATORS from the modules, this one among them: looked up when called
     from . import GENERATORS
 

@@ -6,7 +6,7 @@ tests/ and has no ``__init__.py`` beside it, so pytest's default ``prepend`` imp
 folder by their plain name (``scenes``, ``repository_paths``). Test file names are unique across the
 folders (pytest imports them by basename in this mode).
 
-Scene dictionaries of the reference problems come from ``scenes.py`` (builders with overrides); the
+Scene dictionaries of the closed-form and published problems come from ``scenes.py`` (builders with overrides); the
 fixtures here are the ones that several rooms use.
 """
 from __future__ import annotations

@@ -1,5 +1,5 @@
 """Scene builders shared by the tests: each returns a fresh scene dictionary (what ``masonrydam.run`` takes)
-of one reference problem, with its physical parameters as keywords and any other entry changed through
+of one closed-form or published problem, with its physical parameters as keywords and any other entry changed through
 ``overrides``.
 
 ``overrides`` is a mapping merged into the scene by :func:`merged`: a dotted key names one entry
@@ -7,20 +7,20 @@ of one reference problem, with its physical parameters as keywords and any other
 (``{"joints": {"joints": {"cohesion": 1e5}}}``), any other value replaces the entry. Use it for changes that
 do not alter the problem's identity; a test that needs another problem writes its own scene.
 
-The problems (shared/reference/PROBLEMS.md numbers in brackets):
+The problems:
 
-- :func:`sliding_block`: Newmark's (1965) rigid block on a Coulomb joint under a ground-acceleration pulse [1];
+- :func:`sliding_block`: Newmark's (1965) rigid block on a Coulomb joint under a ground-acceleration pulse;
 - :func:`rocking_block`, :func:`rocking_block_model`: Housner's (1963) slender block on a no-tension,
-  no-slip joint [3];
-- :func:`tilted_block`: the same kind of block under a growing horizontal body force (a tilted table) [3];
+  no-slip joint;
+- :func:`tilted_block`: the same kind of block under a growing horizontal body force (a tilted table);
 - :func:`block_on_elastic_joint`: a rigid block on linear joint springs with a modal stage (Chopra 2012,
   sec. 10.2);
 - :func:`small_wall`: a running-bond wall of 0.2 x 0.1 m units on a fixed base (the simplified micro-model,
   Lourenco 1996);
 - :func:`dam_with_reservoir`: a triangular-topped gravity dam on a rock block with water and uplift (the
   gravity method of USBR 1987, sec. 5.7-5.11);
-- :func:`koyna_el_centro`: examples/koyna_el_centro.toml (the Koyna section under El Centro) with time
-  steps and a mesh of the test's own [5].
+- :func:`koyna_el_centro`: examples/koyna_el_centro.toml (the Koyna section of Chopra & Chakrabarti
+  1973 under El Centro) with time steps and a mesh of the test's own.
 
 :func:`toml_text` writes a scene dictionary as TOML, for tests of the command line.
 """
@@ -102,7 +102,7 @@ def _toml_value(value) -> str:
 
 
 # ----------------------------------------------------------------------------------------------
-# Newmark's sliding block (reference problem 1)
+# Newmark's (1965) sliding block
 # ----------------------------------------------------------------------------------------------
 
 def sliding_block(*, shape="rectangular", amplitude=0.4 * G, pulse=0.2, mu=0.2, dt=0.002, duration=0.6,
@@ -137,7 +137,7 @@ def sliding_block(*, shape="rectangular", amplitude=0.4 * G, pulse=0.2, mu=0.2, 
 
 
 # ----------------------------------------------------------------------------------------------
-# Housner's rocking block (reference problem 3)
+# Housner's (1963) rocking block
 # ----------------------------------------------------------------------------------------------
 
 #: the rocking block's width 2b and height 2h (m): b/h = 0.2
@@ -361,7 +361,7 @@ def dam_with_reservoir(*, height=30.0, crest_width=5.0, downstream_slope=0.8, le
 
 
 # ----------------------------------------------------------------------------------------------
-# the Koyna section under El Centro (reference problem 5)
+# the Koyna section (Chopra & Chakrabarti 1973) under El Centro
 # ----------------------------------------------------------------------------------------------
 
 def koyna_el_centro(*, element_size, dt, steps=None, duration=None, output=None, overrides=None):

@@ -1,4 +1,4 @@
-"""The house rules of docs/architecture.md that a change can break (issue 32): the rooms import only rooms
+"""The house rules of docs/architecture.md that a change can break: the rooms import only rooms
 below them (the import-linter contracts of pyproject.toml), no module grows past what one person holds in
 mind, and no code outside ``materials/`` and the numba kernels tests a law by name or reads a law's
 state and parameter columns (the law descriptors of ``materials/joint_laws.py`` and

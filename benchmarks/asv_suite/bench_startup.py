@@ -1,4 +1,4 @@
-"""Start-up of the command line and a warm run of the default scene as a user times them (issue 35): whole
+"""Start-up of the command line and a warm run of the default scene as a user times them: whole
 processes, numba's cache filled by ``setup_cache``."""
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""What a time step costs (issue 35): the coarse Koyna section (358 DOF) with the trapezoidal rule, at a fixed
+"""What a time step costs: the coarse Koyna section (358 DOF) with the trapezoidal rule, at a fixed
 dt of 2.5 ms and with dt = "auto". The figures are the run's own (``dynamic_wall_time_s`` over
 ``dynamic_steps``: the steps, not the model's build or the output), in ms a step."""
 from __future__ import annotations

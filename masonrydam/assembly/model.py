@@ -141,7 +141,7 @@ class Model:
     @property
     def joint_space_capable(self) -> bool:
         """Every joint set follows a law that the joint-space kernels carry (``JointLaw.joint_space``: the
-        seed's Mohr-Coulomb law, :mod:`masonrydam.solvers.joint_space.kernels`)."""
+        Mohr-Coulomb law of Tzamtzis & Asteris, :mod:`masonrydam.solvers.joint_space.kernels`)."""
         return all(g.joint_law.joint_space for g in self.igroups)
 
     @property

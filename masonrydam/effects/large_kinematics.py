@@ -1,4 +1,4 @@
-"""Large displacements (issue 17; the seed's total Lagrangian description): the effect ``[model] kinematics =
+"""Large displacements (the total Lagrangian description of Tzamtzis & Asteris): the effect ``[model] kinematics =
 "large"``, with ``[joints.<set>] frame``.
 
 Schema fragment: :data:`~masonrydam.assembly.groups.KINEMATICS`, :data:`~masonrydam.assembly.groups.JOINT_FRAMES`

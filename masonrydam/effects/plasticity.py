@@ -1,4 +1,4 @@
-"""Elasto-plastic and elasto-viscoplastic blocks (issue 17; the seed's continuum nonlinearity): the effect
+"""Elasto-plastic and elasto-viscoplastic blocks (the continuum nonlinearity of Tzamtzis & Asteris): the effect
 ``[materials.<group>] law = "von_mises" | "tresca" | "drucker_prager" | "mohr_coulomb"``.
 
 The laws are descriptors (:mod:`masonrydam.materials.continuum_laws`: their keys, read by

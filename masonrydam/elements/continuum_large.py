@@ -1,11 +1,11 @@
-"""Continuum elements in the total Lagrangian description (issue 17, ``[model] kinematics = "large"``):
+"""Continuum elements in the total Lagrangian description (``[model] kinematics = "large"``):
 Green-Lagrange strain, second Piola-Kirchhoff stress, the St. Venant-Kirchhoff material (the linear
 elastic ``D`` of the group applied to the Green-Lagrange strain), plane strain / plane stress (2D) and
 3D, every element type of :mod:`masonrydam.elements.continuum`.
 
 Per Gauss point of the reference configuration (Bathe, *Finite Element Procedures*, 1996, sec. 6.2.3,
 table 6.4; Belytschko, Liu & Moran, *Nonlinear Finite Elements for Continua and Structures*, 2000,
-sec. 4.9; the seed paper's total Lagrangian option, Tzamtzis & Asteris sec. 3)::
+sec. 4.9; the total Lagrangian option of Tzamtzis & Asteris, sec. 3)::
 
     F = I + du/dX                      (dim, dim), F[k, i] = delta_ki + sum_a u_ak dN_a/dX_i
     E = (F^T F - I) / 2                Voigt [E11, E22, (E33,) 2 E12, (2 E23, 2 E31)]

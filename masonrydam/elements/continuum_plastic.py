@@ -1,4 +1,4 @@
-"""Continuum elements whose material is elasto-plastic (issue 17): internal forces and the consistent
+"""Continuum elements whose material is elasto-plastic: internal forces and the consistent
 tangent from the point laws of :mod:`masonrydam.materials.von_mises`,
 :mod:`masonrydam.materials.drucker_prager`, :mod:`masonrydam.materials.tresca` and
 :mod:`masonrydam.materials.mohr_coulomb_solid`, small strains, plane strain (2D, strain [exx, eyy, gxy])

@@ -1,4 +1,4 @@
-"""Zero-thickness interface (joint) elements, seed paper sec. 3.3 (Tzamtzis & Asteris, eqs. 1-11).
+"""Zero-thickness interface (joint) elements of Tzamtzis & Asteris, sec. 3.3, eqs. 1-11 (the "eq." numbers below).
 
 An interface element joins a *bottom* face and a *top* face with coincident (or nearly coincident)
 nodes. Supported faces: ``line2`` / ``line3`` (2D, elements of 2+2 / 3+3 nodes) and ``quad4``,
@@ -11,7 +11,7 @@ surface Jacobian ``j``, the rule weight ``w`` and the 2D thickness ``h`` (m). In
 ``"lumped"`` (nodal) by default, after Schellekens & de Borst (1993).
 
 Theory: docs/elements.md, sections "Formulation (Tzamtzis & Asteris, eqs. 1–11)" and "Integration" (under
-"Zero-thickness interfaces (the seed's element)").
+"Zero-thickness interfaces").
 """
 from __future__ import annotations
 
@@ -214,14 +214,14 @@ def local_frame(xm, dN, g, dim, R, size):
 
 
 # the joint law of the fused kernels (argument ``law``) is the descriptor's ``JointLaw.kernel_id``
-# (masonrydam.materials.joint_laws.FUSED_KERNELS): None, the seed's Mohr-Coulomb (and the linear joint, a
-# Mohr-Coulomb joint that cannot break), or 1, the composite masonry law of
+# (masonrydam.materials.joint_laws.FUSED_KERNELS): None, the Mohr-Coulomb law of Tzamtzis & Asteris (and the linear
+# joint, a Mohr-Coulomb joint that cannot break), or 1, the composite masonry law of
 # masonrydam.materials.composite (see joint_law_at for why None)
 
 
 @njit(cache=True, inline="always")
 def displacement_jumps(conn, u, e, ns, dim, du):
-    """The jumps ``du[a] = u_top,a - u_bot,a`` (ns, dim) m across element ``e``'s node pairs (seed eq. 4)."""
+    """The jumps ``du[a] = u_top,a - u_bot,a`` (ns, dim) m across element ``e``'s node pairs (eq. 4)."""
     for a in range(ns):
         b = conn[e, a]
         t = conn[e, ns + a]
@@ -231,7 +231,7 @@ def displacement_jumps(conn, u, e, ns, dim, du):
 
 @njit(cache=True, inline="always")
 def jump_at_point(N, g, ns, dim, du, Dug):
-    """The jump at integration point ``g`` in global axes, ``Dug = sum_a N_a du[a]`` (dim,) m (seed eq. 5)."""
+    """The jump at integration point ``g`` in global axes, ``Dug = sum_a N_a du[a]`` (dim,) m (eq. 5)."""
     for k in range(dim):
         s = 0.0
         for a in range(ns):
@@ -269,7 +269,7 @@ def add_point(fe_out, ke_out, e, N, g, ns, dim, ndof_half, R, t, C, jwh, want_ta
     with ``want_tangent``, the tangent ``R^T C R jwh`` (:func:`add_point_tangent`). ``R`` (dim, dim) the local
     frame (rows: tangent(s), normal), ``t`` (dim,) the local traction (Pa), ``C`` (dim, dim) its tangent (Pa/m),
     ``jwh`` the point's weight (j w h); ``tg`` (dim,), ``RC`` and ``Cg`` (dim, dim) scratch. Shared by the fused
-    and the generic interface kernels (seed eqs. 7-10)."""
+    and the generic interface kernels (eqs. 7-10)."""
     for k in range(dim):  # global traction R^T t
         s = 0.0
         for r in range(dim):
@@ -305,7 +305,7 @@ def joint_law_at(params_table, pidx, state_committed, state_trial, delta_out, tr
     interface kernels. The law runs on scalars (row views per point cost more than the law: see
     :func:`~masonrydam.materials.mohr_coulomb.mohr_coulomb_point`).
 
-    ``law``: None for the seed's Mohr-Coulomb law, an int (``JointLaw.kernel_id``) for another. Why None:
+    ``law``: None for the Mohr-Coulomb law of Tzamtzis & Asteris, an int (``JointLaw.kernel_id``) for another. Why None:
     numba prunes the ``law is not None`` branch of a None argument before typing, so the Mohr-Coulomb
     kernels never compile the composite law (it doubled the first, compiling run of the default scene).
     ``want_tangent`` False: a law may leave ``C`` uncomputed (the composite law does: its tangent is a complex-step
@@ -389,9 +389,9 @@ def interface_evaluate(
     int : STATUS_OK; STATUS_BAD_GEOMETRY for a zero-length / zero-area element (or integration
     point); STATUS_NAN for non-finite input or output. The element index goes to ``info[0]``.
 
-    Equations: ``Du = sum_i N_i (u_top_i - u_bot_i)``, ``delta = R Du`` (seed eqs. 4-6, 10);
+    Equations: ``Du = sum_i N_i (u_top_i - u_bot_i)``, ``delta = R Du`` (eqs. 4-6, 10);
     ``fe = sum_ip B^T t j w h``, ``ke = sum_ip B^T C B j w h`` with
-    ``B = R [-N_1 I .. -N_ns I, N_1 I .. N_ns I]`` (seed eqs. 5, 7, 9, 10). The global-axes
+    ``B = R [-N_1 I .. -N_ns I, N_1 I .. N_ns I]`` (eqs. 5, 7, 9, 10). The global-axes
     blocks are ``fe_{bot,i} = -N_i R^T t jwh``, ``fe_{top,i} = +N_i R^T t jwh`` and
     ``ke_{ai,bk} = s_a s_b N_i N_k R^T C R jwh`` with ``s_bot = -1``, ``s_top = +1``.
     """
@@ -465,7 +465,7 @@ def interface_forces(conn, u, N, frame, jw, thickness, params_table, param_index
     tributary areas of the reference mid-surface computed once (:func:`interface_geometry`: ``frame`` (n_elem,
     nip, dim, dim), ``jw`` (n_elem, nip) = j w) instead of at every call. What an explicit step asks of its
     joints: the frames are a third of the kernel's work, and they do not change under small displacements.
-    Other arguments and the status as in :func:`interface_evaluate` (seed eqs. 4-10)."""
+    Other arguments and the status as in :func:`interface_evaluate` (eqs. 4-10)."""
     n_elem = conn.shape[0]
     dim = frame.shape[2]
     nip = N.shape[0]
@@ -562,7 +562,7 @@ def interface_relative_displacements(conn, u, N, frame, delta_out, info):
     frame : float64 (n_elem, nip, dim, dim)
         Local frames R of the reference mid-surface (:func:`interface_geometry`).
     delta_out : float64 (n_elem, nip, dim), out
-        ``delta = R sum_a N_a (u_top,a - u_bot,a)`` (m), ``[s1, (s2,) n]``, opening positive (seed eqs. 4-6, 10).
+        ``delta = R sum_a N_a (u_top,a - u_bot,a)`` (m), ``[s1, (s2,) n]``, opening positive (eqs. 4-6, 10).
     info : int64 (1,), out — the element of a non-finite displacement.
 
     Returns STATUS_OK, or STATUS_NAN (non-finite displacement).
@@ -591,7 +591,7 @@ def interface_relative_displacements(conn, u, N, frame, delta_out, info):
 @njit(cache=True)
 def interface_assemble(N, frame, jw, thickness, traction, tangent, want_tangent, fe_out, ke_out, info):
     """Element forces and tangents from the tractions and tangents at the points (the assembly of
-    :func:`interface_evaluate`): ``fe = sum_ip B^T t j w h``, ``ke = sum_ip B^T C B j w h`` (seed eqs. 7-10).
+    :func:`interface_evaluate`): ``fe = sum_ip B^T t j w h``, ``ke = sum_ip B^T C B j w h`` (eqs. 7-10).
 
     Parameters
     ----------

@@ -1,5 +1,5 @@
-"""Zero-thickness interfaces whose frame rotates with the joint (issue 17, ``[model] kinematics =
-"large"``): the seed's interface (Tzamtzis & Asteris sec. 3.3) with the local frame taken on the
+"""Zero-thickness interfaces whose frame rotates with the joint (``[model] kinematics =
+"large"``): the interface of Tzamtzis & Asteris (sec. 3.3) with the local frame taken on the
 mid-surface of the *current* configuration, so that gap and slip are measured across the joint as it
 is now, at any rotation of the blocks it joins.
 
@@ -9,7 +9,7 @@ gradients of the joint's work (a co-rotational formulation: Crisfield 1991, ch. 
 the frame surface is the mid-surface or, with ``[joints.<set>] frame = "bottom"``, the bottom face.
 
 Theory: docs/elements.md, section "Large kinematics: a frame that turns with the joint" (under "Zero-thickness
-interfaces (the seed's element)").
+interfaces").
 """
 from __future__ import annotations
 

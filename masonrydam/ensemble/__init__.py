@@ -1,4 +1,4 @@
-"""Scenario ensembles: many runs of one base scene over records, intensities and parameters (issue 20).
+"""Scenario ensembles: many runs of one base scene over records, intensities and parameters.
 
 An ensemble file (TOML) names a base scene and the axes to sweep: ground-motion records (bundled names,
 files, a folder), intensities (``scale_to_pga`` or ``scale_to_sa``), scene keys over lists of values, and

@@ -61,7 +61,7 @@ class Axis(NamedTuple):
 def member_id(coords: dict, sampled: dict | None = None) -> str:
     """A stable short id of a member: the first :data:`ID_LENGTH` hex digits of the SHA-1 of the JSON of its
     ``coords`` and, where there are, its sampled values (as ``"p_<name>(sample)"`` keys), keys sorted. The same
-    coordinates give the same id in every session (and a changed seed, with other samples, another one)."""
+    coordinates give the same id in every run (and a changed seed, with other samples, another one)."""
     payload = dict(coords)
     for k, v in (sampled or {}).items():
         payload[f"{k}(sample)"] = v

@@ -2,7 +2,7 @@
 
 - :mod:`masonrydam.materials.elastic`: linear isotropic elasticity matrices (plane stress,
   plane strain, 3D) for the continuum blocks.
-- :mod:`masonrydam.materials.mohr_coulomb`: the seed's joint law (stick, slip, open) for interfaces.
+- :mod:`masonrydam.materials.mohr_coulomb`: the joint law of Tzamtzis & Asteris (stick, slip, open) for interfaces.
 - :mod:`masonrydam.materials.von_mises`, :mod:`masonrydam.materials.tresca`,
   :mod:`masonrydam.materials.drucker_prager`, :mod:`masonrydam.materials.mohr_coulomb_solid` (with shared
   helpers in :mod:`masonrydam.materials.plasticity` and, for the principal-space returns of Tresca and

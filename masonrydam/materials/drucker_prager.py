@@ -1,5 +1,5 @@
 """Drucker-Prager plasticity with cohesion hardening / softening, non-associated flow and optional
-Perzyna viscosity, small strains, plane strain and 3D (issue 17, continuum plasticity).
+Perzyna viscosity, small strains, plane strain and 3D (continuum plasticity).
 
 Point-level numba kernels: :func:`drucker_prager_point` (one integration point; what an element
 kernel calls), :func:`drucker_prager_update` (a batch) and the Python wrapper

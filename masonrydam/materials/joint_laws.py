@@ -11,7 +11,7 @@ Callers ask the descriptor (or the element group's methods built on it,
 
 Built-in laws (registered here, in this order):
 
-- ``mohr_coulomb``: the seed's joint (Tzamtzis & Asteris, sec. 3.4, eqs. 11-12;
+- ``mohr_coulomb``: the joint of Tzamtzis & Asteris (sec. 3.4, eqs. 11-12;
   :mod:`masonrydam.materials.mohr_coulomb`);
 - ``linear``: the same kernel with a bond that cannot break and no friction limit (an elastic joint);
 - ``composite``: the masonry interface of Lourenco & Rots (1997, J. Eng. Mech. 123(7):660-668;
@@ -73,8 +73,8 @@ RESULT_STATE_NAMES = ("stick", "slip", "open", "crushed")
 
 #: :attr:`JointLaw.kernel_id` of a law without a fused interface kernel (a plug-in: :attr:`JointLaw.point_law`)
 NO_FUSED_KERNEL = -1
-#: the fused interface kernels: ``kernel_id`` -> the point law compiled into them. None is the seed's
-#: Mohr-Coulomb law: numba prunes the other branch of a None argument before typing, so that the
+#: the fused interface kernels: ``kernel_id`` -> the point law compiled into them. None is the
+#: Mohr-Coulomb law of Tzamtzis & Asteris: numba prunes the other branch of a None argument before typing, so that the
 #: Mohr-Coulomb kernels never compile the composite law (:func:`masonrydam.elements.interface.joint_law_at`)
 FUSED_KERNELS = {None: "mohr_coulomb_point", 1: "composite_point"}
 

@@ -1,4 +1,4 @@
-"""Mohr-Coulomb joint law of the seed paper (Tzamtzis & Asteris, sec. 3.4, eqs. 11-12).
+"""Mohr-Coulomb joint law of Tzamtzis & Asteris (sec. 3.4, eqs. 11-12).
 
 One numba kernel, :func:`mohr_coulomb_point`, evaluates the law at one integration point of a
 zero-thickness interface, in 2D (2 local components ``[s, n]``) or 3D (3 components
@@ -9,10 +9,10 @@ bottom in the local frame (m), the normal component ``delta_n`` is positive in o
 
 Parameter vector (float64, ``N_JOINT_PARAMS``)::
 
-    P_KS                 ks    elastic shear stiffness  (Pa/m), > 0       (seed eq. 11, k_sx = k_sy)
-    P_KN                 kn    normal stiffness         (Pa/m), > 0       (seed eq. 11, k_nz)
-    P_COHESION           c     cohesion (Pa), >= 0                        (seed eq. 12)
-    P_TAN_PHI            tan(phi), >= 0                                   (seed eq. 12)
+    P_KS                 ks    elastic shear stiffness  (Pa/m), > 0       (Tzamtzis & Asteris eq. 11, k_sx = k_sy)
+    P_KN                 kn    normal stiffness         (Pa/m), > 0       (Tzamtzis & Asteris eq. 11, k_nz)
+    P_COHESION           c     cohesion (Pa), >= 0                        (Tzamtzis & Asteris eq. 12)
+    P_TAN_PHI            tan(phi), >= 0                                   (Tzamtzis & Asteris eq. 12)
     P_TENSILE_STRENGTH   ft    bond tensile strength (Pa), >= 0 (0 = no-tension joint)
     P_KS_RESIDUAL        ks_r  residual shear stiffness while sliding (Pa/m), 0 <= ks_r < ks
 
@@ -102,7 +102,7 @@ def mohr_coulomb_point(ks, kn, c, tan_phi, ft, ks_r, open_tangent, ns, d_s1, d_s
         ft_eff = ft
     t_n = kn * d_n
 
-    # ---- separation: no traction, no stiffness (seed sec. 3.4); s_p := d_s, alpha := 0
+    # ---- separation: no traction, no stiffness (Tzamtzis & Asteris sec. 3.4); s_p := d_s, alpha := 0
     if d_n > 0.0 and t_n > ft_eff:
         f_ks = open_tangent * ks if open_tangent != 0.0 else 0.0
         f_kn = open_tangent * kn if open_tangent != 0.0 else 0.0
@@ -206,7 +206,7 @@ def write_tangent(tangent, ns, C11, C12, C21, C22, C1n, C2n, Cnn):
 
 @njit(cache=True)
 def mohr_coulomb_update(params, delta, state_committed, state_trial, traction, tangent):
-    """Return-mapping update of the seed's Mohr-Coulomb joint at one integration point.
+    """Return-mapping update of the Mohr-Coulomb joint (Tzamtzis & Asteris) at one integration point.
 
     Parameters
     ----------
@@ -230,13 +230,13 @@ def mohr_coulomb_update(params, delta, state_committed, state_trial, traction, t
         ``STATUS_OK`` (0), or ``STATUS_NAN`` if an input or output is not finite.
 
     Law (ns = ncomp - 1 shear components; d_s, tau, plastic slip s_p and back stress alpha are
-    ns-vectors; with ks_r = 0 this is the elastic-perfectly-plastic joint of the seed, Fig. 2)
+    ns-vectors; with ks_r = 0 this is the elastic-perfectly-plastic joint of Tzamtzis & Asteris, Fig. 2)
     ----------------------------------------------------------------------------------------------
-    Elastic trial (seed eq. 11, k = diag(ks, [ks,] kn)):
+    Elastic trial (Tzamtzis & Asteris eq. 11, k = diag(ks, [ks,] kn)):
         t_n       = kn * d_n
         tau_trial = ks * (d_s - s_p)
     Bond: while intact ``c_eff = c``, ``ft_eff = ft``; once broken ``c_eff = ft_eff = 0``.
-    Separation (seed sec. 3.4, stage 1: no tension, both stiffnesses zero):
+    Separation (Tzamtzis & Asteris sec. 3.4, stage 1: no tension, both stiffnesses zero):
         if d_n > 0 and kn * d_n > ft_eff:
             traction = 0, tangent = 0, code = OPEN, bond broken,
             s_p := d_s  (on re-closure the contact starts free of shear at the new position),
@@ -245,9 +245,9 @@ def mohr_coulomb_update(params, delta, state_committed, state_trial, traction, t
         The "new position" is that of the last *committed* open state (the trial state of a step
         that closes the joint starts from the committed s_p), so a joint that opens and closes
         within one step keeps its previous s_p.
-    Mohr-Coulomb strength (seed eq. 12, sigma_n = -t_n the compressive stress):
+    Mohr-Coulomb strength (Tzamtzis & Asteris eq. 12, sigma_n = -t_n the compressive stress):
         tau_y = max(c_eff - t_n tan(phi), 0) = max(c_eff + sigma_n tan(phi), 0)
-    Residual shear stiffness (seed: "a reduced (or residual) shear stiffness is allocated to the
+    Residual shear stiffness (Tzamtzis & Asteris: "a reduced (or residual) shear stiffness is allocated to the
     joint" while sliding) as linear kinematic hardening of modulus
         H = ks ks_r / (ks - ks_r)     so that  ks H / (ks + H) = ks_r,
     yield function f = |xi| - tau_y with the relative stress xi = tau_trial - alpha.
@@ -294,9 +294,9 @@ def joint_params(
     ----------
     normal_stiffness : kn (Pa/m), > 0.
     shear_stiffness : ks (Pa/m), > 0.
-    cohesion : c (Pa), >= 0 (seed eq. 12).
-    friction_angle_deg : phi in degrees, 0 <= phi < 90 (seed eq. 12). Default 30 deg.
-    tensile_strength : ft (Pa), >= 0; 0 gives the seed's no-tension joint.
+    cohesion : c (Pa), >= 0 (Tzamtzis & Asteris eq. 12).
+    friction_angle_deg : phi in degrees, 0 <= phi < 90 (Tzamtzis & Asteris eq. 12). Default 30 deg.
+    tensile_strength : ft (Pa), >= 0; 0 gives the no-tension joint of Tzamtzis & Asteris.
     residual_shear_stiffness : ks_r (Pa/m), 0 <= ks_r < ks; 0 gives elastic-perfectly-plastic sliding.
 
     Returns

@@ -1,5 +1,5 @@
 """Mohr-Coulomb plasticity of solids with cohesion hardening / softening, non-associated flow and
-optional Perzyna viscosity, small strains, plane strain and 3D (issue 17, continuum plasticity).
+optional Perzyna viscosity, small strains, plane strain and 3D (continuum plasticity).
 
 Not the joint law of :mod:`masonrydam.materials.mohr_coulomb` (interfaces): this is the continuum
 law of rock, concrete and masonry treated as a continuum. Point-level numba kernels:

@@ -1,5 +1,5 @@
 """Tresca plasticity with linear isotropic hardening / softening and optional Perzyna viscosity,
-small strains, plane strain and 3D (issue 17, continuum plasticity).
+small strains, plane strain and 3D (continuum plasticity).
 
 Point-level numba kernels: :func:`tresca_point` (one integration point; what an element kernel
 calls, with the signature of :func:`masonrydam.materials.von_mises.von_mises_point`),

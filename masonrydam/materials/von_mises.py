@@ -1,5 +1,5 @@
 """von Mises (J2) plasticity with linear isotropic and kinematic hardening and optional Perzyna
-viscosity, small strains, plane strain and 3D (issue 17, continuum plasticity).
+viscosity, small strains, plane strain and 3D (continuum plasticity).
 
 Point-level numba kernels: :func:`von_mises_point` evaluates one integration point (the function an
 element kernel calls per point), :func:`von_mises_update` a batch of points, and

@@ -15,7 +15,7 @@ from ..elements.shapes import ELEMENT_TYPES
 from ..errors import MeshError
 
 #: interface element type -> face type of each side. 2D: 2+2 and 3+3 node line interfaces;
-#: 3D: the seed's 8-node (4+4) surface interface, its 16-node (8+8) quadratic form for 20-node
+#: 3D: the 8-node (4+4) surface interface of Tzamtzis & Asteris, its 16-node (8+8) quadratic form for 20-node
 #: hexahedra, and the 6-node (3+3) triangular interface for tetrahedral meshes.
 INTERFACE_FACE_TYPE = {
     "interface_line2": "line2",

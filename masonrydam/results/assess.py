@@ -8,7 +8,7 @@ tractions of the joint law (the pore pressure, ``joint_pore_pressure``, is not i
   the point weights (in 2D per model thickness): the W - U of the gravity method;
 - ``shear_force`` |T| (N): magnitude of the resultant of the shear tractions;
 - ``sliding_safety_factor`` (c A_c + N tan(phi)) / |T| with A_c the area of the points in compression
-  whose bond is intact (a cracked or opened point has no cohesion, seed sec. 3.4): the shear-friction
+  whose bond is intact (a cracked or opened point has no cohesion, Tzamtzis & Asteris sec. 3.4): the shear-friction
   factor of USACE EM 1110-2-2200 (1995) sec. 4-4 and USBR Design of Small Dams (1987) sec. 5.11;
 - ``resultant_position`` (m from the upstream end of the line): where the normal force acts, the
   centroid of the effective normal tractions (moment equilibrium of the gravity method);

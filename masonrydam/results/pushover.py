@@ -1,4 +1,4 @@
-"""Pushover curves of static results: the force of the actuator against its displacement (issue 18).
+"""Pushover curves of static results: the force of the actuator against its displacement.
 
 The actuator is the set of DOFs a static stage drives by prescribed displacements (the result's
 ``driven`` variable, 1 + the stage index). Its force is the sum of the reactions at those DOFs along the

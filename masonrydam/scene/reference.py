@@ -170,7 +170,7 @@ _GENERATOR_PARAMETERS = {
     "extruded": {
         "generator": ("", "the 2D generator whose model is extruded"),
         "parameters": ("", "that generator's parameters (its section above)"),
-        "depth": ("m", "thickness of the slab (z)"),
+        "depth": ("m", "thickness of the slab, along y from 0 to `depth`"),
         "layers": ("", "elements through the thickness"),
     },
     "gravity_dam_2d": {**_DAM_SECTION, "element": ("", "`\"quad\"` (quad4 / quad8) or `\"tri\"` (tri3 / tri6)")},

@@ -84,7 +84,7 @@ def _model(d):
         out["thickness"] = 1.0
         gravity = [0.0, 0.0, -G_STANDARD]
     out["gravity"] = _vector(d.get("gravity", gravity), "acceleration", "model.gravity", dim)
-    # "large": total Lagrangian blocks and joints whose frame turns with them (issue 17)
+    # "large": total Lagrangian blocks and joints whose frame turns with them
     out["kinematics"] = _choice(d.get("kinematics", "small"), KINEMATICS, "model.kinematics")
     return out
 
@@ -179,7 +179,7 @@ def _joint(name, d):
     out = {"law": law.name, "normal_stiffness": kn, "shear_stiffness": ks, **law.normalize(d, key, ks)}
     # default: nodal ("lumped") integration (Schellekens & de Borst 1993); the build step switches
     # 16-node (quad8) interfaces to 3x3 Newton-Cotes, whose lumped corner weights would be negative
-    # large kinematics: the joint's frame turns with its current mid-surface (the seed's), or with its
+    # large kinematics: the joint's frame turns with its current mid-surface (as in Tzamtzis & Asteris), or with its
     # bottom face (a supporting face on which the top side may slide far)
     if "frame" in d:
         out["frame"] = _choice(d["frame"], JOINT_FRAMES, f"{key}.frame")

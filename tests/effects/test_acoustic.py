@@ -3,12 +3,12 @@
 Sources:
 - Westergaard, H. M. (1933), "Water pressures on dams during earthquakes", Trans. ASCE 98, 418-433:
   rigid vertical face, incompressible water, horizontal ground acceleration ``a`` toward the reservoir,
-  exact series (../shared/reference/PROBLEMS.md, sec. 4; ``d`` the depth below the surface)
+  exact series (Westergaard 1933; ``d`` the depth below the surface)
   ``p(d) = (8 rho a H / pi^2) sum_{m odd} sin(m pi d / (2H)) / m^2``; base pressure
   ``(8 / pi^2) G rho a H = 0.7425 rho a H`` (G Catalan's constant), resultant per unit width
   ``(16 rho a H^2 / pi^3) sum_{m odd} 1 / m^3 = 0.5428 rho a H^2``;
 - compressible water, harmonic acceleration ``a e^{i w t}``: every term divided by
-  ``c_m = sqrt(1 - (w / w_m)^2)``, ``w_m = m pi c / (2H)`` (PROBLEMS.md sec. 4 writes it with the bulk
+  ``c_m = sqrt(1 - (w / w_m)^2)``, ``w_m = m pi c / (2H)`` (also written with the bulk
   modulus K and the period T; A. K. Chopra, "Hydrodynamic pressures on dams during earthquakes",
   J. Eng. Mech. Div. ASCE 93 (1967) 205-223): the response is unbounded at the first cut-off
   ``w_1 = pi c / (2H)`` (``f = c / 4H``) for a rigid bottom;
@@ -59,7 +59,7 @@ def series_force(w=0.0, c=C, depth=H, terms=4000):
 
 @pytest.mark.reference
 def test_series_values():
-    # PROBLEMS.md sec. 4 numbers: base 0.7425 rho a H, resultant 0.5428 rho a H^2
+    # the series' numbers: base 0.7425 rho a H, resultant 0.5428 rho a H^2
     assert series_pressure(H)[0] / H == pytest.approx(0.7425, abs=1e-4)
     assert series_force() / H**2 == pytest.approx(0.5428, abs=1e-4)
 

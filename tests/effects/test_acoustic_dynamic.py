@@ -1,10 +1,9 @@
-"""The acoustic reservoir in the dynamic stages (``[reservoir] dynamic = "acoustic"``, issue 16 sec. 2,
-4 and 5), end to end through the scene.
+"""The acoustic reservoir in the dynamic stages (``[reservoir] dynamic = "acoustic"``), end to end through the scene.
 
-References: the exact rigid-wall solution of Westergaard (1933), Trans. ASCE 98:418-433, as the series
-of reference problem 4 (shared/reference/PROBLEMS.md): incompressible base pressure 0.7425 rho a H and
-resultant 0.5428 rho a H^2; under harmonic excitation each term of the series divided by
-c_m = sqrt(1 - (w / w_m)^2), w_m = m pi c / (2 H) (Chopra 1967, J. Eng. Mech. Div. ASCE 93(EM6):205-223).
+References: the exact rigid-wall solution of Westergaard (1933), Trans. ASCE 98:418-433, as a series:
+incompressible base pressure 0.7425 rho a H and resultant 0.5428 rho a H^2; under harmonic excitation
+each term of the series divided by c_m = sqrt(1 - (w / w_m)^2), w_m = m pi c / (2 H) (Chopra 1967, J. Eng.
+Mech. Div. ASCE 93(EM6):205-223).
 The matrices themselves are checked in tests/test_acoustic.py; here the time integration of the
 coupled dam-water system (masonrydam/solvers/dynamic/fluid.py) is.
 """

@@ -11,7 +11,7 @@ References:
 - its stable step: omega_max h <= 2 (Hughes 2000, sec. 9.1.2) with omega_max the highest frequency of the coupled
   undamped dam-water system (masonrydam/solvers/dynamic/stability.py, coupled_highest_frequency);
 - Westergaard (1933), Trans. ASCE 98:418-433: on a rigid vertical face under a slowly varying ground acceleration
-  a, the pressure tends to the incompressible series of reference problem 4 (shared/reference/PROBLEMS.md): base
+  a, the pressure tends to the incompressible series: base
   0.7425 rho a H, resultant 0.5428 rho a H^2;
 - the discrete energy balance of central difference (Hughes 2000, sec. 9.1.4), with the water's work on the dam
   as its ``hydrodynamic`` term, as in the implicit stages (masonrydam/solvers/dynamic/energy.py).
@@ -117,8 +117,8 @@ def test_explicit_energy_balance_closes_with_the_water(explicit_and_implicit):
 @pytest.mark.reference
 def test_slow_ground_acceleration_on_a_stiff_dam_gives_westergaard():
     """A ground acceleration rising smoothly to 2 m/s2 over 0.2 s (against H / c = 7 ms and the water's first
-    period of 28 ms) on a stiff dam (E = 1e11 Pa), explicit: the face pressure tends to Westergaard's series
-    (reference problem 4), base 0.7425 rho a H and resultant 0.5428 rho a H^2 (2 %, the tolerance of the
+    period of 28 ms) on a stiff dam (E = 1e11 Pa), explicit: the face pressure tends to Westergaard's series,
+    base 0.7425 rho a H and resultant 0.5428 rho a H^2 (2 %, the tolerance of the
     implicit path's test in test_acoustic_dynamic.py; measured 0.1 and 0.7 %), and along the face the series
     at each node's depth (0.02 rho a H)."""
     dtg, ramp = 0.005, 0.2

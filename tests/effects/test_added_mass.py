@@ -1,8 +1,8 @@
-"""Westergaard's added mass (``[reservoir] dynamic = "westergaard"``, issue 16 sec. 2).
+"""Westergaard's added mass (``[reservoir] dynamic = "westergaard"``).
 
 References: Westergaard (1933), Trans. ASCE 98:418-433: on a rigid vertical face accelerating with a
-the pressure is p(z) = 7/8 rho a sqrt(H z) and its resultant 7/12 rho a H^2 (reference problem 4 in
-shared/reference/PROBLEMS.md); the generalised form m_a n n^T on inclined faces (Kuo 1982, UCB/EERC-82/10).
+the pressure is p(z) = 7/8 rho a sqrt(H z) and its resultant 7/12 rho a H^2; the generalised form m_a n n^T on
+inclined faces (Kuo 1982, UCB/EERC-82/10).
 The rigid block on a joint follows tests/test_modal_stage.py (Chopra, Dynamics of Structures, sec. 10.2)
 with the added mass integrated in closed form over the wetted face.
 """

@@ -1,4 +1,4 @@
-"""The joint lines of an arch dam (issue 34): each cantilever's base and lifts measured through its own
+"""The joint lines of an arch dam: each cantilever's base and lifts measured through its own
 thickness, along its radii, so that the uplift, the crack from the heel and the gravity-method measures
 of ``masonrydam assess`` mean on an arch what they mean on a gravity monolith.
 

@@ -1,4 +1,4 @@
-"""The water on a curved face: the reservoir on the extrados of an arch dam (issue 34, item 3).
+"""The water on a curved face: the reservoir on the extrados of an arch dam.
 
 The arch is :func:`generators.arch_dam_3d` with a constant radius and vertical faces (x across the valley, y
 downstream, z up; the extrados is the circle of radius R about the vertical axis x = 0, y = R, so a node at

@@ -1,4 +1,4 @@
-"""Uplift during an earthquake (``[reservoir] uplift.earthquake``, issue 16 sec. 2): the options of
+"""Uplift during an earthquake (``[reservoir] uplift.earthquake``): the options of
 CADAM3D (Leclerc, Leger & Tinawi 2003, Adv. Eng. Softw. 34:583-601; user's manual sec. 3.6) and the FERC
 Engineering Guidelines ch. 3 sec. 3-8.2: the pore pressure kept at its static value, the full
 reservoir pressure entering the joint where it opens, or none there.

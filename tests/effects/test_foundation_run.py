@@ -1,10 +1,10 @@
-"""The foundation with mass end to end (``[foundation] mass = true``, issue 16 sec. 3 and 5): a 1D
+"""The foundation with mass end to end (``[foundation] mass = true``): a 1D
 column of rock with a Lysmer-Kuhlemeyer absorbing base (Lysmer & Kuhlemeyer 1969, ASCE J. Eng. Mech.
 Div. 95(EM4):859-877) and the outcrop motion entered as the free-field force rho c_s A v_outcrop(t)
 (Joyner & Chen 1975, BSSA 65:1315-1336). A vertically propagating shear pulse must reach the free
 surface with the outcrop amplitude (twice the incident wave: d'Alembert, the free surface doubles it)
 H / c_s later, and after its reflection travel down and leave through the base: the motion left in
-the column is under 5 % of the pulse (the issue's acceptance: reflected amplitude under 5 %).
+the column is under 5 % of the pulse (the acceptance: reflected amplitude under 5 %).
 """
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""An effect added from this file alone, through the public registry (issue 32): a harmonic force on the
+"""An effect added from this file alone, through the public registry: a harmonic force on the
 nodes of a set, ``[shaker] set = "top_edge", force = [0, -F], frequency = f``, with its own result variable
 ``shaker_force`` (the applied resultant per recorded step, N).
 

@@ -1,5 +1,5 @@
 """What the reservoir, the uplift and the foundation carry from one dynamic stage to the next, the
-coupled dam-water modes, and the effect of the uplift options on the response (issue 16).
+coupled dam-water modes, and the effect of the uplift options on the response.
 
 A record split into two dynamic stages must give the history of the same record in one stage: the
 dynamic equations do not know where a stage ends (the compressible water's pressure and the pore

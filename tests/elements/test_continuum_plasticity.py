@@ -1,4 +1,4 @@
-"""Elasto-plastic blocks (``[materials.<group>] law = "von_mises" | "drucker_prager"``, issue 17 sec. 1):
+"""Elasto-plastic blocks (``[materials.<group>] law = "von_mises" | "drucker_prager"``):
 the element integration of the point laws (masonrydam/elements/continuum_plastic.py; the laws are
 tested in tests/test_von_mises.py and tests/test_drucker_prager.py) in static stages.
 

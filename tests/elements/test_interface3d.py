@@ -1,16 +1,16 @@
-"""Element-level verification of the 3D zero-thickness surface interfaces (quad4 = the seed's 8-node
-element, quad8 = 16-node, tri3 = 6-node) of masonrydam.elements.interface with the Mohr-Coulomb
+"""Element-level verification of the 3D zero-thickness surface interfaces (quad4 = the 8-node
+element of Tzamtzis & Asteris, quad8 = 16-node, tri3 = 6-node) of masonrydam.elements.interface with the Mohr-Coulomb
 law of masonrydam.materials.mohr_coulomb.
 
 Sources
 -------
-- Seed paper: Tzamtzis & Asteris, sec. 3.3, eqs. 1-10 (relative displacement top minus bottom
+- Tzamtzis & Asteris, sec. 3.3, eqs. 1-10 (relative displacement top minus bottom
   interpolated with the face shape functions, N = [-B_1 .. -B_4, B_1 .. B_4], K' = int N^T k N dA with
   dA = det J dxi deta, transformation to global axes K = H^T K' H) and eq. 11 (k = diag(ks_x, ks_y,
   kn)); sec. 3.4 / eq. 12 (Mohr-Coulomb slip tau_y = c + sigma_n tan(phi) with a residual shear
   stiffness, separation with zero normal and shear stiffness, contact restored on closing).
 - Schellekens, J.C.J. & de Borst, R. (1993), "On the numerical integration of interface elements",
-  IJNME 36:43-66 (/work/shared/reference/PROBLEMS.md, problem 7): Gauss integration of stiff
+  IJNME 36:43-66: Gauss integration of stiff
   interfaces couples the nodes and makes tractions oscillate; nodal / Newton-Cotes (Lobatto)
   integration gives node-pair springs and smooth tractions.
 - Simo & Hughes (1998), Computational Inelasticity, sec. 2.3 / 3.3: closest-point (radial) return
@@ -311,7 +311,7 @@ def _rigid_modes(coords, centre_pt):
 
 @pytest.mark.parametrize("face, scheme", COMBOS)
 def test_rigid_body_motion_gives_zero_force(face, scheme):
-    """Seed eqs. 4-5: the element strains only through the relative displacement top minus bottom, so
+    """Tzamtzis & Asteris eqs. 4-5: the element strains only through the relative displacement top minus bottom, so
     a rigid-body motion of both (coincident) faces gives zero relative displacement, zero force,
     lies in the null space of the tangent, and superposed on a deformed (sliding) state changes
     nothing. Warped quad4 / curved quad8, generic orientation. In stick the tangent has exactly
@@ -350,7 +350,7 @@ def test_rigid_body_motion_gives_zero_force(face, scheme):
 
 @pytest.mark.parametrize("face, scheme", COMBOS)
 def test_patch_uniform_relative_displacement(face, scheme):
-    """Seed eqs. 7-11: a uniform relative displacement d (top face translated rigidly with respect to
+    """Tzamtzis & Asteris eqs. 7-11: a uniform relative displacement d (top face translated rigidly with respect to
     the bottom, stick, linear law) gives at every point delta = R d, t = k delta with
     k = diag(ks, ks, kn), hence the uniform global traction ks d + (kn - ks)(d.n) n, and the nodal
     forces on the top face add up to that traction times the face area (independent area: half the
@@ -402,12 +402,12 @@ EXPECTED_CODE = {"stick": STICK, "slip": SLIP, "slip_residual": SLIP, "open": OP
 @pytest.mark.parametrize("regime", list(REGIMES))
 @pytest.mark.parametrize("face, scheme", COMBOS)
 def test_tangent_equals_central_difference(face, scheme, regime):
-    """The element tangent ke = sum B^T C B j w (seed eqs. 7-10 with the consistent tangent C of the
+    """The element tangent ke = sum B^T C B j w (Tzamtzis & Asteris eqs. 7-10 with the consistent tangent C of the
     Mohr-Coulomb return mapping, Simo & Hughes 1998 sec. 3.3) is the derivative of the internal
     force: compared with a central difference (relative error 1e-6) on a warped quad4 / curved quad8 /
     tilted tri3, with a non-uniform relative displacement, in stick, slip (cohesion and friction,
     oblique slip direction, with and without residual shear stiffness: non-symmetric tangent) and
-    open (zero tangent: no stiffness in separation, seed sec. 3.4). The perturbation (1e-9 m) changes
+    open (zero tangent: no stiffness in separation, Tzamtzis & Asteris sec. 3.4). The perturbation (1e-9 m) changes
     a traction by ~20 Pa, far from the yield (margin > 1e5 Pa) and opening kinks."""
     d_loc, ks_r = REGIMES[regime]
     params = joint_params(KN, KS, C, PHI, 0.0, ks_r)
@@ -445,7 +445,7 @@ def test_tangent_equals_central_difference(face, scheme, regime):
 @pytest.mark.parametrize("regime", ["stick", "slip"])
 @pytest.mark.parametrize("face, scheme", [("quad4", "gauss"), ("quad4", "lumped"), ("quad8", "gauss"), ("tri3", "gauss")])
 def test_rotation_invariance(face, scheme, regime):
-    """The local frame is built from the element's own geometry (seed eq. 10: K = H^T K' H with the
+    """The local frame is built from the element's own geometry (Tzamtzis & Asteris eq. 10: K = H^T K' H with the
     element's direction cosines), so the same joint problem (element and displacement field) under
     a rigid rotation x -> Q x, u -> Q u gives the same local relative displacements, tractions and
     state codes and rotated nodal forces (f -> Q f) and tangent (K -> Q K Q^T). Seeded random
@@ -482,7 +482,7 @@ def test_rotation_invariance(face, scheme, regime):
 
 @pytest.mark.parametrize("face, scheme", [("quad4", "lumped"), ("quad4", "gauss"), ("tri3", "gauss"), ("quad8", "lobatto")])
 def test_slip_along_trial_shear_traction(face, scheme):
-    """Isotropic Mohr-Coulomb in the joint plane (seed eqs. 11-12 with ks_x = ks_y; radial return of
+    """Isotropic Mohr-Coulomb in the joint plane (Tzamtzis & Asteris eqs. 11-12 with ks_x = ks_y; radial return of
     Simo & Hughes 1998 sec. 2.3): (a) an oblique shear relative displacement beyond yield with
     ks_r = 0 gives a shear traction vector parallel to the applied shear relative displacement, of
     magnitude tau_y = c - t_n tan(phi) (t_n = kn delta_n < 0 in compression, so tau_y = c + sigma_n
@@ -541,7 +541,7 @@ def test_slip_along_trial_shear_traction(face, scheme):
 
 @pytest.mark.parametrize("face, scheme", COMBOS)
 def test_separation_and_recontact(face, scheme):
-    """Seed sec. 3.4: in separation both stiffnesses are zero and no traction is transmitted
+    """Tzamtzis & Asteris sec. 3.4: in separation both stiffnesses are zero and no traction is transmitted
     (the optional solver regularisation P_OPEN_TANGENT = 1 gives the elastic tangent but still zero
     traction); on closing, contact is restored with the elastic stiffness diag(ks, ks, kn) (the same
     element tangent as a virgin joint) and the shear starts from zero at the position where the joint
@@ -612,7 +612,7 @@ def test_separation_and_recontact(face, scheme):
     np.testing.assert_allclose(np.linalg.norm(E["traction"][0, :, :2], axis=1), -KN * d_n * TAN_PHI, rtol=1e-12)
 
 
-# ------------------------------------------------------------------ 5. reference problem 7 in 3D
+# ------------------------------------------------------------------ 5. interface integration in 3D
 
 
 def _strip(n_el, h, width):
@@ -669,7 +669,7 @@ def _along_x(x, t):
 
 @pytest.mark.reference
 def test_gauss_tractions_oscillate_nodal_integration_does_not():
-    """Reference problem 7 (Schellekens & de Borst 1993, IJNME 36:43-66) in 3D with quad4 faces: a
+    """Interface integration (Schellekens & de Borst 1993, IJNME 36:43-66) in 3D with quad4 faces: a
     stiff linear joint (kn = 1e15 Pa/m) under a sharply varying normal load (notch tip). Gauss (2x2)
     integration couples neighbouring nodes (consistent 'mass-like' matrix), and the normal tractions
     alternate in sign from element to element; nodal (lumped) and Newton-Cotes (2x2 Lobatto)

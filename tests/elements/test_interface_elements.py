@@ -1,6 +1,6 @@
 """Tests of the zero-thickness interface elements (masonrydam.elements.interface).
 
-Sources: seed paper (Tzamtzis & Asteris) sec. 3.3, eqs. 1-10 (relative displacement top minus
+Sources: Tzamtzis & Asteris, sec. 3.3, eqs. 1-10 (relative displacement top minus
 bottom, B = [-N I, N I], K = integral of B^T k B, transformation to global axes) and sec. 3.4
 (joint law); Schellekens & de Borst (1993), IJNME 36:43-66 (nodal / Newton-Cotes integration gives
 node-pair springs, Gauss integration couples the nodes); conventions of docs/architecture.md.

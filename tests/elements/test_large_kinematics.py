@@ -1,4 +1,4 @@
-"""Large displacements (issue 17 sec. 2, ``[model] kinematics = "large"``): total Lagrangian St.
+"""Large displacements (``[model] kinematics = "large"``): total Lagrangian St.
 Venant-Kirchhoff blocks (:mod:`masonrydam.elements.continuum_large`) and joints whose frame turns with
 their current mid-surface (:mod:`masonrydam.elements.interface_large`).
 
@@ -10,8 +10,8 @@ Closed forms used:
   (a full circle at 2 pi) with end moment E I theta / L (Euler's elastica under an end moment; e.g.
   Bisshopp & Drucker 1945, Q. Appl. Math. 3; the classic benchmark of Simo & Vu-Quoc 1986, CMAME 49);
 - Housner (1963) free rocking of a rigid block about its corners, the nonlinear equation of motion
-  ``theta'' = -(3 g / 4 R) sin(alpha - theta)`` (reference problem 3, ../shared/reference/PROBLEMS.md;
-  Housner, BSSA 53(2) 1963); its linearisation is what small kinematics gives;
+  ``theta'' = -(3 g / 4 R) sin(alpha - theta)`` (Housner,
+  BSSA 53(2) 1963); its linearisation is what small kinematics gives;
 - tilt-table toppling of a block that cannot slide: the resultant of weight and a horizontal body
   force leaves the base at tan(alpha) = b / h (statics of a rigid block, e.g. Housner 1963 sec. 2).
 """
@@ -302,7 +302,7 @@ def _half_cycle(ds):
 @pytest.mark.slow
 @pytest.mark.reference
 def test_housner_free_rocking_half_cycle(frame):
-    """Reference problem 3: a 0.5 x 2.0 m block launched about its corner so that it reaches half its
+    """Housner (1963): a 0.5 x 2.0 m block launched about its corner so that it reaches half its
     slenderness angle comes back upright within 3 % of the nonlinear equation of motion (1 % asserted, at two
     time steps); with small kinematics the same block comes back about a third too early."""
     b, h = 0.25, 1.0
@@ -320,11 +320,11 @@ def test_housner_free_rocking_half_cycle(frame):
     for dt in (0.005, 0.0025):
         t_half, theta_max = _half_cycle(masonrydam.run(_rocking_scene("large", dt, 1.05 * t_ref, w0, frame)))
         errors.append(abs(t_half / t_ref - 1))
-        assert t_half == pytest.approx(t_ref, rel=0.01)  # (the issue asks for 3 %; measured 0.14 %)
+        assert t_half == pytest.approx(t_ref, rel=0.01)  # (3 % is the acceptance; measured 0.14 %)
         assert theta_max == pytest.approx(alpha / 2, rel=0.01)
     assert abs(errors[1] - errors[0]) < 0.005  # the same at half the step: converged in dt
     t_small, _ = _half_cycle(masonrydam.run(_rocking_scene("small", 0.005, 1.05 * t_ref, w0)))
-    assert t_small < 0.8 * t_ref  # linearised rotation: the error the issue reported
+    assert t_small < 0.8 * t_ref  # linearised rotation: the error of small kinematics
 
 
 @pytest.mark.parametrize("dim", [2, 3])

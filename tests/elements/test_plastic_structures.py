@@ -1,5 +1,5 @@
-"""Structural closed-form checks of the elasto-plastic blocks (issue 17 sec. 1,
-masonrydam/elements/continuum_plastic.py with the point law masonrydam/materials/von_mises.py).
+"""Structural closed-form checks of the elasto-plastic blocks
+(masonrydam/elements/continuum_plastic.py with the point law masonrydam/materials/von_mises.py).
 
 1. Thick-walled cylinder under internal pressure, von Mises, plane strain, perfectly plastic: inner radius
    a = 100 mm, outer b = 200 mm, E = 210 GPa, nu = 0.3, sigma_y = 240 MPa (the benchmark of de Souza Neto,

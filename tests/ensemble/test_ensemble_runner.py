@@ -1,4 +1,4 @@
-"""Ensembles on dask (masonrydam.ensemble.runner; issue 20 sec. 2 and 4): a sliding block under 3 records x 4
+"""Ensembles on dask (masonrydam.ensemble.runner): a sliding block under 3 records x 4
 intensities x 2 friction angles on a LocalCluster of 2 workers gives the same numbers as the members run one by
 one; resuming after an interrupted ensemble runs only the missing members; the dataset has the ensemble's dims,
 units and status; an unreachable scheduler is a named error. The members' physics is checked in

@@ -1,4 +1,4 @@
-"""Ensemble files (issue 20): the spec, the member enumeration, the Latin hypercube and the member measures."""
+"""Ensemble files: the spec, the member enumeration, the Latin hypercube and the member measures."""
 from __future__ import annotations
 
 import json
@@ -254,7 +254,7 @@ def test_latin_hypercube_samples(tmp_path):
         assert sorted(np.floor(F(x) * n).astype(int)) == list(range(n))
     # the keys are not sampled in the same order (one hypercube, independent columns)
     assert not np.array_equal(np.argsort(c), np.argsort(ft))
-    # reproducible with the seed, other samples with another
+    # reproducible with the same seed, other samples with another
     again = load_ensemble(write(tmp_path, LHS.format(n=n, seed=1), name="again.toml"))
     assert [p.values for p in again.sampled_parameters] == [p.values for p in spec.sampled_parameters]
     other = load_ensemble(write(tmp_path, LHS.format(n=n, seed=2), name="other.toml"))

@@ -1,5 +1,5 @@
 """Lognormal fragility fits (Baker 2015, eq. 11), IDA and fragility figures of an ensemble dataset
-(masonrydam.ensemble.fragility and masonrydam.ensemble.report; issue 20 sec. 3)."""
+(masonrydam.ensemble.fragility and masonrydam.ensemble.report)."""
 from __future__ import annotations
 
 import csv

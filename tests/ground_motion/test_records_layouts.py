@@ -1,4 +1,4 @@
-"""Ground-motion text files as users have them (issue 22, part 3): header lines, a time column, several
+"""Ground-motion text files as users have them: header lines, a time column, several
 value columns, units stated in the header. Every file is written here, into tmp_path, so that the
 expected physical values are known exactly: the PGA of a trace is the largest absolute value written
 times the factor of its units (g = 9.80665 m/s2, cm/s2 = gal = 0.01 m/s2), and dt is the spacing of the

@@ -5,7 +5,7 @@ Delft, ch. 4 ([LR97]/[L96]): tension cut-off with exponential softening governed
 friction with cohesion softening governed by GfII and friction softening with the cohesion lost,
 dilatancy decaying with the normal compression and the slip, elliptical compression cap with
 hardening/softening; multisurface return mapping after Simo & Hughes (1998), Computational
-Inelasticity, sec. 5.2; the seed's Mohr-Coulomb joint (masonrydam.materials.mohr_coulomb) as the
+Inelasticity, sec. 5.2; the Mohr-Coulomb joint of Tzamtzis & Asteris (masonrydam.materials.mohr_coulomb) as the
 brittle limit; sign conventions from docs/architecture.md (opening and tension positive). The
 simplified cap curve and the shared softening exponent are those documented in the module.
 """
@@ -432,7 +432,7 @@ def test_rotation_of_the_shear_plane_is_an_invariance_for_equal_shear_stiffnesse
 
 
 # ------------------------------------------------------------------------------------------------
-# brittle limit: the seed's Mohr-Coulomb
+# brittle limit: the Mohr-Coulomb joint of Tzamtzis & Asteris
 # ------------------------------------------------------------------------------------------------
 
 
@@ -456,10 +456,10 @@ def _compare_paths(pc, pm, path, ns, rtol=1e-9):
         assert sc[S_PLASTIC_SLIP:S_PLASTIC_SLIP + ns] == pytest.approx(sm[2:2 + ns], rel=1e-9, abs=1e-15)
 
 
-def test_brittle_limit_is_the_seed_mohr_coulomb_joint():
+def test_brittle_limit_is_the_mohr_coulomb_joint():
     """GfI, GfII -> 0 without a cap: the bond (ft, c) breaks at the first opening and the joint then
-    has no tension and no cohesion, as the seed's joint (mohr_coulomb, OPEN). Paths that do not
-    re-close an opened joint (re-closure happens at delta_p_n here, at 0 in the seed)."""
+    has no tension and no cohesion, as the joint of Tzamtzis & Asteris (mohr_coulomb, OPEN). Paths that do not
+    re-close an opened joint (re-closure happens at delta_p_n here, at 0 in Tzamtzis & Asteris)."""
     for ns in (1, 2):
         pc = composite_params(KN, KS, FT, 1e-6, C0, PHI, mode_II_fracture_energy=1e-6)
         pm = joint_params(KN, KS, cohesion=C0, friction_angle_deg=PHI, tensile_strength=FT)
@@ -471,7 +471,7 @@ def test_brittle_limit_is_the_seed_mohr_coulomb_joint():
                 D(6e-5, -1e-5, 8e-5), D(-2e-4, 1e-4, 2e-4)]
         _compare_paths(pc, pm, path, ns)
 
-        # cohesionless frictional joint (the seed's broken joint): cyclic sliding under compression,
+        # cohesionless frictional joint (the broken Mohr-Coulomb joint): cyclic sliding under compression,
         # then opening
         pc = composite_params(KN, KS, 0.0, 0.0, 0.0, PHI, mode_II_fracture_energy=0.0)
         pm = joint_params(KN, KS, cohesion=0.0, friction_angle_deg=PHI, tensile_strength=0.0)
@@ -481,7 +481,7 @@ def test_brittle_limit_is_the_seed_mohr_coulomb_joint():
 
 
 def test_brittle_limit_is_approached_as_the_fracture_energies_vanish():
-    """The traction after a crack opening tends to the seed's zero traction as GfI, GfII -> 0."""
+    """The traction after a crack opening tends to the zero traction of Mohr-Coulomb's open joint as GfI, GfII -> 0."""
     pm = joint_params(KN, KS, cohesion=C0, friction_angle_deg=PHI, tensile_strength=FT)
     d = [1e-5, 4e-5]
     tm, _, _ = _mc(pm, d, np.zeros(N_JOINT_STATE))
@@ -607,13 +607,14 @@ def test_snap_back_length():
 
 
 @pytest.mark.xfail(strict=True, raises=NumericalError,
-                   reason="known defect (issue 18): from a virgin state, a trial far beyond the cap and the shear "
+                   reason="known defect: from a virgin state, a trial far beyond the cap and the shear "
                           "surface at once (tau 22 MPa, sigma -57 MPa against fc 10.5 MPa) finds no converged return; "
                           "met at the start of a push step of the Eindhoven J4D wall with softer unit cracks "
                           "(docs/masonry_softening.md)")
 def test_virgin_trial_far_beyond_cap_and_shear_returns():
-    """The joint parameters of reference problem 6 (bed joints with the cap) and the relative displacement
-    of the failing point: a return must exist (the surfaces are closed and convex in compression)."""
+    """The joint parameters of the Eindhoven walls (Lourenco & Rots 1997; bed joints with the cap) and the
+    relative displacement of the failing point: a return must exist (the surfaces are closed and convex in
+    compression)."""
     prm = composite_params(82e9, 36e9, 0.25e6, 18.0, 0.35e6, 36.87, mode_II_fracture_energy=125.0,
                            compressive_strength=10.5e6, cap_shear_factor=9.0, cap_fracture_energy=5000.0,
                            cap_peak_plastic_strain=9e-5)
@@ -679,7 +680,7 @@ def test_relaxation_tends_to_the_inviscid_law_and_is_elastic_for_a_vanishing_ste
 
 
 def test_overstress_at_one_relaxation_time_grows_with_the_joints_stiffness():
-    """The Eindhoven units' potential cracks (issue 36): the same relaxation time and step (dt/tau = 1e4, the
+    """The Eindhoven units' potential cracks: the same relaxation time and step (dt/tau = 1e4, the
     J4D example's), the same opening beyond the elastic limit, perfectly plastic tension. The overstress is
     ``kn w_p / (1 + dt/tau)`` (backward Euler of Duvaut-Lions, Simo & Hughes 1998 sec. 2.7), in proportion to
     the stiffness: nothing at a mortar joint's 82 N/mm3, 5 % of ft = 2 MPa at a 1e6 N/mm3 penalty."""

@@ -1,6 +1,6 @@
 """Tests of the Mohr-Coulomb joint law (masonrydam.materials.mohr_coulomb).
 
-Sources: seed paper (Tzamtzis & Asteris), sec. 3.4: diagonal joint stiffness (eq. 11), Mohr-Coulomb
+Sources: Tzamtzis & Asteris, sec. 3.4: diagonal joint stiffness (eq. 11), Mohr-Coulomb
 strength tau_y = c + sigma_n tan(phi) (eq. 12), reduced/residual shear stiffness while slipping,
 separation with both stiffnesses zero until contact is restored; return mapping and consistent
 tangent after Simo & Hughes (1998), Computational Inelasticity, ch. 2-3; sign conventions from
@@ -174,7 +174,7 @@ def test_tangent_open(ncomp):
     np.testing.assert_array_equal(fd_tangent(p, delta, None, 1e-9), 0.0)
 
 
-# ------------------------------------------------------------------ direct shear test (seed eq. 12)
+# ------------------------------------------------------------------ direct shear test (Tzamtzis & Asteris eq. 12)
 
 
 def direct_shear(p, sigma, path, ncomp=2):
@@ -200,7 +200,7 @@ def direct_shear(p, sigma, path, ncomp=2):
 def test_direct_shear_perfectly_plastic(ncomp):
     sigma = 0.5e6
     p = joint_params(KN, KS, C, PHI)
-    tau_y = C + sigma * TAN_PHI  # seed eq. 12
+    tau_y = C + sigma * TAN_PHI  # Tzamtzis & Asteris eq. 12
     up = np.linspace(0, 4 * tau_y / KS, 41)[1:]
     taus, codes, _ = direct_shear(p, sigma, up, ncomp)
     assert taus.max() == pytest.approx(tau_y, rel=1e-12)

@@ -48,18 +48,18 @@ def test_result_states_and_state_columns():
     state[:, ci.S_CODE] = np.arange(6)  # elastic, shear, tension, cap, tension-shear, shear-cap
     assert composite.result_states(state).tolist() == [RESULT_STICK, RESULT_SLIP, RESULT_OPEN, RESULT_CRUSHED,
                                                        RESULT_OPEN, RESULT_CRUSHED]
-    seed = joint_law("mohr_coulomb")
+    mc_law = joint_law("mohr_coulomb")
     state = np.zeros((2, 3, mc.N_JOINT_STATE))
     state[..., mc.S_CODE] = [[mc.STICK, mc.SLIP, mc.OPEN], [mc.OPEN, mc.STICK, mc.SLIP]]
     state[..., mc.S_PLASTIC_SLIP] = 1e-3
     state[0, 2, mc.S_BOND_BROKEN] = 1.0
-    assert seed.result_states(state).dtype == np.int8
-    np.testing.assert_array_equal(seed.result_states(state), state[..., mc.S_CODE])
-    assert seed.plastic_slip(state, 2).shape == (2, 3, 1) and (seed.plastic_slip(state, 2) == 1e-3).all()
-    assert seed.bond_broken(state).sum() == 1
+    assert mc_law.result_states(state).dtype == np.int8
+    np.testing.assert_array_equal(mc_law.result_states(state), state[..., mc.S_CODE])
+    assert mc_law.plastic_slip(state, 2).shape == (2, 3, 1) and (mc_law.plastic_slip(state, 2) == 1e-3).all()
+    assert mc_law.bond_broken(state).sum() == 1
 
 
-def test_bonds_latch_for_the_seed_law_only():
+def test_bonds_latch_for_the_mohr_coulomb_law_only():
     base, trial = np.zeros((4, mc.N_JOINT_STATE)), np.zeros((4, mc.N_JOINT_STATE))
     trial[[1, 3], mc.S_BOND_BROKEN] = 1.0
     assert joint_law("composite").latch_broken_bonds(base, trial) == 0
@@ -70,9 +70,9 @@ def test_bonds_latch_for_the_seed_law_only():
 
 @pytest.mark.parametrize("dim", [2, 3])
 def test_compliance_and_elastic_stiffness(dim):
-    seed = mc.joint_params(1e10, 4e9, 0.0, 30.0)[None, :]
-    np.testing.assert_array_equal(joint_law("mohr_coulomb").compliance(seed, dim),
-                                  1.0 / seed[:, [mc.P_KS] * (dim - 1) + [mc.P_KN]])
+    rows = mc.joint_params(1e10, 4e9, 0.0, 30.0)[None, :]
+    np.testing.assert_array_equal(joint_law("mohr_coulomb").compliance(rows, dim),
+                                  1.0 / rows[:, [mc.P_KS] * (dim - 1) + [mc.P_KN]])
     row = joint_law("composite").parameters(COMPOSITE_SPEC)[None, :]
     expected = [3.6e10, 3.0e10, 8.2e10] if dim == 3 else [3.6e10, 8.2e10]
     np.testing.assert_array_equal(joint_law("composite").elastic_stiffness(row, dim)[0], expected)
@@ -93,15 +93,15 @@ def test_elastic_parameters_and_solver_controls_work_on_copies():
 
 
 def test_scene_keys_are_read_and_checked_by_the_descriptor():
-    seed = joint_law("mohr_coulomb")
-    out = seed.normalize({"friction_angle": "30 deg", "cohesion": "0.1 MPa"}, "joints.j", 1e9)
+    mc_law = joint_law("mohr_coulomb")
+    out = mc_law.normalize({"friction_angle": "30 deg", "cohesion": "0.1 MPa"}, "joints.j", 1e9)
     assert out == {"friction_angle": 30.0, "cohesion": 1e5, "tensile_strength": 0.0, "residual_shear_stiffness": 0.0}
     for table, key in (({}, "joints.j.friction_angle"), ({"friction_angle": 90.0}, "joints.j.friction_angle"),
                        ({"friction_angle": 30.0, "cohesion": -1.0}, "joints.j.cohesion"),
                        ({"friction_angle": 30.0, "residual_shear_stiffness": 2e9},
                         "joints.j.residual_shear_stiffness")):
         with pytest.raises(SceneError) as err:
-            seed.normalize(table, "joints.j", 1e9)
+            mc_law.normalize(table, "joints.j", 1e9)
         assert err.value.key == key
     # the composite law keeps only what is given (its parameter builder has the defaults)
     given = {"tensile_strength": 1e5, "mode_I_fracture_energy": 10.0, "cohesion": 2e5, "friction_angle": 30.0,

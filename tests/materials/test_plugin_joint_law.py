@@ -1,4 +1,4 @@
-"""A joint law added from outside the package, through the public registry (issue 32).
+"""A joint law added from outside the package, through the public registry.
 
 The toy law, written here alone, is a linear spring ``t = diag(ks, (ks,) kn) delta`` whose state never
 changes. It is registered with :func:`masonrydam.materials.joint_laws.register_joint_law` and used by a scene
@@ -13,7 +13,7 @@ the lateral load at height h above the joint, A = L t the joint's area, L its le
 
 The scene, the law and the checks need no change in masonrydam/. Also checked: the generic evaluation path
 (kinematics, point law, assembly) gives the fused kernel's numbers, bit for bit, when its point law is the
-seed's Mohr-Coulomb law; and what a plug-in law does not support is refused by key.
+Mohr-Coulomb law of Tzamtzis & Asteris; and what a plug-in law does not support is refused by key.
 """
 from __future__ import annotations
 
@@ -167,7 +167,7 @@ def test_without_registration_the_law_is_unknown():
 # ---- the generic path against the fused kernel ----------------------------------------------------------
 def mohr_coulomb_points(params_table, param_index, state_committed, delta, time_step, state_trial, traction_out,
                         tangent_out, info):
-    """The seed's Mohr-Coulomb law (:func:`~masonrydam.materials.mohr_coulomb.mohr_coulomb_update`) point by point."""
+    """The Mohr-Coulomb law (:func:`~masonrydam.materials.mohr_coulomb.mohr_coulomb_update`) point by point."""
     for e in range(delta.shape[0]):
         for g in range(delta.shape[1]):
             status = mc.mohr_coulomb_update(params_table[param_index[e]], delta[e, g], state_committed[e, g],

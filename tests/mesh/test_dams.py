@@ -1,7 +1,7 @@
 """Gravity dam generators (generators.dams): geometry, bodies and joints, named sets, self-weight
 equilibrium, determinism, bad input and gmsh hygiene.
 
-Sources: the Koyna section of reference problem 5 in shared/reference/PROBLEMS.md (Chopra &
+Sources: the Koyna benchmark section (Chopra &
 Chakrabarti 1973, BSSA 63(2), fig. 1: heel (0, 0), toe (70, 0), downstream kink (19.25, 66.5),
 crest (14.8, 103) and (0, 103); concrete rho = 2643 kg/m3, E = 31 027 MPa, nu = 0.2); elementary
 geometry (shoelace areas of the section clipped between lift planes, prism volumes); statics
@@ -140,7 +140,7 @@ def interface_normals(mesh, joint):
 
 @pytest.mark.reference
 def test_koyna_preset_is_the_published_section():
-    """The preset's polygon is reference problem 5's, its area the value computed from the published
+    """The preset's polygon is the Koyna benchmark section's, its area the value computed from the published
     dimensions; the same section from parameters (slopes from the published vertices) is identical."""
     mesh = dams.gravity_dam_2d(preset="koyna", element_size=5.0)
     area = sum(element_areas(mesh, b).sum() for b in mesh.blocks)

@@ -1,5 +1,5 @@
 """A scene whose mesh comes from a gmsh file through meshio, with a joint inserted along a named
-physical line: a block sliding on a frictional joint (reference problem 2 with beta = 0: the
+physical line: a block sliding on a frictional joint (a block on an incline with beta = 0: the
 horizontal force at sliding is mu W)."""
 from __future__ import annotations
 
@@ -111,7 +111,7 @@ def _write_two_boxes_tet(path, order=1):
 def test_tetrahedral_gmsh_file_with_triangular_interfaces_slides_at_mu_w(tmp_path):
     """3D: a gmsh tetrahedral mesh read through meshio gets 6-node (3 + 3) triangular interfaces on
     the joint surface; a block pushed horizontally (oblique, in x and y) slides at mu W along the
-    push (reference problem 2, beta = 0)."""
+    push (block on an incline, beta = 0)."""
     msh = tmp_path / "two_boxes.msh"
     _write_two_boxes_tet(msh)
     phi, rho = 30.0, 2000.0

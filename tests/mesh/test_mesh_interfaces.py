@@ -4,7 +4,7 @@
 Sources:
 - simplified micro-model of masonry: expanded units joined by zero-thickness interfaces on every bed
   and head joint (Lourenco 1996, PhD thesis TU Delft, sec. 6; Lourenco & Rots 1997, J. Eng. Mech.
-  123(7)); seed paper (Tzamtzis & Asteris) sec. 3.3: a joint element joins the two faces of a joint,
+  123(7)); Tzamtzis & Asteris, sec. 3.3: a joint element joins the two faces of a joint,
   so each block is a separate continuum connected to its neighbours only through interfaces;
 - interface node order and orientation: docs/architecture.md ("Interface orientation (2D)": nodes
   [bottom.., top..] in line2/line3 order, normal = tangent rotated +90 deg, top face on the +n side)
@@ -182,7 +182,7 @@ def test_wall_beams_glued_without_beam_joints():
 @pytest.mark.parametrize("bond,n,m,epu,order,element", WALL_CASES)
 def test_every_unit_is_a_separate_body(bond, n, m, epu, order, element):
     """Units touch each other only through interfaces: the continuum-only graph has one connected
-    component per unit, and each component is a rectangle of one unit (seed sec. 3.3)."""
+    component per unit, and each component is a rectangle of one unit (Tzamtzis & Asteris sec. 3.3)."""
     mesh = wall(n, m, bond, epu, order=order, element=element)
     n_units = sum(pieces_per_course(n, m, bond))
     n_comp, label = continuum_components(mesh)
@@ -507,7 +507,7 @@ def test_to_meshio_blocks_and_vtu_total(tmp_path, order):
 
 
 def test_vtu_export_keeps_units_and_joints_apart(tmp_path):
-    """README: export-mesh 'writes units and joints as separate cell blocks for ParaView'. After a
+    """docs/cli.md: export-mesh 'writes units and joints as separate cell blocks for ParaView'. After a
     .vtu round trip the blocks must be recoverable, either as separate cell blocks or through an
     integer cell-data array that tags each cell with its block."""
     import meshio

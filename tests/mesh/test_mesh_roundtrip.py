@@ -1,4 +1,4 @@
-"""A mesh written by ``export-mesh`` in gmsh format reads back as a scene mesh (issue 22).
+"""A mesh written by ``export-mesh`` in gmsh format reads back as a scene mesh.
 
 The .msh file holds the mesh as gmsh would give it before interface insertion (masonrydam.mesh.io):
 the node copies of each interface merged, joints as named line (2D) or surface (3D) physical

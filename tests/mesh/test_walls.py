@@ -5,14 +5,14 @@ Sources:
 - simplified micro-model: units expanded by the joint thickness, zero-thickness interfaces on every
   bed, head and collar joint, and optionally a potential crack in the middle of each unit (Lourenco
   1996, PhD thesis TU Delft, ch. 6; Lourenco & Rots 1997, J. Eng. Mech. 123(7) 660-668, fig. 2);
-  seed paper (Tzamtzis & Asteris) sec. 3.3: every block is a separate continuum joined to its
+  Tzamtzis & Asteris, sec. 3.3: every block is a separate continuum joined to its
   neighbours only through joint elements;
 - bond patterns: Hendry, Sinha & Davies, "Design of Masonry Structures" (3rd ed. 1997), ch. 1;
   Brick Industry Association Technical Notes 10 and 30: stretcher (running) bond with half units at
   the ends of alternate courses; English bond = alternate courses of stretchers and headers, queen
   closer next to the quoin header; Flemish bond = headers and stretchers alternating in each course,
   each header centred on the stretcher below;
-- Eindhoven wall geometry: shared/reference/PROBLEMS.md sec. 6 (990 mm long, bricks 210 x 52 x
+- Eindhoven wall geometry: Raijmakers & Vermeltfoort (1992) (990 mm long, bricks 210 x 52 x
   100 mm, 10 mm joints: expanded units 220 x 62 x 110 mm, 4.5 units per course);
 - expected interface counts: combinatorics of the structured grid (generators/grid.py,
   generators/grid3d.py: every interval between block edges split into ceil(interval / size)
@@ -39,7 +39,7 @@ from generators.walls import masonry_wall_2d
 from generators.walls3d import masonry_wall_3d
 from masonrydam.errors import SceneError
 
-# Eindhoven bricks (PROBLEMS.md sec. 6): 210 x 52 x 100 mm, 10 mm joints
+# Eindhoven bricks (Raijmakers & Vermeltfoort 1992): 210 x 52 x 100 mm, 10 mm joints
 BRICK = dict(unit_length=0.21, unit_height=0.052, unit_width=0.1, joint_thickness=0.01)
 LU, HU, WU = 0.22, 0.062, 0.11  # expanded unit length, height, width (m)
 
@@ -216,7 +216,7 @@ def test_two_wythe_stack_bond_collar_count():
 @pytest.mark.reference
 def test_eindhoven_wall_half_units_alternate_ends():
     """990 mm = 4.5 expanded units: every course has 4 whole units and a half unit, at the right end
-    in even courses and at the left end in odd courses (PROBLEMS.md sec. 6, 16 free courses)."""
+    in even courses and at the left end in odd courses (the Eindhoven walls, 16 free courses)."""
     mesh = masonry_wall_2d(length=0.99, height=16 * HU, bond="running", elements_per_unit=1,
                            **{k: v for k, v in BRICK.items() if k != "unit_width"})
     n_bodies, label = components(mesh)

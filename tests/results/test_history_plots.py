@@ -1,4 +1,4 @@
-"""What ``masonrydam plot OUT.nc`` draws (masonrydam/results/histories.py, issue 19 sec. 2), checked on the
+"""What ``masonrydam plot OUT.nc`` draws (masonrydam/results/histories.py), checked on the
 matplotlib Figure objects (lines, their data, axis labels), not on the PNG:
 
 - dynamic results: the ground acceleration at the record's own sampling rate (the result keeps each

@@ -1,4 +1,4 @@
-"""Results written in blocks (issue 21): buffering, chunking, single precision and compression change
+"""Results written in blocks: buffering, chunking, single precision and compression change
 how the steps reach the file, never what is in it.
 
 The reference is the same run written one step at a time (``buffer_steps = 1``); single precision

@@ -1,4 +1,4 @@
-"""A run never destroys a result, and a stopped run keeps every converged step (issue 22, part 1).
+"""A run never destroys a result, and a stopped run keeps every converged step.
 
 - the working file ``NAME.partial.nc`` is moved over the target only when the run completes: a failing
   run leaves an earlier result byte for byte, also while another process holds it open;
@@ -330,7 +330,7 @@ def test_version(capsys):
 @pytest.mark.parametrize("flag", ["--version", "--help"])
 def test_version_and_help_import_no_numerics(flag):
     """``masonrydam --version`` and ``--help`` answer without importing numpy, numba, scipy, xarray or any room
-    below the command line (issue 35: under 0.3 s on any machine; the start-up is timed by
+    below the command line (target: under 0.3 s on any machine; the start-up is timed by
     benchmarks/bench_default_scene.py, not here). Before, --version imported the solvers and took 1.1-2.2 s."""
     heavy = ("numpy", "numba", "scipy", "xarray", "obspy", "gmsh", "masonrydam.scene", "masonrydam.solvers")
     code = ("import sys\n"
@@ -349,7 +349,7 @@ def test_version_and_help_import_no_numerics(flag):
 def test_summary_wall_time_is_the_whole_process(tmp_path):
     """``masonrydam run`` as a process: the summary's wall time counts from the package's first import (the
     process's start less the interpreter's own) and is printed after the result is read back, so it is what
-    ``time masonrydam run`` shows (issue 35). Before, it left out the imports, the reading back and the
+    ``time masonrydam run`` shows. Before, it left out the imports, the reading back and the
     interpreter's teardown: 2.4 of 4.4 s on the default scene (Xeon). The margin allows for the start of the
     process (fork, exec and the interpreter) and a loaded machine."""
     scene = tmp_path / "slide.toml"

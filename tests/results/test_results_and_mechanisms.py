@@ -2,15 +2,15 @@
 command line summary.
 
 Sources:
-- results layout and attributes: README "Results" and masonrydam/results/writer.py (CF-1.8 style:
+- results layout and attributes: docs/results.md and masonrydam/results/writer.py (CF-1.8 style:
   every variable with ``units`` and ``long_name``; streamed step by step, a stopped run keeps every
   converged step and is marked ``completed = "false"``);
 - statics of a rigid block on a joint (equilibrium of forces): the bed-joint force equals the load
   above it; a block on a no-tension joint (tensile strength 0: an open joint transmits no traction,
-  seed paper Tzamtzis & Asteris sec. 3.4 and README "Joint law") cannot carry a net upward load
+  Tzamtzis & Asteris, sec. 3.4 and docs/method.md, joint law) cannot carry a net upward load
   larger than its weight; on a cohesionless Mohr-Coulomb joint it cannot carry a horizontal load
-  larger than tan(phi) times the normal force (tau_y = c - t_n tan(phi), seed eq. 12);
-- README "Robustness": a mechanism is reported by naming the free part; a run that stops keeps the
+  larger than tan(phi) times the normal force (tau_y = c - t_n tan(phi), Tzamtzis & Asteris eq. 12);
+- docs/method.md, robustness: a mechanism is reported by naming the free part; a run that stops keeps the
   converged steps.
 """
 from __future__ import annotations
@@ -123,7 +123,7 @@ def test_netcdf_structure(wall_run):
 
 
 def test_joint_point_is_a_coordinate(wall_run):
-    """README: coordinates step, node, component and joint_point."""
+    """docs/results.md: coordinates step, node, component and joint_point."""
     path, _ = wall_run
     with xr.open_dataset(path) as ds:
         assert "joint_point" in ds.coords
@@ -332,7 +332,7 @@ def test_cli_run_default(tmp_path, capsys):
     ds = open_nc(out)
     assert ds.attrs["completed"] == "true"
     assert json.loads(ds.stage.attrs["stage_names"]) == ["gravity_and_precompression", "lateral_push"]
-    # README: a displacement load is an increment over the stage: the top beam moved 1 mm sideways
+    # docs/scene_guide.md: a displacement load is an increment over the stage: the top beam moved 1 mm sideways
     # and not vertically from where the first stage left it
     top = (ds.y == float(ds.y.max())).values
     u = ds.displacement.values[:, top, :]

@@ -1,5 +1,5 @@
 """Scene validation: every bad input is a SceneError whose ``key`` names the offending entry, raised
-before anything is solved (masonrydam.errors.SceneError, masonrydam/scene/schema.py, README "A scene
+before anything is solved (masonrydam.errors.SceneError, masonrydam/scene/schema.py, docs/scene_guide.md "A scene
 is a TOML file ...": numbers are SI, strings with units are accepted, a unit of the wrong kind is an
 error that names the key).
 
@@ -7,10 +7,10 @@ Physical admissibility limits asserted here:
 - Poisson's ratio of an isotropic elastic solid lies in (-1, 0.5) (positive-definite strain energy;
   0.5 is incompressible and makes the plane-strain D matrix singular), e.g. Timoshenko & Goodier,
   Theory of Elasticity, or any elasticity text;
-- Mohr-Coulomb friction angle in [0, 90) deg (tan(phi) finite, seed paper sec. 3.4, eq. 12);
+- Mohr-Coulomb friction angle in [0, 90) deg (tan(phi) finite, Tzamtzis & Asteris sec. 3.4, eq. 12);
 - joint stiffnesses kn, ks > 0 and residual (hardening) shear stiffness below the elastic ks
-  (seed sec. 3.4; README "Method notes");
-- a linear joint has no strength parameters (README: law 'linear');
+  (Tzamtzis & Asteris sec. 3.4; docs/method.md);
+- a linear joint has no strength parameters (docs/scene_guide.md: law 'linear');
 - Young's modulus of masonry units / concrete is O(1-100) GPa (Lourenco & Rots 1997: 16.7 GPa for
   the Eindhoven units), so 16700 in a SI file is a forgotten 'MPa'.
 """

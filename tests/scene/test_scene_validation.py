@@ -1,4 +1,4 @@
-"""Scene validation gaps of issue 22: implausible magnitudes (unit slips), NaN and infinity, NumPy
+"""Scene validation: implausible magnitudes (unit slips), NaN and infinity, NumPy
 values from Python, and ``masonrydam check`` finding the mechanisms that ``run`` finds.
 
 Plausible ranges (masonrydam/units.py, PLAUSIBLE) lie orders of magnitude beyond real values:

@@ -1,4 +1,4 @@
-"""Arc-length control of static stages (issue 18 sec. 2, masonrydam/solvers/static/arc_length.py): Crisfield's
+"""Arc-length control of static stages (masonrydam/solvers/static/arc_length.py): Crisfield's
 cylindrical method, chosen by a stage (``control = "arc_length"``) or switched on where load control
 stalls.
 

@@ -1,4 +1,4 @@
-"""Composite (masonry) joints in scenes (issue 18 sec. 1-2): ``[joints.<set>] law = "composite"`` (the
+"""Composite (masonry) joints in scenes: ``[joints.<set>] law = "composite"`` (the
 Lourenco-Rots interface law of masonrydam/materials/composite/, tested at point level in
 tests/materials/test_composite_interface.py) in the interface elements, and the snap-back a softening joint
 gives in series with a long elastic bar, followed by indirect displacement control.

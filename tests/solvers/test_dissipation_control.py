@@ -1,4 +1,4 @@
-"""Dissipation-based path following (``control = "dissipation"``, issue 18 sec. 2): every step dissipates a
+"""Dissipation-based path following (``control = "dissipation"``): every step dissipates a
 chosen energy in the joints (Gutierrez 2004, Commun. Numer. Meth. Eng. 20:19-29; Verhoosel, Remmers &
 Gutierrez 2009, Int. J. Numer. Meth. Eng. 77:1290-1321), the joints' plastic work measured point by point
 (masonrydam/solvers/static/dissipation.py).
@@ -85,9 +85,9 @@ def test_dissipation_gradient_equals_finite_differences(slide):
 
 
 def test_sliding_mohr_coulomb_joint_dissipates_friction_work():
-    """The seed's law (Mohr-Coulomb, no cohesion): a joint compressed by sigma slides by ds; the step dissipates
-    the friction work tan(phi) sigma ds A (its elastic energy does not change), and the gradient equals
-    central differences."""
+    """The Mohr-Coulomb law of Tzamtzis & Asteris (no cohesion): a joint compressed by sigma slides by ds; the
+    step dissipates the friction work tan(phi) sigma ds A (its elastic energy does not change), and the gradient
+    equals central differences."""
     model, mesh = bar_model(law_spec=MOHR_COULOMB)
     meter = JointDissipation(model, "test")
     closing = -1e-6  # m: sigma = kn 1e-6 = 0.1 MPa

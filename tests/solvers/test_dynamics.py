@@ -9,7 +9,7 @@ Every test compares with a closed form or published data (source in the docstrin
 - integrator properties (Newmark 1959; Hilber, Hughes & Taylor 1977; Chung & Hulbert 1993;
   Hughes, *The Finite Element Method* 2000, ch. 9);
 - cantilever modal frequencies against Euler-Bernoulli beam theory (Chopra sec. 16.3, Blevins 1979);
-- Newmark (1965) sliding block, Housner (1963) rocking block (shared/reference/PROBLEMS.md, 1 and 3).
+- Newmark (1965) sliding block, Housner (1963) rocking block (closed forms).
 """
 from __future__ import annotations
 
@@ -427,7 +427,7 @@ def test_rayleigh_coefficients_give_the_ratio_at_both_frequencies():
 
 
 # ----------------------------------------------------------------------------------------------
-# Newmark sliding block (reference problem 1)
+# Newmark (1965) sliding block
 # ----------------------------------------------------------------------------------------------
 
 def newmark_half_sine_slip(A, ay, tp):
@@ -453,7 +453,7 @@ def newmark_half_sine_slip(A, ay, tp):
 @pytest.mark.parametrize("shape", ["rectangular", "half_sine"])
 @pytest.mark.reference
 def test_newmark_sliding_block_permanent_slip(shape):
-    """Reference problem 1 (Newmark 1965): an elastic block on a Mohr-Coulomb joint (c = 0, mu = 0.2,
+    """Newmark (1965) sliding block: an elastic block on a Mohr-Coulomb joint (c = 0, mu = 0.2,
     kn = ks = 1e10 Pa/m) after a gravity stage, horizontal pulse of amplitude A = 0.4 g.
     Rectangular pulse (t0 = 0.2 s): s = A (A - a_y) t0^2 / (2 a_y), stop at A t0 / a_y. Half-sine
     (tp = 0.4 s): closed form by integration. Permanent slip within 0.05 % of the closed form (the
@@ -518,7 +518,7 @@ def test_stiffness_proportional_damping_excludes_joints_by_default():
 
 
 # ----------------------------------------------------------------------------------------------
-# Housner rocking block (reference problem 3)
+# Housner (1963) rocking block
 # ----------------------------------------------------------------------------------------------
 
 B, H = ROCKING_BLOCK_WIDTH, ROCKING_BLOCK_HEIGHT  # block width 2b and height 2h: b/h = 0.2
@@ -527,7 +527,7 @@ B, H = ROCKING_BLOCK_WIDTH, ROCKING_BLOCK_HEIGHT  # block width 2b and height 2h
 @pytest.mark.parametrize("factor, rocks", [(0.98, False), (1.02, True)])
 @pytest.mark.reference
 def test_housner_rocking_starts_at_g_b_over_h(factor, rocks):
-    """Reference problem 3 (Housner 1963): a block on a no-tension frictional joint starts to rock when
+    """Housner (1963): a block on a no-tension frictional joint starts to rock when
     the base acceleration exceeds g b/h. A ground acceleration raised slowly (0.5 s, quasi-static for
     the block on its stiff joint) to 0.98 g b/h and held 0.5 s leaves the heel down (uplift at the
     elastic scale, < 1e-5 m); to 1.02 g b/h, the block tips over the toe (uplift > 1e-3 m)."""
@@ -573,7 +573,7 @@ def free_rocking(integrator, dt, theta_ratio=0.02, duration=0.3, **kw):
 
 @pytest.mark.reference
 def test_housner_free_rocking_quarter_period_impact_and_energy():
-    """Reference problem 3 (Housner 1963), block 0.3 x 1.5 m released from theta0 = 0.02 alpha:
+    """Housner (1963) free rocking, block 0.3 x 1.5 m released from theta0 = 0.02 alpha:
     - time to the first impact T/4 = acosh(1 / (1 - theta0/alpha)) / p, p = sqrt(3 g / (4 R)), within
       1 % (the code reaches 0.41 %: masonrydam is small-displacement, the restoring moment is m g b
       instead of m g R sin(alpha - theta), which changes T/4 by 0.3 % at this theta0);
@@ -660,7 +660,7 @@ def test_time_history_file_stride_selection_energy_and_provenance(tmp_path):
     for ax in (disp, joint, energy):
         for line in ax.get_lines():
             np.testing.assert_array_equal(line.get_xdata(), t)
-    (ag_x,) = ground.get_lines()  # the record at its own rate (issue 19); no y motion: no line of zeros
+    (ag_x,) = ground.get_lines()  # the record at its own rate; no y motion: no line of zeros
     np.testing.assert_array_equal(ag_x.get_xdata(), ds.ground_record_time_x.values)
     np.testing.assert_array_equal(ag_x.get_ydata(), ds.ground_acceleration_record_x.values)
     assert np.max(ag_x.get_ydata()) == pytest.approx(0.4 * G)  # the pulse, at its full amplitude
@@ -813,7 +813,7 @@ def test_static_state_carried_into_the_dynamic_stage():
 
 
 def test_horizontal_and_vertical_ground_motion_together():
-    """Reference problem 1 with a vertical component: the ground accelerates downwards at 0.5 g (ramped
+    """Newmark's (1965) sliding block with a vertical component: the ground accelerates downwards at 0.5 g (ramped
     in over 0.2 s, slowly against the block's vertical period of 2 ms), then a rectangular horizontal
     pulse A = 0.15 g for 0.2 s. The joint's yield acceleration is mu (g - 0.5 g) = 0.1 g, and Newmark's
     (1965) rigid-block slip A t_p^2 (A - a_y) / (2 a_y) holds within 0.05 % (the code reaches 1.5e-4);
@@ -840,7 +840,7 @@ def test_horizontal_and_vertical_ground_motion_together():
 def test_substeps_rescue_steps_that_do_not_converge():
     """The general Newton path with two iterations allowed per step cannot follow the onset of sliding in
     one step; halving the step (automatic sub-steps) finishes the run, and the slip is Newmark's (1965)
-    rigid-block value A t_p^2 (A - a_y) / (2 a_y) within 0.05 % (reference problem 1)."""
+    rigid-block value A t_p^2 (A - a_y) / (2 a_y) within 0.05 %."""
     ds = masonrydam.run(sliding_block(duration=0.55, dt=0.002, max_iterations=2, max_substeps=6, joint_space="off"))
     assert ds.attrs["completed"] == "true" and int(ds.attrs["dynamic_substeps"]) > 0
     A, ay, tp = 0.4 * G, 0.2 * G, 0.2
@@ -848,7 +848,7 @@ def test_substeps_rescue_steps_that_do_not_converge():
 
 
 def test_consistent_mass_time_history():
-    """A time history with the consistent mass matrix (reference problem 1, HHT): Newmark's (1965)
+    """A time history with the consistent mass matrix (Newmark's sliding block, HHT): Newmark's (1965)
     rigid-block slip within 0.05 %, as with the lumped mass."""
     ds = masonrydam.run(sliding_block(duration=0.55, mass="consistent"))
     A, ay, tp = 0.4 * G, 0.2 * G, 0.2

@@ -5,10 +5,10 @@ balance, and the scene errors of an explicit stage.
 Every physical assertion is against a closed form:
 - Newmark (1965), "Effects of earthquakes on dams and embankments", Geotechnique 15(2):139-160: a rigid block on
   a Coulomb joint (friction mu) under a rectangular ground pulse A, t0 slips s = A (A - a_y) t0^2 / (2 a_y),
-  a_y = mu g, and stops at t = A t0 / a_y (reference problem 1);
+  a_y = mu g, and stops at t = A t0 / a_y;
 - Housner (1963), "The behavior of inverted pendulum structures during earthquakes", BSSA 53(2):403-417: a
   rectangular block released from rest at theta0 about a corner reaches its first impact after
-  T/4 = acosh(1 / (1 - theta0/alpha)) / p, p = sqrt(3 g / (4 R)) (reference problem 3);
+  T/4 = acosh(1 / (1 - theta0/alpha)) / p, p = sqrt(3 g / (4 R));
 - local damping (Cundall 1987; Itasca 3DEC manual; masonrydam.assembly.damping.local_damping_coefficient): an
   oscillator in one mode loses the amplitude ratio (1 - alpha_L)/(1 + alpha_L) per cycle, alpha_L =
   tanh(pi zeta): the logarithmic decrement 2 pi zeta at every frequency;

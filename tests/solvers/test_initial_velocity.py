@@ -1,4 +1,4 @@
-"""Initial velocities of a dynamic stage (``initial_velocity``, issue 17 sec. 2): a translation or a
+"""Initial velocities of a dynamic stage (``initial_velocity``): a translation or a
 rigid rotation of element groups at the start of the stage, with or without ground motion.
 
 A block launched along a Coulomb joint stops after v0^2 / (2 g tan(phi)) in v0 / (g tan(phi))

@@ -1,13 +1,13 @@
 """Joint-space (condensed) Newton of the dynamic solver, masonrydam.solvers.joint_space.
 
 The condensed step must reproduce the general Newton path: both solve the same discrete equations
-(HHT step of Hilber, Hughes & Taylor 1977 with the seed's Mohr-Coulomb joints), so the two time
-histories agree to the Newton tolerance. Checked on reference problem 1 (Newmark 1965 sliding block,
-shared/reference/PROBLEMS.md: the permanent slip of the rectangular pulse within 0.05 % of the closed
-form, as tests/test_dynamics.py checks for the general path) and reference problem 3 (Housner 1963
-rocking block: opening, impact and re-closure). The pieces are checked against their definitions:
-``delta = B u`` against the interface kernel at random displacements on inclined 2D and 3D joints,
-and the block-triangular Newton correction against a dense solve of ``(I + S Qt) D = -F``.
+(HHT step of Hilber, Hughes & Taylor 1977 with the Mohr-Coulomb joints of Tzamtzis & Asteris), so
+the two time histories agree to the Newton tolerance. Checked on Newmark's (1965) sliding block (the
+permanent slip of the rectangular pulse within 0.05 % of the closed form, as tests/solvers/test_dynamics.py
+checks for the general path) and Housner's (1963) rocking block (opening, impact and re-closure). The pieces
+are checked against their definitions: ``delta = B u`` against the interface kernel at random displacements on
+inclined 2D and 3D joints, and the block-triangular Newton correction against a dense solve of
+``(I + S Qt) D = -F``.
 """
 from __future__ import annotations
 
@@ -65,7 +65,7 @@ def _oblique_3d():
 @pytest.mark.parametrize("scene", [_inclined_2d(0.0), _inclined_2d(37.0), _oblique_3d()],
                          ids=["2d-flat", "2d-37deg", "3d-oblique"])
 def test_joint_operator_gives_the_kernel_relative_displacements_and_forces(scene):
-    """B u equals the local relative displacements of the interface kernel (seed eqs. 4-6, 10) at a
+    """B u equals the local relative displacements of the interface kernel (Tzamtzis & Asteris eqs. 4-6, 10) at a
     random displacement field, and B^T (w t) its nodal forces, on flat, inclined and oblique joints."""
     model = _model(scene)
     rng = np.random.default_rng(3)
@@ -192,7 +192,7 @@ def test_woodbury_update_equals_the_dense_solve():
 
 @pytest.mark.reference
 def test_sliding_block_same_history_as_the_general_path_and_newmark_slip():
-    """Reference problem 1: rectangular pulse A = 0.4 g for 0.2 s on a joint with mu = 0.2. Permanent
+    """Newmark (1965): rectangular pulse A = 0.4 g for 0.2 s on a joint with mu = 0.2. Permanent
     slip of a rigid block (Newmark 1965): s = A t_p^2 (A - a_y) / (2 a_y) with a_y = mu g. The condensed
     and the general Newton paths give the same history (to 1e-6 of the slip), and the condensed path
     solved every step itself."""
@@ -216,7 +216,7 @@ def test_sliding_block_same_history_as_the_general_path_and_newmark_slip():
 def test_recovery_from_stored_columns_equals_the_substitution(monkeypatch):
     """The displacements of a converged joint-space step, ``u = y - K_ref^-1 B^T (q - q_n)``, recovered
     from the stored columns of ``K_ref^-1 B^T`` (the default) equal those of a second substitution
-    (columns not stored) to round-off, on the sliding block of reference problem 1 (every step of the
+    (columns not stored) to round-off, on Newmark's sliding block (every step of the
     pulse slides); the run reports the recoveries and the memory of the columns."""
     from masonrydam.solvers.joint_space import condensation as js
 
@@ -248,7 +248,7 @@ def test_sticking_steps_take_no_joint_space_iteration():
 
 @pytest.mark.slow
 def test_rocking_block_same_history_as_the_general_path():
-    """Reference problem 3 (Housner 1963): the block 0.3 x 1.5 m on a no-tension joint under a
+    """Housner (1963): the block 0.3 x 1.5 m on a no-tension joint under a
     half-sine ground pulse of 1.5 g b/h lifts off (joint points open), rocks on its toe and lands on
     its heel. Until that first impact the joint-space path gives the general path's uplift history to
     1e-6 of the peak uplift (about 1 mm). After it the histories part: the impact of a stiff block
@@ -284,8 +284,8 @@ def test_joint_space_key_is_checked():
 def test_held_points_stick_whatever_their_displacement():
     """The iteration device of ``JointSpace.solve_step``: a held point gets the elastic traction
     ``D0 (delta - s_p)`` from its committed plastic slip and the sticking ``q = -w ks s_p``, ``qt = 0``
-    (seed eq. 11), in the residual as in the tangent, however far its displacement has gone into
-    slip or opening; the same points not held follow the Mohr-Coulomb law (seed sec. 3.4)."""
+    (Tzamtzis & Asteris eq. 11), in the residual as in the tangent, however far its displacement has gone into
+    slip or opening; the same points not held follow the Mohr-Coulomb law (Tzamtzis & Asteris sec. 3.4)."""
     from masonrydam.materials import mohr_coulomb as mc
     from masonrydam.solvers.joint_space.kernels import joint_points_evaluate
 
@@ -323,7 +323,7 @@ def test_reevaluating_some_points_equals_a_full_residual_evaluation():
     """``joint_space_reevaluate_points`` (the law again at the points whose held flag changed, the
     condensed residual ``F = delta - delta_y + S (q - q_n)`` updated by their change of joint force)
     equals a full ``joint_space_evaluate_residual`` with the new flags, for a mix of sliding, open and
-    sticking points (seed eqs. 11-12, sec. 3.4) and a non-symmetric S."""
+    sticking points (Tzamtzis & Asteris eqs. 11-12, sec. 3.4) and a non-symmetric S."""
     from masonrydam.materials import mohr_coulomb as mc
     from masonrydam.solvers.joint_space.kernels import joint_space_evaluate_residual, joint_space_reevaluate_points
 

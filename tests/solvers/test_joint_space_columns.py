@@ -5,7 +5,7 @@ not set up; :class:`~masonrydam.solvers.joint_space.FlexibilityColumns` computes
 iteration reads and keeps them in a bounded store. These tests check that the columns are those of
 ``S``, that the store evicts the columns used longest ago and refuses a step that needs more than it
 holds, and that runs with the store give the histories of the dense flexibility and the closed form
-of reference problem 1 (Newmark 1965), also when the store is too small to keep every column (the
+of Newmark's (1965) sliding block, also when the store is too small to keep every column (the
 oldest are evicted and computed again) or too small for a step (the step goes on in the general
 Newton path).
 """
@@ -20,7 +20,7 @@ from masonrydam.solvers.joint_space import condensation as js_module
 from masonrydam.solvers.static import stepping as static_module
 from masonrydam.solvers.joint_space import ColumnStoreFull, FlexibilityColumns
 from repository_paths import EXAMPLES
-from scenes import sliding_block  # reference problem 1: a block on a joint with mu = 0.2, a 0.2 s pulse
+from scenes import sliding_block  # Newmark (1965): a block on a joint with mu = 0.2, a 0.2 s pulse
 
 G = 9.80665
 

@@ -1,4 +1,4 @@
-"""The modal stage (issue 16, sec. 1): ``{ type = "modal", modes = N }`` after the static stages, on
+"""The modal stage: ``{ type = "modal", modes = N }`` after the static stages, on
 their state. Checked against the closed forms of a rigid block on an elastic joint (a rigid body on
 distributed springs: Chopra, Dynamics of Structures, 4th ed., sec. 10.2 for the eigenproblem; the
 springs are the joint's normal and shear stiffness times its lumped point areas): the vertical mode

@@ -1,4 +1,4 @@
-"""The words a static step that does not converge ends with (issue 36): where its last Newton iterate is out of
+"""The words a static step that does not converge ends with: where its last Newton iterate is out of
 balance, and which joint points its next correction would switch (``solvers.diagnostics.newton_stall``).
 
 A block of 0.5 x 0.5 m on a base, joined by a Mohr-Coulomb joint with nodal (lumped) integration, at rest

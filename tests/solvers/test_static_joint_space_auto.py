@@ -1,4 +1,4 @@
-"""The static joint space with ``linear_solver = "auto"`` where the general path takes AMG (issue 33, item 1).
+"""The static joint space with ``linear_solver = "auto"`` where the general path takes AMG.
 
 A 3D model of ``AUTO_ITERATIVE_MIN_DOF`` equations or more gets AMG on the general Newton path. Its static stages
 are still condensed on the joints (one L D L^T factorization of the all-stick stiffness) up to

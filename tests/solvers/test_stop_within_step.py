@@ -1,5 +1,5 @@
 """A stop asked for within an implicit step (Ctrl-C or SIGTERM between two Newton iterations) abandons the step and
-keeps the last converged one (issue 33, item 5: a step of a large 3D model in the general Newton path can take
+keeps the last converged one (a step of a large 3D model in the general Newton path can take
 minutes, and the run must end within seconds).
 
 The scene is the Newmark sliding block of tests/scenes.sliding_block on the general Newton path (joint_space =

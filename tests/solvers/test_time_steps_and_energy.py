@@ -1,5 +1,4 @@
-"""Error-controlled time steps (dt = "auto") and the energy balance with named terms (issue 14, parts 3
-and 4).
+"""Error-controlled time steps (dt = "auto") and the energy balance with named terms.
 
 References: Zienkiewicz & Xie (1991), Earthquake Eng. Struct. Dyn. 20:871-887 (local error estimate of
 the Newmark family); Chopra (2012), *Dynamics of Structures*, Table 5.2.1 (exact SDOF response to a
@@ -33,7 +32,7 @@ def sliding_slip(**kw):
 @pytest.mark.slow
 @pytest.mark.reference
 def test_auto_dt_sliding_block_reaches_the_converged_slip_in_fewer_steps():
-    """Newmark (1965) rectangular pulse on the elastic block of reference problem 1 (kn = ks = 1e10 Pa/m).
+    """Newmark (1965) rectangular pulse on the elastic block of Newmark's sliding block (kn = ks = 1e10 Pa/m).
 
     Reference: the same model at a fixed dt = 1e-4 s (5 000 steps; halving it again changes the slip by
     3.5e-5 relative, measured down to dt = 1e-5 s). dt = "auto" with tolerance = 1e-4 reaches it within
@@ -117,7 +116,7 @@ def koyna_section(dt, duration=4.0):
 
 @pytest.mark.slow
 def test_koyna_at_a_large_step_warns_that_contact_events_created_energy(tmp_path):
-    """The Koyna section (reference problem 5) with stiff lift joints (kn = 1e11 Pa/m: rattle modes of a
+    """The Koyna benchmark section (Chopra & Chakrabarti 1973) with stiff lift joints (kn = 1e11 Pa/m: rattle modes of a
     few hundred Hz) stepped at dt = 0.01 s: compressed joint points open within a step, and the
     trapezoidal rule credits their released contact energy without the work that stored it (Laursen &
     Chawla 1997). Measured: 20 % of the largest energy term created in the first 4 s. The run finishes,
@@ -180,7 +179,7 @@ def test_auto_dt_scene_errors_name_the_key(stage, key, match):
 def test_accuracy_study_quick_variant_runs_and_converges(capsys):
     """benchmarks/accuracy_cost.py --quick (the CI variant of docs/accuracy.md's study) on its two cheap
     cases: the sliding block's slip error falls from dt = 10 ms to 2.5 ms and dt = "auto" at 1e-4 is
-    within 0.05 % of the converged slip (the acceptance of issue 14); the rocking block's first impact
+    within 0.05 % of the converged slip (the acceptance); the rocking block's first impact
     is within 0.5 % of Housner's T/4 at every dt (the small-displacement model's own 0.3 % included);
     the table that says what to use is printed."""
     import sys
@@ -222,7 +221,7 @@ def test_chord_error_is_the_exact_velocity_missed_by_a_linear_load():
 
 @pytest.mark.slow
 def test_auto_dt_koyna_with_linear_joints_within_one_percent_rms_of_the_converged_history():
-    """Issue 14's acceptance on the Koyna section (reference problem 5) with every joint linear
+    """The acceptance on the Koyna benchmark section (Chopra & Chakrabarti 1973) with every joint linear
     (kn = ks = 1e11 Pa/m), coarse mesh (2.9 m), first 4 s of El Centro at 0.5 g: dt = "auto" at its
     default tolerance is within 1 % RMS of the crest history at dt = 3.125e-4 s (the dt-converged
     reference: halving dt from there changes it by about 0.02 %, docs/accuracy.md); measured 0.09 % in

@@ -1,4 +1,4 @@
-"""A 3D cohesive joint driven through zero normal stress (issue 33, item 1).
+"""A 3D cohesive joint driven through zero normal stress.
 
 The static stages of 3D dams stalled where points of a joint sat at almost zero normal stress: with cohesion
 ``c`` and no tensile strength the Mohr-Coulomb joint (Tzamtzis & Asteris sec. 3.4, eq. 12) jumps there from a
@@ -35,7 +35,7 @@ def result():
 
 
 def test_an_opened_cohesive_joint_carries_nothing(result):
-    """Stage "open": every point is open (state 2) and carries no traction (seed sec. 3.4); the block, held
+    """Stage "open": every point is open (state 2) and carries no traction (Tzamtzis & Asteris sec. 3.4); the block, held
     only by the drive, needs no force there."""
     step = result.isel(step=int(np.flatnonzero(result.stage.values == 0)[-1]))
     assert (step.joint_state.values == mc.OPEN).all()
@@ -46,7 +46,7 @@ def test_an_opened_cohesive_joint_carries_nothing(result):
 
 def test_closed_on_a_broken_bond_every_point_slides_at_the_friction_limit(result):
     """Stage "close": the joint closes (t_n < 0) on the bonds that broke, so ``c = 0`` and every point slides
-    with ``|tau| = -t_n tan(phi)`` (seed eq. 12) along the shear displacement; the reaction on the driven
+    with ``|tau| = -t_n tan(phi)`` (Tzamtzis & Asteris eq. 12) along the shear displacement; the reaction on the driven
     face balances the joint force."""
     step = result.isel(step=-1)
     t_n = step.joint_traction_normal.values

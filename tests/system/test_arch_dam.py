@@ -1,4 +1,4 @@
-"""Arch dams end to end (issue 34, item 5): modes of a small arch under mesh refinement, the reservoir's
+"""Arch dams end to end: modes of a small arch under mesh refinement, the reservoir's
 added mass on its curved face, and a short explicit run through a record with the contraction joints.
 
 No published frequencies of a reproducible arch geometry are at hand, so the modal tests check the model

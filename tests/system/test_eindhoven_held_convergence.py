@@ -1,5 +1,5 @@
-"""The Eindhoven wall J4D with its top held (reference problem 6; Raijmakers & Vermeltfoort 1992 as modelled by
-Lourenco & Rots 1997): how its curve converges as the joints' relaxation time goes to zero (issue 36).
+"""The Eindhoven wall J4D with its top held (Raijmakers & Vermeltfoort 1992 as modelled by
+Lourenco & Rots 1997): how its curve converges as the joints' relaxation time goes to zero.
 
 The example (examples/eindhoven_J4D.toml) regularises its softening joints with Duvaut-Lions viscosity
 (Simo & Hughes 1998, sec. 2.7): the traction is ``(t_trial + r t_inviscid) / (1 + r)``, ``r = dt / tau``. The
@@ -63,7 +63,7 @@ def test_held_j4d_force_converged_in_the_relaxation_time_up_to_2_mm(held_curves,
 
 @pytest.mark.slow
 @pytest.mark.reference
-@pytest.mark.xfail(strict=True, reason="known (issue 36): past 3 mm the held wall's force depends on the relaxation "
+@pytest.mark.xfail(strict=True, reason="known: past 3 mm the held wall's force depends on the relaxation "
                                        "time, through the overstress of the units' penalty-stiff cracks "
                                        "(80 kN at 0.0025 ms, 69 kN at 0.00025 ms; docs/masonry_softening.md)")
 def test_held_j4d_force_at_4_mm_converged_in_the_relaxation_time(held_curves):

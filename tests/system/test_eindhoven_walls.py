@@ -1,8 +1,8 @@
-"""The Eindhoven shear wall J4D (reference problem 6, PROBLEMS.md; Raijmakers & Vermeltfoort 1992, modelled
+"""The Eindhoven shear wall J4D (Raijmakers & Vermeltfoort 1992, modelled
 as Lourenco & Rots 1997): the bundled example examples/eindhoven_J4D.toml and its cyclic variant
 examples/eindhoven_J4D_cyclic.py.
 
-Closed form checked (PROBLEMS.md, problem 6): under a constant vertical load, once a bed joint has lost its
+Closed form checked: under a constant vertical load, once a bed joint has lost its
 cohesion and slides (no dilatancy), the horizontal force is Coulomb's, H = tan(phi) N, N the vertical force
 on that joint: the precompression p A (0.30 MPa x 99 000 mm2 = 29.7 kN; 22.3 kN of friction) plus the
 weight above it (top beam and courses). In a cyclic push the loop is then a parallelogram between the plateaus H = +/- tan(phi) N.

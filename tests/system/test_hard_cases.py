@@ -1,4 +1,4 @@
-"""Hard cases of jointed-block analysis (issue 14, sec. 5): impacts, chatter, stick-slip, stiff
+"""Hard cases of jointed-block analysis (the robustness cases): impacts, chatter, stick-slip, stiff
 penalties, floating blocks, lift-off, brittle cascades, non-unique friction, near-collapse statics
 and 3D rocking and sliding.
 
@@ -12,7 +12,7 @@ the docstring. Cases that show a defect the rules of this suite could not fix ar
 Sources used throughout: Newmark (1965), Geotechnique 15(2):139-160 (rigid sliding block);
 Housner (1963), BSSA 53(2):403-417 (rocking block); Klarbring (1990), Ingenieur-Archiv 60:529-541
 (non-uniqueness of frictional contact); Schellekens & de Borst (1993), IJNME 36:43-66 (interface
-integration); the seed's joint law (Tzamtzis & Asteris, sec. 3.4, eqs. 11-12: tau_y = c - t_n
+integration); the joint law of Tzamtzis & Asteris (sec. 3.4, eqs. 11-12: tau_y = c - t_n
 tan(phi), no tension, open joints carry nothing).
 """
 from __future__ import annotations
@@ -88,7 +88,7 @@ def joint_forces(ds, step=-1):
 
 def assert_coulomb_admissible(ds, tan_phi, cohesion=0.0, tensile_strength=0.0, rtol=1e-6):
     """Every point of every step: |tau| <= c - t_n tan(phi) (t_n tension positive), t_n <= ft, and an
-    open point carries no traction (seed sec. 3.4)."""
+    open point carries no traction (Tzamtzis & Asteris sec. 3.4)."""
     tn = ds.joint_traction_normal.values
     tau = np.linalg.norm(ds.joint_traction_shear.values, axis=-1)
     scale = max(np.abs(tn).max(), tau.max(), 1.0)
@@ -193,7 +193,7 @@ def test_free_rocking_repeated_impacts_no_spurious_sliding(integrator):
 def test_stick_slip_reversal_hysteresis_loop_area():
     """A rigid block under a constant normal force N = sigma A on a cohesionless joint (mu = 0.6,
     shear stiffness ks, residual stiffness 0), its top kept horizontal and at its height, pushed to +d,
-    back to -d and again to +d (displacement control). Elastic-perfectly-plastic friction (seed sec. 3.4)
+    back to -d and again to +d (displacement control). Elastic-perfectly-plastic friction (Tzamtzis & Asteris sec. 3.4)
     gives a parallelogram between F = +-mu N with elastic branches of slope ks A: loop area
     4 mu N (d - mu N / (ks A)) (the rigid-plastic 4 mu N d less the elastic travel; here d = 10 mu N /
     (ks A), so the correction is 10 %). Asserted: the trapezoidal area of the closed F(u) loop within
@@ -284,7 +284,7 @@ def test_penalty_ratio_column_converges_to_the_jointless_answer():
 @pytest.mark.parametrize("ratio", RATIOS)
 @pytest.mark.reference
 def test_penalty_ratio_no_traction_oscillation_with_lumped_integration(ratio):
-    """Schellekens & de Borst (1993), reference problem 7 of test_system: two blocks (E = 2 GPa) on a
+    """Schellekens & de Borst (1993), as in test_system: two blocks (E = 2 GPa) on a
     stiff cohesive joint that stops at a notch, the right block pulled (1e5 Pa on its 0.4 m end), h =
     0.025 m, kn = ks = ratio E / h. With nodal (lumped) integration the normal traction along the joint
     falls monotonically from the notch tip at every ratio (no direction change), the resultant equals
@@ -742,7 +742,7 @@ def test_near_collapse_beyond_the_threshold_names_mechanism_and_part(case):
     """Just beyond the threshold (1.02 x, proportional loading, so no step cut can help) there is no
     equilibrium: the run stops with a ConvergenceError or MechanismError that names the stage, the
     mechanism the closed form predicts (sliding, or rocking about the toe) and the part: the joint set
-    and the element groups 'base' and 'block'. For the Gauss-integrated joint the issue's report is
+    and the element groups 'base' and 'block'. For the Gauss-integrated joint the reported failure is
     reproduced: k = 0.20 already fails although b/h = 0.25, because the discrete threshold is
     (b - d_g) / h = 0.197 (NEAR_COLLAPSE), and it fails as rocking."""
     threshold, mechanism = NEAR_COLLAPSE[case][4], NEAR_COLLAPSE[case][5]
@@ -783,7 +783,7 @@ def block_3d_scene(block, ground_motion, dt, duration=None, kn=1e10, phi=None, E
 
 
 def test_3d_mesh_uses_the_8_node_interface():
-    """The 3D cases below run on the seed's 8-node surface interface (4 + 4 nodes, quad4 faces, nodal
+    """The 3D cases below run on the 8-node surface interface of Tzamtzis & Asteris (4 + 4 nodes, quad4 faces, nodal
     integration), as built by blocks_3d with hexahedra."""
     from masonrydam.scene import build_mesh
     from masonrydam.scene.scene import Scene
@@ -797,8 +797,8 @@ def test_3d_mesh_uses_the_8_node_interface():
 @pytest.mark.slow
 def test_3d_sliding_under_two_horizontal_components_follows_the_input():
     """Newmark (1965) in 3D: a 1 x 1 x 0.5 m block on a cohesionless joint (mu = 0.2) under rectangular
-    pulses in x and y together, |a_g| = 0.4 g at 30 deg from x, 0.2 s. Isotropic Coulomb friction (seed
-    sec. 3.4; the return is radial) makes the rigid block slide along -a_g: the slip vector of every
+    pulses in x and y together, |a_g| = 0.4 g at 30 deg from x, 0.2 s. Isotropic Coulomb friction (Tzamtzis &
+    Asteris sec. 3.4; the return is radial) makes the rigid block slide along -a_g: the slip vector of every
     point points at 210 deg within 0.1 deg and its length is A (A - a_y) t0^2 / (2 a_y) within 0.5 % (the
     code reaches 5e-5); the block sticks again; no point opens (no rocking: b/h = 1 > mu)."""
     A, theta, mu, t0 = 0.4 * G, math.radians(30.0), 0.2, 0.2

@@ -1,9 +1,9 @@
-"""The strut a held top makes (issue 36): one unit between a fixed base and a top beam that is pushed sideways
+"""The strut a held top makes: one unit between a fixed base and a top beam that is pushed sideways
 while kept level and at its height, on no-tension joints that do not slide. Against a hand calculation.
 
 The unit (b wide, h high, t thick) and the beams are nearly rigid. Each joint has normal stiffness kn, shear
-stiffness ks and no tensile strength: an open point carries nothing (seed sec. 3.4). Its cohesion is large, so a
-compressed point sticks. Pushing the top by u turns the unit by theta about its centre. The configuration is
+stiffness ks and no tensile strength: an open point carries nothing (Tzamtzis & Asteris sec. 3.4). Its cohesion is
+large, so a compressed point sticks. Pushing the top by u turns the unit by theta about its centre. The configuration is
 symmetric under a half turn about that centre, so the centre moves by u/2 and not vertically. The bottom joint
 closes over one half of its length and opens over the other, and the top joint does the same on the opposite
 side: a diagonal strut. Each joint's closing varies linearly, ``kn theta x`` over ``0 <= x <= b/2``, which gives:

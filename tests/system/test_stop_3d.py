@@ -1,4 +1,4 @@
-"""Ctrl-C and SIGTERM end a real 3D earthquake run within 10 s and keep the steps done (issue 33, item 5).
+"""Ctrl-C and SIGTERM end a real 3D earthquake run within 10 s and keep the steps done.
 
 The scene is examples/dam_3d_earthquake.toml (gravity of the dam, the reservoir with uplift, its modes, then
 El Centro in three components, explicit with the program's stable step and local damping) on a coarse mesh,

@@ -1,9 +1,8 @@
 """End-to-end physics checks of the static engine against closed forms.
 
 Each test builds a scene with the ``blocks_2d`` generator and runs it through ``masonrydam.run``.
-Sources: reference problems in shared/reference/PROBLEMS.md (2: block on an incline; 7: interface
-integration, Schellekens & de Borst 1993, IJNME 36:43-66) and the seed's joint law (Tzamtzis &
-Asteris, sec. 3.4, eqs. 11-12).
+Sources: the block on an incline (static, closed form); interface integration (Schellekens & de Borst
+1993, IJNME 36:43-66); the joint law of Tzamtzis & Asteris (sec. 3.4, eqs. 11-12).
 """
 from __future__ import annotations
 
@@ -46,7 +45,7 @@ def top_force(ds, component, y_top):
 @pytest.mark.parametrize("beta_deg, c", [(10.0, 0.0), (20.0, 0.0), (10.0, 1e3)])
 @pytest.mark.reference
 def test_block_on_incline_horizontal_push(beta_deg, c):
-    """Reference problem 2: horizontal force that pushes a block up a slope beta, friction phi,
+    """Block on an incline: horizontal force that pushes a block up a slope beta, friction phi,
     cohesion c on the contact area A: P = (W sin b + mu W cos b + c A) / (cos b - mu sin b),
     = W tan(beta + phi) for c = 0. The FE plateau force must match within 1 %."""
     phi = 30.0
@@ -83,7 +82,7 @@ def _rotated_top_nodes(ds, beta_deg, y_top):
 
 @pytest.mark.reference
 def test_block_on_incline_slides_under_self_weight_only_if_tan_beta_exceeds_mu():
-    """Reference problem 2: with c = 0 a block slides under its own weight iff tan(beta) > mu."""
+    """Block on an incline: with c = 0 a block slides under its own weight iff tan(beta) > mu."""
     joint = {"normal_stiffness": 1e11, "shear_stiffness": 1e11, "friction_angle": 30.0}
     stages = [{"name": "gravity", "steps": 2, "loads": [{"type": "self_weight"}]}]
     stable = masonrydam.run(block_scene(blocks=[BASE, BLOCK], joint=joint, rotation=25.0, stages=stages))
@@ -100,7 +99,7 @@ def test_block_on_incline_slides_under_self_weight_only_if_tan_beta_exceeds_mu()
 
 def test_direct_shear_peak_and_residual_stiffness():
     """Direct shear of a joint under constant normal stress sigma: peak tau = c + sigma tan(phi)
-    (seed eq. 12), then the incremental shear stiffness is the residual one (seed sec. 3.4)."""
+    (Tzamtzis & Asteris eq. 12), then the incremental shear stiffness is the residual one (Tzamtzis & Asteris sec. 3.4)."""
     c, phi, sigma, ks, ksr = 0.2e6, 35.0, 0.5e6, 50e9, 0.5e9
     A = 2.0
     joint = {"normal_stiffness": 100e9, "shear_stiffness": ks, "friction_angle": phi, "cohesion": c,
@@ -128,7 +127,7 @@ def test_direct_shear_peak_and_residual_stiffness():
 
 
 def test_tension_opens_joint_with_zero_traction_and_recovers_contact():
-    """Seed sec. 3.4: a joint pulled apart carries no traction (both stiffnesses zero); contact is
+    """Tzamtzis & Asteris sec. 3.4: a joint pulled apart carries no traction (both stiffnesses zero); contact is
     restored when the gap closes. Blocks with nu = 0 in plane stress are uniaxial, so the closed
     joint and the two blocks act as springs in series: F = d / (1/(kn A) + (h1 + h2)/(E A))."""
     kn, E, A = 50e9, 30e9, 2.0
@@ -183,7 +182,7 @@ def test_rotation_invariance_of_joint_tractions(angle):
 def _notched_joint_tractions(integration):
     """Two blocks joined by a stiff linear vertical joint that stops at a notch (the left block
     leaves a 0.1 m gap at the bottom), the right block pulled at its free end: the normal traction
-    has a steep gradient at the notch tip (reference problem 7; Schellekens & de Borst 1993,
+    has a steep gradient at the notch tip (Schellekens & de Borst 1993,
     notched beam). Returns the joint points' heights and normal tractions, sorted by height."""
     joint = {"law": "linear", "normal_stiffness": 1e15, "shear_stiffness": 1e15, "integration": integration}
     blocks = [{"x0": 0.0, "y0": 0.1, "x1": 1.0, "y1": 0.4, "group": "left"},
@@ -203,7 +202,7 @@ def _direction_changes(values):
 
 @pytest.mark.reference
 def test_gauss_integration_oscillates_lumped_does_not():
-    """Reference problem 7: with a stiff interface, Gauss integration couples the nodes and the
+    """Schellekens & de Borst (1993): with a stiff interface, Gauss integration couples the nodes and the
     tractions oscillate from point to point near a steep gradient; nodal (lumped) integration gives
     a smooth, monotonic distribution. Both integrate the same resultant."""
     y_l, t_l = _notched_joint_tractions("lumped")

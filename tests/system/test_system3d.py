@@ -1,10 +1,10 @@
 """3D models end to end: interface insertion, the 8-node surface interface in a full analysis,
 closed forms and the 2D plane-strain limit.
 
-Sources: reference problem 2 (block on an incline) of shared/reference/PROBLEMS.md extended to an
+Sources: the block on an incline (static, closed form) extended to an
 oblique push (Coulomb friction is isotropic in the joint plane: sliding when the tangential force
-reaches mu times the normal force, along the tangential force); the seed's 8-node interface
-(Tzamtzis & Asteris, eqs. 1-11) and joint law (sec. 3.4); elementary elasticity for the uniform
+reaches mu times the normal force, along the tangential force); the 8-node interface
+of Tzamtzis & Asteris (eqs. 1-11) and joint law (sec. 3.4); elementary elasticity for the uniform
 compression of a stack of blocks.
 """
 from __future__ import annotations
@@ -129,7 +129,7 @@ def _critical_k(beta_deg, theta_deg, phi=30.0):
 @pytest.mark.parametrize("beta_deg, theta_deg", [(10.0, 60.0), (15.0, 135.0)])
 @pytest.mark.reference
 def test_block_on_incline_oblique_push_slides_at_closed_form_load(beta_deg, theta_deg):
-    """Reference problem 2 in 3D with an oblique horizontal push (perfectly plastic joint): the
+    """Block on an incline in 3D with an oblique horizontal push (perfectly plastic joint): the
     block holds at 97 % of the closed-form seismic coefficient and slides (no equilibrium) at
     103 %."""
     k_crit, _ = _critical_k(beta_deg, theta_deg)
@@ -145,7 +145,7 @@ def test_block_on_incline_oblique_push_slides_at_closed_form_load(beta_deg, thet
 def test_block_on_incline_oblique_push_slides_along_applied_shear():
     """With a residual shear stiffness the block keeps equilibrium past the sliding load; under
     proportional loading the slip vector of every joint point is parallel to the tangential part
-    of the applied force (isotropic Coulomb friction, seed sec. 3.4), and every point slides."""
+    of the applied force (isotropic Coulomb friction, Tzamtzis & Asteris sec. 3.4), and every point slides."""
     beta, theta = 10.0, 60.0
     k_crit, n = _critical_k(beta, theta)
     k = 1.3 * k_crit

@@ -22,7 +22,7 @@ ENERGY_KEYS = ("input", "external", "hydrodynamic", "kinetic", "strain", "dampin
 ENERGY_SCALE_KEYS = ("input", "external", "kinetic", "strain", "joint", "damping")
 
 #: an energy balance whose error, or whose energy created at contact events, exceeds this fraction of its
-#: largest term is reported (issue 14: "every example closes to 1 %")
+#: largest term is reported (every example closes to 1 %)
 ENERGY_WARNING_FRACTION = 0.01
 
 

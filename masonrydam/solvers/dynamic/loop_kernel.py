@@ -27,7 +27,8 @@ the committed state. With dt = "auto" the kernel also returns where a step it ac
 
 Why it is written out: the Python around one joint-space call took about 200 us a step on the coarse Koyna section
 (the step's set-up, two residuals, the model's forces, the energy balance; docs/performance.md), against 68 us for
-the joint-space call and 10 us for the floor issue 35 measures against.
+the joint-space call and 10 us for its floor (one substitution and one joint-law pass over the points;
+benchmarks/bench_step_kernel.py).
 """
 from __future__ import annotations
 

@@ -7,7 +7,7 @@ flexibility ``S = B K_ref^-1 B^T`` (m, m), m/N, of the all-stick effective matri
 step's joint equations ``F(delta) = delta - delta_y + S (q(delta) - q_n) = 0`` (relative displacements in m)
 with small dense LU factorizations of the active components, then recovers the displacements (n_dof,) m. The
 flexibility formulation of contact problems: Francavilla & Zienkiewicz (1975); the joint law and ``B``:
-Tzamtzis & Asteris (seed eqs. 1-6, 10, 11).
+Tzamtzis & Asteris (eqs. 1-6, 10, 11).
 
 Theory: docs/dynamics.md, section "The joint-space step in equations" (under "Fast path").
 """
@@ -144,7 +144,7 @@ def joint_operator(model) -> tuple[sp.csr_matrix, np.ndarray, np.ndarray, np.nda
     B : CSR (m, n_dof): local relative displacement ``delta = B u`` (m) at every point, rows
         ``(point * dim + component)``, points in group order then element-major (the order of the
         groups' ``(n_elem, nip)`` state arrays), components ``[s1, (s2,) n]``; entries
-        ``+-N_a(xi_ip) R[c, k]`` (top +, bottom -; seed eqs. 4-6, 10, as in
+        ``+-N_a(xi_ip) R[c, k]`` (top +, bottom -; Tzamtzis & Asteris eqs. 4-6, 10, as in
         :func:`~masonrydam.elements.interface.interface_evaluate`).
     weight : (P,) tributary area ``j w h`` (m^2; 2D: length x thickness).
     params_table : (n_sets, N_JOINT_PARAMS), param_index : (P,) int64 — the law parameters per point.
@@ -316,8 +316,8 @@ class JointSpace:
         self.stop_check = None
         self.dim = dim = model.dim
         self.groups = [g for g in model.igroups if g.nonlinear]
-        #: the joint law of the points: the one the joint-space kernels carry (``JointLaw.joint_space``, the seed's
-        #: Mohr-Coulomb law; Model.joint_space_capable), None without points
+        #: the joint law of the points: the one the joint-space kernels carry (``JointLaw.joint_space``, the
+        #: Mohr-Coulomb law of Tzamtzis & Asteris; Model.joint_space_capable), None without points
         laws = list({id(g.joint_law): g.joint_law for g in self.groups}.values())
         if len(laws) > 1 or not all(law.joint_space for law in laws):
             raise ValueError(f"the joint-space kernels carry one law, not {[law.name for law in laws]}")

@@ -1,4 +1,4 @@
-"""Arc-length control of a static stage (issue 18): following a load-displacement path past limit points,
+"""Arc-length control of a static stage: following a load-displacement path past limit points,
 snap-throughs and snap-backs, where load or displacement control stalls.
 
 :class:`ArcLengthStage` runs a static stage whose loading is one parameter ``lambda`` (forces ``f_base +
@@ -101,7 +101,7 @@ class ArcLengthStage:
         for g in m.igroups:
             if not g.nonlinear:
                 continue
-            # cracking points: open in the last converged state (the seed's OPEN; the composite law's tension
+            # cracking points: open in the last converged state (Mohr-Coulomb's OPEN; the composite law's tension
             # and tension-shear corner)
             active = g.is_open(trial=False)
             if not active.any():

@@ -17,9 +17,9 @@ joint's elastic compliance ``C_e = diag(1/ks, (1/ks2,) 1/kn)`` its plastic relat
 (w = area of the point, m2; subscripts 0 and 1: the start and the end of the step): the work on the joints,
 by the trapezoidal rule (second order in the step: exact where the traction varies linearly over it), less
 the change of their stored elastic energy (exact). For the composite (plasticity) law, whose unloading
-stiffness is the elastic one, it is the plastic work; an elastic step dissipates nothing. For the seed's Mohr-Coulomb law
-the open joint (no stiffness, no traction) stores and dissipates nothing and a sliding one dissipates
-friction work. Its derivative with respect to the end displacements, through the point tangent
+stiffness is the elastic one, it is the plastic work; an elastic step dissipates nothing. For the Mohr-Coulomb law of
+Tzamtzis & Asteris, the open joint (no stiffness, no traction) stores and dissipates nothing and a sliding
+one dissipates friction work. Its derivative with respect to the end displacements, through the point tangent
 ``K_t = dt1/d delta1`` (:func:`~masonrydam.elements.interface.interface_point_tangents`), is
 
     dD/d delta1 = 1/2 (t0 + t1) + K_t^T (1/2 (delta1 - delta0) - C_e t1)

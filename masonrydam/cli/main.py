@@ -349,7 +349,8 @@ def history_figure(ds, title: str, comp: str = "x", nodes=None, joints=None):
     return figure(ds, title, comp, nodes, joints)
 
 
-def main(argv=None) -> int:
+def build_parser() -> argparse.ArgumentParser:
+    """The command line's parser, with every command and option (the docs' check of the flags they name reads it)."""
     p = argparse.ArgumentParser(prog="masonrydam", description="Nonlinear analysis of jointed masonry and block dams")
     p.add_argument("--version", action="version", version=f"masonrydam {__version__}")
     sub = p.add_subparsers(dest="command", required=True)
@@ -495,7 +496,11 @@ def main(argv=None) -> int:
     a.add_argument("--all-steps", action="store_true", help="also print each section's lowest sliding factor "
                                                              "and largest cracked ratio over all steps, and where")
     a.set_defaults(func=_cmd_assess)
-    args = p.parse_args(argv)
+    return p
+
+
+def main(argv=None) -> int:
+    args = build_parser().parse_args(argv)
     # the console script: the clock of the summary starts with the process; a call from Python: with this call
     args.started = PROCESS_START if argv is None else time.perf_counter()
     code = _dispatch(args)

@@ -505,8 +505,8 @@ def masonry_wall_2d(
     element_size: float = 0.0,
     key: str = "mesh.parameters",
 ):
-    """A 2D (plane stress) wall of ``height / (unit_height + joint_thickness)`` courses on optional
-    steel / concrete beams.
+    """A 2D wall (plane stress or plane strain: the scene's ``[model] hypothesis``) of
+    ``height / (unit_height + joint_thickness)`` courses on optional steel / concrete beams.
 
     Lengths in m. Expanded unit size = unit size + joint_thickness (simplified micro-model).
     ``bond``: 'running' (= 'stretcher': half-unit offset, half units at the ends as built), 'stack',

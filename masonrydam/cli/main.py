@@ -117,7 +117,8 @@ def _cmd_export_results(args):
                                 time=args.time, source=str(path))
     unit = "s" if s.time_unit == "s" else "(step numbers)"
     print(f"wrote {out}: {len(s.steps)} steps, time {s.times[0]:g} to {s.times[-1]:g} {unit}; {s.n_points} points, "
-          f"{s.n_block_cells} block cells, {s.n_joint_cells} interface cells ({args.joints})")
+          f"{s.n_block_cells} block cells, {s.n_joint_cells} interface cells (joints drawn {args.joints}; the mesh "
+          "undeformed: Warp By Vector)")
     left = s.left_out
     if left.get("block_cells") or left.get("joint_elements"):
         print(f"  left out (nodes not recorded): {left['block_cells']} block cells, {left['joint_elements']} "

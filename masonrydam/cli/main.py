@@ -7,7 +7,7 @@
     masonrydam export-results OUT.nc -o R.xdmf|R.pvd [--joints V] [--every K]   results as a ParaView time series
     masonrydam records list                  the bundled ground-motion records
     masonrydam records show NAME [-o PNG]    a record's measures (PGA, PGV, PGD, Arias, D5-95, CAV) and plot
-    masonrydam plot OUT.nc [--nodes N ..] [--joints J ..] -o PNG   histories (static, driven DOFs: pushover curve)
+    masonrydam plot OUT.nc [--nodes N ..] [--joints J ..] -o PNG   histories (a static push: its pushover curve)
     masonrydam plot OUT.nc --quantity VAR [--select DIM=VALUE ..] -o PNG   history of one variable
     masonrydam plot OUT.nc --mode N [--scale S] -o PNG   mode shape N of a result with a modal stage
     masonrydam plot OUT.nc --deformed [--step N] [--scale S] [--slice y=V] -o PNG   deformed blocks, joint states
@@ -177,7 +177,7 @@ def _cmd_records(args):
 
 def _cmd_plot(args):
     """The default figure of a result file, as PNG (:func:`masonrydam.results.histories.default_figure`):
-    time histories (dynamic results), the pushover curve (static results with driven DOFs) or histories
+    time histories (dynamic results), the pushover curve (static results with prescribed displacements) or histories
     against the load factor (other static results); with ``--quantity VAR [--select DIM=VALUE ...]`` the
     history of one variable (:func:`masonrydam.results.histories.quantity_figure`); with ``--pushover`` the
     pushover curve; with ``--mode N`` the mode shape N of a result with a modal stage
@@ -412,13 +412,13 @@ def build_parser() -> argparse.ArgumentParser:
     rs.add_argument("--column", type=int, help="which value column of a text file with several, counted from 0 "
                                                "without the time column (or which trace of a SAC/MiniSEED file)")
     rc.set_defaults(func=_cmd_records)
-    pl = sub.add_parser("plot", help="plot histories (a static result with driven DOFs: its pushover curve; with "
-                                     "--quantity, one variable; with --mode, a mode shape; with --deformed, the "
-                                     "deformed shape) from a result file (netCDF) to PNG",
+    pl = sub.add_parser("plot", help="plot histories (a static result with prescribed displacements: its pushover "
+                                     "curve; with --quantity, one variable; with --mode, a mode shape; with "
+                                     "--deformed, the deformed shape) from a result file (netCDF) to PNG",
                         description="Without options: time histories of a dynamic result (ground acceleration at "
                                     "the record's own rate, displacement, joint slip and opening, energies); the "
-                                    "pushover curve of a static result with driven DOFs; else the histories "
-                                    "against the load factor of the static stages.")
+                                    "pushover curve of a static result with prescribed displacements; else the "
+                                    "histories against the load factor of the static stages.")
     pl.add_argument("result", help="result file written by `masonrydam run`")
     pl.add_argument("--nodes", type=int, nargs="+", help="node numbers, as in the file's node coordinate (default: the recorded node that moves most)")
     pl.add_argument("--joints", type=int, nargs="+", help="joint point indices along joint_point (default: the one "

@@ -71,8 +71,8 @@ def pushover_figure(ds, component: str = "x", title: str | None = None):
     k = int(np.argmax(sign * f))
     ax.plot(sd * d[k] * 1e3, sign * f[k] / 1e3, "v", color="C3",
             label=f"peak {sign * f[k] / 1e3:.3g} kN at {sd * d[k] * 1e3:.3g} mm")
-    ax.set_xlabel(f"displacement of the driven DOFs, {component} (mm)")
-    ax.set_ylabel(f"force on the driven DOFs, {component} (kN)")
+    ax.set_xlabel(f"prescribed displacement, {component} (mm)")
+    ax.set_ylabel(f"force at the prescribed displacements, {component} (kN)")
     ax.grid(True, alpha=0.3)
     ax.legend(loc="best", fontsize=8)
     if title:

@@ -230,7 +230,7 @@ def test_static_default_figure_is_the_pushover(wall, wall_nc, tmp_path, drawn):
     curve = ax.get_lines()[0]
     np.testing.assert_allclose(curve.get_xdata(), d * 1e3)  # the driven DOFs' displacement, mm
     np.testing.assert_allclose(curve.get_ydata(), f / 1e3)
-    assert ax.get_xlabel() == "displacement of the driven DOFs, x (mm)" and "(kN)" in ax.get_ylabel()
+    assert ax.get_xlabel() == "prescribed displacement, x (mm)" and "(kN)" in ax.get_ylabel()
     # the command line draws the same figure without options
     assert main(["plot", str(wall_nc), "-o", str(tmp_path / "w.png")]) == 0
     np.testing.assert_allclose(drawn[-1].axes[0].get_lines()[0].get_xdata(), d * 1e3)

@@ -185,7 +185,7 @@ def test_links_and_paths_exist(path):
 
 @pytest.mark.parametrize("path", sorted(p for p in EXAMPLES.iterdir() if p.is_file()), ids=_page_id)
 def test_example_headers_name_paths_that_exist(path):
-    header = "\n".join(line for line in path.read_text(encoding="utf-8").splitlines()[:60])
+    header = "\n".join(path.read_text(encoding="utf-8").splitlines()[:60])
     spans = " ".join(f"`{word}`" for word in header.split())
     assert not missing_paths(spans), f"{_page_id(path)} names what does not exist: {missing_paths(spans)}"
 

@@ -376,6 +376,10 @@ class StaticSolver:
         #: raises StepInterrupted between two iterations where a stop was asked for (None without stop requests; an
         #: iteration of the 166k-DOF dam on the AMG path takes a few seconds, a step up to a minute)
         self._stop_within_step = within_step_stop(stop_requested)
+        #: where set, makes the ``give_up`` test of each Newton solve
+        #: (:func:`~masonrydam.solvers.newton.newton_iterations`); :mod:`.relaxation` sets it for the solves whose
+        #: failure is held or cut anyway
+        self.give_up = None
         #: (stage name, load factor) of the last converged step, None before the first
         self._committed = None
         self._iterations_before = 0  # Newton iterations before the running stage (its per-stage count)
@@ -614,7 +618,8 @@ class StaticSolver:
                 self._stop_within_step()
 
         result = newton_iterations(step, start, ConvergenceTest(s.force_tolerance, s.energy_tolerance),
-                                   s.max_iterations, guard=guard if m.nonlinear else None, on_check=tell_progress)
+                                   s.max_iterations, guard=guard if m.nonlinear else None, on_check=tell_progress,
+                                   give_up=None if self.give_up is None else self.give_up())
         last = result.iterate
         if result.converged:
             return True, last.u, result.iterations, last.f_int

@@ -122,19 +122,19 @@ def _states(model) -> list[tuple[object, np.ndarray]]:
             if getattr(g, "state_committed", None) is not None]
 
 
-def _out_of_balance(model, u, f_ext) -> float:
+def _out_of_balance(model, u, f_ext):
     """The residual of the joints' own law at ``u`` (free DOFs) from the committed state, over the force scale (the
-    larger of the external and internal forces' norms over all DOFs: the reactions of a push count); the trial
-    state is reverted."""
+    larger of the external and internal forces' norms over all DOFs: the reactions of a push count), and the
+    internal forces (n_dof,) N there. The trial state at ``u`` is left for the caller to commit (the relaxed state is
+    that equilibrium) or revert; where a law gives up there, it is reverted and the residual is infinite."""
     try:
         f_int, _ = model.evaluate(u, want_tangent=False)
     except NumericalError:  # a law that gives up there: far from it
-        return float("inf")
-    finally:
         model.revert()
+        return float("inf"), None
     free = model.dofmap.free
     scale = force_scale(float(np.linalg.norm(f_ext)), float(np.linalg.norm(f_int)))
-    return float(np.linalg.norm((f_ext - f_int)[free])) / scale
+    return float(np.linalg.norm((f_ext - f_int)[free])) / scale, f_int
 
 
 def _step(solver, trial, f_ext, max_iterations: int):
@@ -187,12 +187,12 @@ def relax_past_limit(solver, st, u: np.ndarray, trial: np.ndarray, f_ext: np.nda
             steps += 1
             trial = u_hold
             m.time_step = step_time
-            balance = _out_of_balance(m, u_hold, f_ext)
+            balance, f_own = _out_of_balance(m, u_hold, f_ext)
             if balance <= solver.s.force_tolerance:  # settled: an equilibrium of the joints' own law already
-                f_int, _ = m.evaluate(u_hold, want_tangent=False)
                 m.commit()
                 stage_stats.setdefault("relaxed_limit_points", []).append([float(load_factor), steps])
-                return True, u_hold, f_int, ""
+                return True, u_hold, f_own, ""
+            m.revert()
             # the stage's own step: once near the joints' own equilibrium, after 1, 2, 4, ... hold steps more
             # each time it fails (a try that fails costs a whole Newton solve, a hold step a few iterations)
             if steps >= next_try and balance <= RETRY_BELOW:

@@ -157,16 +157,23 @@ def test_bad_composite_joints():
     assert err.value.key == "stages[0].control"
 
 
-def test_a_snap_back_relaxed_lands_on_the_far_branch_at_the_same_end_displacement():
+@pytest.mark.parametrize("first_r, predictor", [(1.0, 0.0), ("default", "default")])
+def test_a_snap_back_relaxed_lands_on_the_far_branch_at_the_same_end_displacement(monkeypatch, first_r, predictor):
     """``limit_point = "relax"`` (masonrydam/solvers/static/relaxation.py): the bar of the test above pulled under
     displacement control, L = 10 m, four times its snap-back length. At the peak no equilibrium lies near the path;
     held there, the joint relaxes (Duvaut-Lions flow at fixed end displacement) until its traction meets the
     softening curve again: the far root of u(sigma) = u_peak on the softening branch, below the branch's turning
     point sigma* = GfI / (ft (L/E + 1/kn)), where du/dsigma = 0 (closed form in the module docstring). From there the
-    pull goes on along the closed form."""
+    pull goes on along the closed form. The hold's schedule (its first pseudo-time step ``R_FIRST``, the start of
+    each hold step ``HOLD_PREDICTOR``) changes the way there, not this end state: both the defaults and the plain
+    schedule (from r = 1, each step from the last relaxed state) land on the far root."""
     from scipy.optimize import brentq
 
     from masonrydam.solvers.static import relaxation
+
+    if first_r != "default":
+        monkeypatch.setattr(relaxation, "R_FIRST", first_r)
+        monkeypatch.setattr(relaxation, "HOLD_PREDICTOR", predictor)
 
     L, width, u_end = 10.0, 0.5, 1.2e-3
     scene = bar(L, u_end, width=width)

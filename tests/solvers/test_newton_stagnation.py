@@ -1,7 +1,8 @@
 """A Newton solve that stagnates gives up early (masonrydam.solvers.newton.Stagnation, used by the relaxation past
 limit points, masonrydam/solvers/static/relaxation.py): a residual that keeps falling is never given up, one that
 cycles between two values (Newton at a corner of a joint law) is given up once the window has shown no progress,
-and newton_iterations reports it as a solve that did not converge, with the iterations it took."""
+and newton_iterations reports it as a solve that did not converge, with the iterations it took. And the same solves
+let an iterate that is down to round-off pass without the work test."""
 from __future__ import annotations
 
 import numpy as np
@@ -81,3 +82,19 @@ def test_newton_that_converges_is_not_given_up():
     assert plain.converged and stopped.converged
     assert stopped.iterations == plain.iterations
     assert abs(stopped.iterate.u) < 1e-12
+
+
+def test_an_iterate_down_to_round_off_passes_without_the_work_test():
+    """The relaxation's solves (masonrydam/solvers/static/relaxation.py, ROUNDOFF_FRACTION) let an iterate whose
+    residual is below a thousandth of the force tolerance pass whatever its correction's work. Newton on
+    x^2 - 2 = 0 from 1.5 converges quadratically, residuals 0.25, 7e-3, 6e-6, 4.5e-12, 4e-16. At 4.5e-12 the force
+    test (1e-6) has passed, but the work of the correction that led there is 1.3e-11, against the first's 2.1e-2
+    (the test asks 1e-20 of it): one more iteration, to round-off, for the work test alone."""
+    step = _Scalar(lambda x: x * x - 2.0, lambda x: 2.0 * x)
+    plain = newton_iterations(step, step.evaluate(1.5), ConvergenceTest(1e-6, 1e-20), 30)
+    roundoff = newton_iterations(step, step.evaluate(1.5), ConvergenceTest(1e-6, 1e-20, 1e-3), 30)
+    assert plain.converged and roundoff.converged
+    assert (plain.iterations, roundoff.iterations) == (4, 3)
+    assert 1e-12 < roundoff.iterate.residual_norm <= 1e-9 and abs(roundoff.iterate.u - np.sqrt(2.0)) < 1e-11
+    # with round-off below 1e-6 of the tolerance the iterate at 4.5e-12 is above it: the work test decides again
+    assert newton_iterations(step, step.evaluate(1.5), ConvergenceTest(1e-6, 1e-20, 1e-6), 30).iterations == 4

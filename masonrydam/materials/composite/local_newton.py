@@ -31,8 +31,15 @@ def _residual_norm(R):
 
 @njit(cache=True)
 def local_jacobian(x, tr, w, ns, act1, act2, act3, h, J, cx, R, tau, fv):
-    """J[:, j] = d R / d x_j by complex steps of size ``h``."""
+    """J[:, j] = d R / d x_j by complex steps of size ``h``. The column of a multiplier whose surface is not active
+    is the unit column: its row is ``L_j = 0``, so the Newton step's and ``dx / d tr``'s component ``j`` is 0 and
+    the rest of the column multiplies zero (a complex residual saved per inactive surface)."""
     for j in range(5):
+        if (j == 2 and not act1) or (j == 3 and not act2) or (j == 4 and not act3):
+            for i in range(5):
+                J[i, j] = 0.0
+            J[j, j] = 1.0
+            continue
         for i in range(5):
             cx[i] = complex(x[i], 0.0)
         cx[j] = complex(x[j], h)

@@ -380,6 +380,9 @@ class StaticSolver:
         #: (:func:`~masonrydam.solvers.newton.newton_iterations`); :mod:`.relaxation` sets it for the solves whose
         #: failure is held or cut anyway
         self.give_up = None
+        #: where set, an iterate whose residual is below this fraction of the force tolerance passes the work test
+        #: (:class:`~masonrydam.solvers.newton.ConvergenceTest`); :mod:`.relaxation` sets it as ``give_up``
+        self.roundoff_fraction = None
         #: (stage name, load factor) of the last converged step, None before the first
         self._committed = None
         self._iterations_before = 0  # Newton iterations before the running stage (its per-stage count)
@@ -617,9 +620,9 @@ class StaticSolver:
             if self._stop_within_step is not None:
                 self._stop_within_step()
 
-        result = newton_iterations(step, start, ConvergenceTest(s.force_tolerance, s.energy_tolerance),
-                                   s.max_iterations, guard=guard if m.nonlinear else None, on_check=tell_progress,
-                                   give_up=None if self.give_up is None else self.give_up())
+        test = ConvergenceTest(s.force_tolerance, s.energy_tolerance, self.roundoff_fraction)
+        result = newton_iterations(step, start, test, s.max_iterations, guard=guard if m.nonlinear else None,
+                                   on_check=tell_progress, give_up=None if self.give_up is None else self.give_up())
         last = result.iterate
         if result.converged:
             return True, last.u, result.iterations, last.f_int

@@ -85,12 +85,12 @@ RETRY_MAX_ITERATIONS = 20
 #: converged there would have been given up, and 3 of the 28 push steps and 6 of the 86 tries that did (those
 #: were held instead, or tried again later: the curve moved by 0.6 % at 4 mm and 0.5 % at 2 mm)
 STAGNATION_WINDOW = 5
-#: and an iterate of such a solve whose residual is below this fraction of the force tolerance passes the work
-#: test, as in the dynamic solver (the residual is down to round-off there). Why: most hold steps took one more
-#: iteration after their residual had reached 1e-10 of the force scale, for the work test alone; on J4D this cut the
-#: Newton iterations by 8 % (the curve the same to the digits shown)
-ROUNDOFF_FRACTION = 1e-3
 STAGNATION_FIRST = 6
+#: an iterate of such a solve whose residual is below this fraction of the force tolerance passes the work test, as
+#: in the dynamic solver (the residual is down to round-off there). Why: most hold steps took one more iteration
+#: after their residual had reached 1e-10 of the force scale, for the work test alone; on J4D this cut the Newton
+#: iterations by 8 % (the curve the same to the digits shown)
+ROUNDOFF_FRACTION = 1e-3
 
 
 def holds(st, size: float, nominal: float, can_cut: bool) -> bool:
@@ -119,9 +119,9 @@ def attempt(solver, st, size: float, nominal: float, can_cut: bool, trial, f_ext
 
 @contextmanager
 def _at_most(solver, max_iterations: int):
-    """The solver's Newton steps within the block take at most ``max_iterations`` (and the stage's own limit), and
-    give up once their residual stagnates (:class:`~masonrydam.solvers.newton.Stagnation`,
-    :data:`STAGNATION_WINDOW`)."""
+    """The solver's Newton steps within the block take at most ``max_iterations`` (and the stage's own limit), give
+    up once their residual stagnates (:class:`~masonrydam.solvers.newton.Stagnation`, :data:`STAGNATION_WINDOW`),
+    and pass an iterate down to round-off without the work test (:data:`ROUNDOFF_FRACTION`)."""
     settings, give_up, roundoff = solver.s, solver.give_up, solver.roundoff_fraction
     solver.s = replace(settings, max_iterations=min(max_iterations, settings.max_iterations))
     solver.give_up = lambda: Stagnation(STAGNATION_WINDOW, STAGNATION_FIRST)

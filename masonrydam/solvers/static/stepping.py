@@ -381,7 +381,7 @@ class StaticSolver:
         #: failure is held or cut anyway
         self.give_up = None
         #: where set, an iterate whose residual is below this fraction of the force tolerance passes the work test
-        #: (:class:`~masonrydam.solvers.newton.ConvergenceTest`); :mod:`.relaxation` sets it as ``give_up``
+        #: (:class:`~masonrydam.solvers.newton.ConvergenceTest`); :mod:`.relaxation` sets it with ``give_up``
         self.roundoff_fraction = None
         #: (stage name, load factor) of the last converged step, None before the first
         self._committed = None

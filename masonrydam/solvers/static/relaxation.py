@@ -79,11 +79,12 @@ HOLD_MAX_ITERATIONS = 10
 RETRY_MAX_ITERATIONS = 20
 #: a Newton solve of a hold, of a try from the relaxed state or of the stage's own step gives up where the smallest
 #: residual of its last this many iterates is not below half the smallest before them, from iteration
-#: :data:`STAGNATION_FIRST` on (:class:`~masonrydam.solvers.newton.Stagnation`). Why: on the inviscid Eindhoven wall J4D (docs/masonry_softening.md)
-#: three in four of the tries from the relaxed state and of the push's own steps past the peak failed, each after its
-#: whole budget, cycling at a corner of the joint law: about 60 % of the run. With this window none of the hold steps that
-#: converged there would have been given up, and 3 of the 28 push steps and 6 of the 86 tries that did (those
-#: were held instead, or tried again later: the curve moved by 0.6 % at 4 mm and 0.5 % at 2 mm)
+#: :data:`STAGNATION_FIRST` on (:class:`~masonrydam.solvers.newton.Stagnation`). Why: on the inviscid Eindhoven wall
+#: J4D (docs/masonry_softening.md) three in four of the tries from the relaxed state and of the push's own steps past
+#: the peak failed, each after its whole budget, cycling at a corner of the joint law: about 60 % of the run. With
+#: this window none of the hold steps that converged there would have been given up, and 3 of the 28 push steps and 6
+#: of the 86 tries that did (those were held instead, or tried again later: the curve moved by 0.6 % at 4 mm and
+#: 0.5 % at 2 mm)
 STAGNATION_WINDOW = 5
 STAGNATION_FIRST = 6
 #: an iterate of such a solve whose residual is below this fraction of the force tolerance passes the work test, as

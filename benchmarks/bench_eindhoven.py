@@ -17,24 +17,31 @@ modelled by Lourenco & Rots 1997). The first case runs once before the timings (
 
     python benchmarks/bench_eindhoven.py [--walls J4D J6D J7D] [--cases held constant]
         [--taus 0.25 0.025 0.0025 0] [--steps 40 80] [--elements 2 4] [--controls load dissipation]
-        [--limit-points follow relax]
+        [--limit-points follow relax] [--numba-threads 2]
 
 Prints per case: the peak force and its displacement, the force at 1, 2, 3 and 4 mm, how far the run got,
 the wall time of the run, the failure mechanisms at the peak and at the end (:mod:`masonrydam.results.wall_cracks`:
 diagonal cracking, toe crushing, sliding), and the peak's change against the case with the smallest relaxation
-time of the same steps and mesh. One process, one thread. A benchmark, not a test: it never fails on a slow figure.
+time of the same steps and mesh. One process, one thread (``--numba-threads N``: N for numba). A benchmark, not a
+test: it never fails on a slow figure.
 """
 from __future__ import annotations
 
-from _common import pin_one_thread  # benchmarks/ is sys.path[0] when run as a script
+import os
+import sys
+
+from _common import cpu_model, pin_one_thread  # benchmarks/ is sys.path[0] when run as a script
 
 pin_one_thread()
+#: ``--numba-threads N``: numba's threads (the composite joints' kernel shares its elements among them,
+#: masonrydam.elements.interface.interface_evaluate_threaded, bit for bit the same); read here, before numba loads
+if "--numba-threads" in sys.argv[1:-1]:
+    os.environ["NUMBA_NUM_THREADS"] = sys.argv[sys.argv.index("--numba-threads") + 1]
 
 import argparse
 import contextlib
 import io
 import itertools
-import os
 import tempfile
 import time
 from pathlib import Path
@@ -103,7 +110,12 @@ def main(argv=None) -> int:
     ap.add_argument("--controls", nargs="+", default=["load"], choices=["load", "dissipation"])
     ap.add_argument("--limit-points", nargs="+", default=["follow"], choices=["follow", "relax"],
                     help="control load: where a step finds no equilibrium, follow the path or relax the joints")
+    ap.add_argument("--numba-threads", type=int, default=1,
+                    help="numba's threads (the composite joints' elements are shared among them); MKL and "
+                         "OpenBLAS keep one")
     args = ap.parse_args(argv)
+    print(f"bench_eindhoven: {os.environ['NUMBA_NUM_THREADS']} numba thread(s), one MKL / OpenBLAS thread, "
+          f"{cpu_model()}", flush=True)
     with tempfile.TemporaryDirectory() as folder:
         warm = scene(args.cases[0], 0.025, 4, 2)
         set_key(warm, "stages[1].loads[0].value", ["0.4 mm"] if args.cases[0] == "constant" else ["0.4 mm", "0 mm"])

@@ -5,7 +5,7 @@ reaches at that displacement (docs/masonry_softening.md, "The inviscid wall past
 
 The example file itself regularises its joints with a relaxation time: it runs in about 20 s and follows these
 curves to 2 mm, and beyond it is an upper band (it hardens to 69-80 kN at 3-4 mm). These runs are the converged
-ones, and they cost minutes on one core (2-core AMD EPYC): J4D about 3, J6D and J7D between 3 and 4 each.
+ones, and they cost minutes (2-core AMD EPYC, the composite joints on both cores): J4D about 2.6, J6D 3, J7D 3.5.
 
 Run:   python examples/eindhoven_walls.py                 all three walls
        python examples/eindhoven_walls.py J4D             one

@@ -18,7 +18,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from ..errors import STATUS_BAD_GEOMETRY, STATUS_NAN, STATUS_OK
 from ..materials.mohr_coulomb import (P_COHESION, P_KN, P_KS, P_KS_RESIDUAL, P_OPEN_TANGENT, P_TAN_PHI,
@@ -397,63 +397,124 @@ def interface_evaluate(
     """
     n_elem = conn.shape[0]
     dim = coords.shape[1]
+    ns = N.shape[1]
+
+    xm, du, R, C, tg, RC, Cg, Dug = _element_scratch(ns, dim)
+    for e in range(n_elem):
+        status = _evaluate_element(coords, conn, u, N, dN, weights, thickness, params_table, param_index,
+                                   state_committed, state_trial, delta_out, traction_out, fe_out, ke_out, want_tangent,
+                                   law, e, xm, du, R, C, tg, RC, Cg, Dug)
+        if status != STATUS_OK:
+            info[0] = e
+            return status
+    return STATUS_OK
+
+
+#: the elements of a group are dealt to this many interleaved chunks by :func:`interface_evaluate_threaded`
+#: (element ``e`` to chunk ``e % THREAD_CHUNKS``), so that a plastic zone, where the law costs most, is shared
+#: by the threads rather than falling to one of them
+THREAD_CHUNKS = 64
+
+
+@njit(cache=True, parallel=True)
+def interface_evaluate_threaded(coords, conn, u, N, dN, weights, thickness, params_table, param_index, state_committed,
+                                state_trial, delta_out, traction_out, fe_out, ke_out, want_tangent, info, law=None):
+    """:func:`interface_evaluate` with the elements shared among numba's threads: the same arguments, outputs and
+    status, and, where every element evaluates, the same outputs bit for bit, whatever the number of threads (each
+    element is computed by the same code, on its own rows of the outputs; nothing is summed across elements). Where
+    some fail, ``info[0]`` is the first failing element, as in the serial kernel; the outputs of other elements may
+    have been written.
+
+    Why: the composite law's return mapping (a local Newton per plastic point, its tangent by complex step) is
+    most of a static iteration's evaluation on the Eindhoven walls (docs/masonry_softening.md), and its points
+    are independent. Joints whose law is Mohr-Coulomb keep the serial kernel: there a point costs little and a
+    thread pool's start would not pay."""
+    n_elem = conn.shape[0]
+    dim = coords.shape[1]
+    ns = N.shape[1]
+    n_chunks = min(n_elem, THREAD_CHUNKS)
+    first_failed = np.full(max(n_chunks, 1), n_elem, dtype=np.int64)
+    failed_status = np.zeros(max(n_chunks, 1), dtype=np.int64)
+    for chunk in prange(n_chunks):
+        xm, du, R, C, tg, RC, Cg, Dug = _element_scratch(ns, dim)
+        for e in range(chunk, n_elem, n_chunks):
+            status = _evaluate_element(coords, conn, u, N, dN, weights, thickness, params_table, param_index,
+                                       state_committed, state_trial, delta_out, traction_out, fe_out, ke_out,
+                                       want_tangent, law, e, xm, du, R, C, tg, RC, Cg, Dug)
+            if status != STATUS_OK:
+                first_failed[chunk] = e
+                failed_status[chunk] = status
+                break
+    # each chunk stops at its own first failure, so the smallest of those is the group's first failing element
+    worst = n_elem
+    status = STATUS_OK
+    for chunk in range(n_chunks):
+        if first_failed[chunk] < worst:
+            worst = first_failed[chunk]
+            status = failed_status[chunk]
+    if worst < n_elem:
+        info[0] = worst
+    return status
+
+
+@njit(cache=True, inline="always")
+def _element_scratch(ns, dim):
+    """The scratch arrays of :func:`_evaluate_element`: mid-surface derivatives ``xm`` and nodal jumps ``du``
+    (ns, dim), the frame ``R``, the law's tangent ``C``, ``R^T C`` and ``R^T C R`` (dim, dim), the traction in
+    global axes ``tg`` and the jump at a point ``Dug`` (dim,)."""
+    return (np.empty((ns, dim)), np.empty((ns, dim)), np.zeros((dim, dim)), np.empty((dim, dim)), np.empty(dim),
+            np.empty((dim, dim)), np.empty((dim, dim)), np.empty(dim))
+
+
+@njit(cache=True, inline="always")
+def _evaluate_element(coords, conn, u, N, dN, weights, thickness, params_table, param_index, state_committed,
+                      state_trial, delta_out, traction_out, fe_out, ke_out, want_tangent, law, e, xm, du, R, C, tg, RC,
+                      Cg, Dug):
+    """Element ``e`` of :func:`interface_evaluate` (its arguments, and the scratch arrays the caller allocates once):
+    writes the element's rows of the outputs and returns its status."""
+    dim = coords.shape[1]
     nip = N.shape[0]
     ns = N.shape[1]
     ndof_half = ns * dim
-
-    xm = np.empty((ns, dim))
-    du = np.empty((ns, dim))
-    R = np.zeros((dim, dim))
-    C = np.empty((dim, dim))
-    tg = np.empty(dim)
-    RC = np.empty((dim, dim))  # R^T C
-    Cg = np.empty((dim, dim))  # R^T C R
-    Dug = np.empty(dim)
-
-    for e in range(n_elem):
+    for r in range(2 * ndof_half):
+        fe_out[e, r] = 0.0
+    if want_tangent:
         for r in range(2 * ndof_half):
-            fe_out[e, r] = 0.0
-        if want_tangent:
-            for r in range(2 * ndof_half):
-                for c2 in range(2 * ndof_half):
-                    ke_out[e, r, c2] = 0.0
+            for c2 in range(2 * ndof_half):
+                ke_out[e, r, c2] = 0.0
 
-        size = mid_surface_derivatives(coords, conn, e, ns, dim, xm)
-        displacement_jumps(conn, u, e, ns, dim, du)
-        h = thickness[e]
-        pidx = param_index[e]
+    size = mid_surface_derivatives(coords, conn, e, ns, dim, xm)
+    displacement_jumps(conn, u, e, ns, dim, du)
+    h = thickness[e]
+    pidx = param_index[e]
 
-        for g in range(nip):
-            j = local_frame(xm, dN, g, dim, R, size)
-            if not math.isfinite(j):
-                info[0] = e
-                return STATUS_NAN
-            if j == 0.0:
-                info[0] = e
-                return STATUS_BAD_GEOMETRY
+    for g in range(nip):
+        j = local_frame(xm, dN, g, dim, R, size)
+        if not math.isfinite(j):
+            return STATUS_NAN
+        if j == 0.0:
+            return STATUS_BAD_GEOMETRY
 
-            # relative displacement in global then local axes
-            jump_at_point(N, g, ns, dim, du, Dug)
-            for r in range(dim):
-                s = 0.0
-                for k in range(dim):
-                    s += R[r, k] * Dug[k]
-                delta_out[e, g, r] = s
+        # relative displacement in global then local axes
+        jump_at_point(N, g, ns, dim, du, Dug)
+        for r in range(dim):
+            s = 0.0
+            for k in range(dim):
+                s += R[r, k] * Dug[k]
+            delta_out[e, g, r] = s
 
-            status = joint_law_at(params_table, pidx, state_committed, state_trial, delta_out, traction_out, e, g,
-                                  dim, C, law, want_tangent)
-            if status != STATUS_OK:
-                info[0] = e
-                return status
+        status = joint_law_at(params_table, pidx, state_committed, state_trial, delta_out, traction_out, e, g,
+                              dim, C, law, want_tangent)
+        if status != STATUS_OK:
+            return status
 
-            jwh = j * weights[g] * h
-            add_point(fe_out, ke_out, e, N, g, ns, dim, ndof_half, R, traction_out[e, g], C, jwh, want_tangent, tg,
-                      RC, Cg)
+        jwh = j * weights[g] * h
+        add_point(fe_out, ke_out, e, N, g, ns, dim, ndof_half, R, traction_out[e, g], C, jwh, want_tangent, tg,
+                  RC, Cg)
 
-        for r in range(2 * ndof_half):
-            if not math.isfinite(fe_out[e, r]):
-                info[0] = e
-                return STATUS_NAN
+    for r in range(2 * ndof_half):
+        if not math.isfinite(fe_out[e, r]):
+            return STATUS_NAN
     return STATUS_OK
 
 

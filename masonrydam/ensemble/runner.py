@@ -32,6 +32,7 @@ import sys
 import time
 from pathlib import Path
 
+import numba
 import numpy as np
 import xarray as xr
 
@@ -88,6 +89,10 @@ def run_member(member, store: str, measure, keep_history: bool = False, fp: str 
     history = store / f"{member.member_id}.nc" if keep_history else None
     t0 = time.perf_counter()
     status, reason, measures = STATUS_COMPLETED, "", {}
+    threads = numba.get_num_threads()
+    # one numba thread (for this task's thread): the members share the cores, one worker process each, and a
+    # member's composite joints would otherwise spread over every core too (InterfaceGroup._evaluate_kernel)
+    numba.set_num_threads(1)
     try:
         with contextlib.redirect_stdout(io.StringIO()):
             ds = masonrydam.run(Scene(member.scene, base_dir=member.base_dir), output=history)
@@ -102,6 +107,8 @@ def run_member(member, store: str, measure, keep_history: bool = False, fp: str 
                   + f"{type(exc).__name__}: {exc}")
     except Exception as exc:  # noqa: BLE001 (an outcome, not a crash of the ensemble)
         status, reason = STATUS_ERROR, f"{type(exc).__name__}: {exc}"
+    finally:
+        numba.set_num_threads(threads)
     out = {"member_id": member.member_id, "fingerprint": fp, "coords": member.coords, "status": status,
            "reason": reason, "wall_time": time.perf_counter() - t0, "measures": measures}
     _write_json_atomic(store / f"{member.member_id}.json", out)

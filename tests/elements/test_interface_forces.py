@@ -89,3 +89,60 @@ def test_composite_law_forces_do_not_depend_on_whether_the_tangent_is_wanted(tim
         codes |= set(np.unique(out[False][3][..., 0]).tolist())
     # plastic returns ran (the codes of tension, shear and their corner among them), where the tangent is skipped
     assert len(codes - {0.0}) >= 2, codes
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_threaded_kernel_is_the_serial_kernel_bit_for_bit(threads):
+    """The composite joints' elements shared among numba's threads (`interface_evaluate_threaded`, what a run
+    with more than one thread calls) give the serial kernel's forces, tangents, tractions, relative displacements
+    and trial states bit for bit, with one thread and with two (each element is computed by the same code on its
+    own rows; nothing is summed across elements, so the number of threads cannot change a last bit), on the
+    inviscid Eindhoven wall with its points in several states. Where elements fail (a NaN displacement), the
+    failing element reported is the serial kernel's: the first one."""
+    import numba
+
+    from masonrydam.elements.interface import interface_evaluate_threaded
+
+    model = example_model("eindhoven_J4D.toml")
+    rng = np.random.default_rng(5)
+    u = rng.normal(scale=3e-5, size=model.n_dof)
+    composite = [g for g in model.igroups if g.law_id is not None and g.kinematics == "small"]
+    assert composite
+    before = numba.get_num_threads()
+    numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
+    codes = set()
+    try:
+        for g in composite:
+            g.params_table[:, g.joint_law.relaxation_time_column] = 0.0
+            n = g.conn.shape[1] * model.dim
+            for want in (True, False):
+                out = {}
+                for kernel in (interface_evaluate, interface_evaluate_threaded):
+                    g.state_trial[...] = 0.0
+                    ke = np.full((g.conn.shape[0], n, n), np.nan) if want else np.empty((0, 0, 0))
+                    st = kernel(model.coords, g.conn, u, g.N, g.dN, g.weights, g.thickness, g.params_table,
+                                g.param_index, g.state_base, g.state_trial, g.delta, g.traction, g.fe, ke, want,
+                                g.info, g.law_id)
+                    assert st == 0
+                    out[kernel] = (g.fe.copy(), ke.copy(), g.traction.copy(), g.delta.copy(), g.state_trial.copy())
+                for a, b in zip(out[interface_evaluate], out[interface_evaluate_threaded]):
+                    np.testing.assert_array_equal(a, b)
+                codes |= set(np.unique(out[interface_evaluate][4][..., 0]).tolist())
+            # NaN displacements at the nodes of two elements, the later one first in the threads' order
+            bad = u.copy()
+            late, early = g.conn[len(g.conn) - 1, 0], g.conn[len(g.conn) // 3, 0]
+            bad[late * model.dim] = np.nan
+            bad[early * model.dim] = np.nan
+            failing = {}
+            for kernel in (interface_evaluate, interface_evaluate_threaded):
+                g.info[0] = -1
+                st = kernel(model.coords, g.conn, bad, g.N, g.dN, g.weights, g.thickness, g.params_table,
+                            g.param_index, g.state_base, g.state_trial, g.delta, g.traction, g.fe,
+                            np.empty((0, 0, 0)), False, g.info, g.law_id)
+                assert st != 0
+                failing[kernel] = (st, int(g.info[0]))
+            assert failing[interface_evaluate] == failing[interface_evaluate_threaded]
+            assert failing[interface_evaluate][1] <= len(g.conn) // 3
+    finally:
+        numba.set_num_threads(before)
+    assert len(codes - {0.0}) >= 2, codes

@@ -427,8 +427,8 @@ def interface_evaluate_threaded(coords, conn, u, N, dN, weights, thickness, para
 
     Why: the composite law's return mapping (a local Newton per plastic point, its tangent by complex step) is
     most of a static iteration's evaluation on the Eindhoven walls (docs/masonry_softening.md), and its points
-    are independent. Joints whose law is Mohr-Coulomb keep the serial kernel: there a point costs little and a
-    thread pool's start would not pay."""
+    are independent. Joints whose law is Mohr-Coulomb keep the serial kernel (a point costs little there, and the
+    default scene's first run compiles no second kernel); they were not timed on threads."""
     n_elem = conn.shape[0]
     dim = coords.shape[1]
     ns = N.shape[1]

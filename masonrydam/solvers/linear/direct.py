@@ -258,7 +258,7 @@ class Factorization:
             # a factorization is not kept, see refactorize). Why: its two default steps (a product with K and a
             # substitution each) doubled the solve, 1.5 ms against 0.7 ms on the Eindhoven wall's 5 452 equations,
             # for a relative residual of 7.3e-12 instead of 7.7e-12 (the solution is checked below in any case).
-            # Set before each solve: an analysis (phase 12) puts the default back
+            # Set before each solve: the first call of a new solver object fills iparm with PARDISO's defaults
             self._ps.set_iparm(8, 0)
             x = self._ps.solve(self._Kcopy, b)
         _check_solution(self.K, x, b, self.residual_check)

@@ -35,8 +35,11 @@ from _common import cpu_model, pin_one_thread  # benchmarks/ is sys.path[0] when
 pin_one_thread()
 #: ``--numba-threads N``: numba's threads (the composite joints' kernel shares its elements among them,
 #: masonrydam.elements.interface.interface_evaluate_threaded, bit for bit the same); read here, before numba loads
-if "--numba-threads" in sys.argv[1:-1]:
-    os.environ["NUMBA_NUM_THREADS"] = sys.argv[sys.argv.index("--numba-threads") + 1]
+for _i, _word in enumerate(sys.argv[1:], 1):
+    if _word == "--numba-threads" and _i + 1 < len(sys.argv):
+        os.environ["NUMBA_NUM_THREADS"] = sys.argv[_i + 1]
+    elif _word.startswith("--numba-threads="):
+        os.environ["NUMBA_NUM_THREADS"] = _word.split("=", 1)[1]
 
 import argparse
 import contextlib
@@ -46,6 +49,7 @@ import tempfile
 import time
 from pathlib import Path
 
+import numba
 import numpy as np
 
 import masonrydam
@@ -114,7 +118,10 @@ def main(argv=None) -> int:
                     help="numba's threads (the composite joints' elements are shared among them); MKL and "
                          "OpenBLAS keep one")
     args = ap.parse_args(argv)
-    print(f"bench_eindhoven: {os.environ['NUMBA_NUM_THREADS']} numba thread(s), one MKL / OpenBLAS thread, "
+    if args.numba_threads != numba.config.NUMBA_NUM_THREADS:  # e.g. main(argv) called with the option: too late
+        ap.error(f"--numba-threads {args.numba_threads}: numba has loaded with {numba.config.NUMBA_NUM_THREADS} "
+                 "thread(s); give the option on the command line of this script")
+    print(f"bench_eindhoven: {numba.config.NUMBA_NUM_THREADS} numba thread(s), one MKL / OpenBLAS thread, "
           f"{cpu_model()}", flush=True)
     with tempfile.TemporaryDirectory() as folder:
         warm = scene(args.cases[0], 0.025, 4, 2)

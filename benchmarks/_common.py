@@ -96,3 +96,13 @@ def child_result(cmd: list, marker: str = "RESULT ") -> dict:
     if not lines:
         raise RuntimeError(f"run failed:\n{proc.stdout[-2000:]}\n{proc.stderr[-4000:]}")
     return json.loads(lines[-1][len(marker):])
+
+
+def example_module(name: str):
+    """The example script ``examples/<name>.py``, imported as a module (its ``__main__`` block does not run)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(name, Path(__file__).resolve().parents[1] / "examples" / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module

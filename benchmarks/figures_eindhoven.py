@@ -21,12 +21,12 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import importlib.util
 import io
 import time
 from pathlib import Path
 
 import numpy as np
+from _common import example_module  # benchmarks/ is sys.path[0] when run as a script
 
 import masonrydam
 from masonrydam.results.deformed import deformed_figure
@@ -76,7 +76,7 @@ def main(argv=None) -> int:
     _save_curves(fig, ax, "Eindhoven wall J4D, p = 0.30 MPa", out / "eindhoven_J4D_curves.png")
     _crack_figures(held, "J4D", out)
     _higher_precompressions(held, out, plt)
-    cyc = run(_example("eindhoven_J4D_cyclic").cyclic_scene(), "J4D cyclic, constant vertical load")
+    cyc = run(example_module("eindhoven_J4D_cyclic").cyclic_scene(), "J4D cyclic, constant vertical load")
     fig = pushover_figure(cyc, "x", title="Eindhoven J4D, constant vertical load, cyclic push")
     fig.savefig(out / "eindhoven_J4D_cyclic.png", dpi=90)
     print(f"wrote the figures in {out}")
@@ -126,20 +126,12 @@ def _higher_precompressions(held_j4d, out, plt):
     _save_curves(fig, ax, "Eindhoven walls, top held at its height (model only)", out / "eindhoven_walls_curves.png")
 
 
-def _example(name):
-    """The example script examples/<name>.py, imported as a module."""
-    spec = importlib.util.spec_from_file_location(name, EXAMPLES / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
 def _relaxed_walls(out, plt, results):
     """The held walls with the inviscid law relaxed past their limit points (examples/eindhoven_walls.py): their
     curves beside J4D's regularised example, and each wall's cracks at its largest force and at 4 mm."""
     import xarray as xr
 
-    walls = _example("eindhoven_walls")
+    walls = example_module("eindhoven_walls")
     fig, ax = plt.subplots(figsize=(6.4, 4.2))
     for wall in walls.PRECOMPRESSION:
         path = None if results is None else results / f"eindhoven_{wall}.nc"

@@ -8,8 +8,9 @@ goes on as it would have.
 
 For each failed hold step it prints:
 - the pseudo-time step ``r = dt / tau`` and the relative residual of every iterate;
-- the line searches: the step length taken, and ``g(1) / g(0)``, the work of the full step over the work at its
-  start (:func:`masonrydam.solvers.newton.secant_line_search`);
+- the secant line searches (:func:`masonrydam.solvers.newton.secant_line_search`): the step length taken, and
+  ``g(1) / g(0)``, the work of the full step over the work at its start. An iteration whose full step is accepted
+  without a search is not listed;
 - how many composite joint points change return region from one evaluation with the tangent to the next (the
   iterates and the full steps tried), and which transitions. The regions are elastic 0, shear 1, tension 2, cap 3,
   tension/shear 4 and shear/cap 5 (:mod:`masonrydam.materials.composite.columns`);
@@ -28,15 +29,13 @@ numba's cache warm, and 55 s compiling.
 """
 from __future__ import annotations
 
-from _common import cpu_model, pin_one_thread  # benchmarks/ is sys.path[0] when run as a script
+from _common import cpu_model, example_module, pin_one_thread  # benchmarks/ is sys.path[0] when run as a script
 
 pin_one_thread()
 
 import argparse  # noqa: E402
 import collections  # noqa: E402
-import importlib.util  # noqa: E402
 import time  # noqa: E402
-from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 
@@ -47,7 +46,6 @@ from masonrydam.materials.composite.batch import composite_evaluate  # noqa: E40
 from masonrydam.materials.composite.columns import S_CODE  # noqa: E402
 from masonrydam.solvers.static import line_search, relaxation, stepping  # noqa: E402
 
-EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "eindhoven_walls.py"
 SAMPLES = 2001  # points along a segment in the continuity check
 TANGENT_MISMATCH = 1e-2  # a tangent that differs from central differences by more than this, relative
 
@@ -209,10 +207,7 @@ def main(argv=None) -> int:
     ap.add_argument("--push-mm", type=float, default=4.0, help="the push, in 0.1 mm nominal steps")
     ap.add_argument("--iterations", type=int, default=30, help="Newton iterations of the second solve")
     args = ap.parse_args(argv)
-    spec = importlib.util.spec_from_file_location("eindhoven_walls", EXAMPLE)
-    example = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(example)
-    scene = example.wall_scene("J4D")
+    scene = example_module("eindhoven_walls").wall_scene("J4D")
     steps = int(round(args.push_mm / 0.1))
     scene["stages"][1]["loads"][0]["value"] = [f"{args.push_mm} mm", "0 mm"]
     scene["stages"][1]["steps"] = steps

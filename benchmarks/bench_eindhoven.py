@@ -17,13 +17,16 @@ modelled by Lourenco & Rots 1997). The first case runs once before the timings (
 
     python benchmarks/bench_eindhoven.py [--walls J4D J6D J7D] [--cases held constant]
         [--taus 0.25 0.025 0.0025 0] [--steps 40 80] [--elements 2 4] [--controls load dissipation]
-        [--limit-points follow relax] [--numba-threads 2]
+        [--limit-points follow relax] [--force-tolerances 1e-6 1e-5 1e-4] [--numba-threads 2]
 
-Prints per case: the peak force and its displacement, the force at 1, 2, 3 and 4 mm, how far the run got,
-the wall time of the run, the failure mechanisms at the peak and at the end (:mod:`masonrydam.results.wall_cracks`:
-diagonal cracking, toe crushing, sliding), and the peak's change against the case with the smallest relaxation
-time of the same steps and mesh. One process, one thread (``--numba-threads N``: N for numba). A benchmark, not a
-test: it never fails on a slow figure.
+``--force-tolerances``: the solver's ``force_tolerance`` (default 1e-6), its ``energy_tolerance`` 1e-4 times that
+(the defaults' ratio): how tightly each Newton solve is converged, a knob that trades accuracy for time.
+
+Prints per case: the peak force and its displacement, the force at 1, 2, 3 and 4 mm, how far the run got, the Newton
+iterations of the run (all its solves, those that failed included), the wall time of the run, the failure mechanisms
+at the peak and at the end (:mod:`masonrydam.results.wall_cracks`: diagonal cracking, toe crushing, sliding), and
+the peak's change against the case with the smallest relaxation time of the same steps and mesh. One process, one
+thread (``--numba-threads N``: N for numba). A benchmark, not a test: it never fails on a slow figure.
 """
 from __future__ import annotations
 
@@ -61,11 +64,16 @@ EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "eindhoven_J4D.toml
 JOINT_SETS = ("bed_joints", "head_joints", "unit_cracks")
 #: the walls' vertical precompression (Raijmakers & Vermeltfoort 1992; Lourenco & Rots 1997)
 PRECOMPRESSION = {"J4D": "0.30 MPa", "J5D": "0.30 MPa", "J6D": "1.21 MPa", "J7D": "2.12 MPa"}
+#: ``--force-tolerances``: the energy tolerance that goes with a force tolerance (the solver's defaults, 1e-10 and
+#: 1e-6, have this ratio)
+ENERGY_PER_FORCE_TOLERANCE = 1e-4
 
 
 def scene(case: str, tau_ms: float, steps: int, elements: int, control: str = "load", wall: str = "J4D",
-          limit_point: str = "follow") -> dict:
+          limit_point: str = "follow", force_tolerance: float = 1e-6) -> dict:
     data = Scene.from_toml(EXAMPLE).data
+    set_key(data, "solver.force_tolerance", force_tolerance)
+    set_key(data, "solver.energy_tolerance", ENERGY_PER_FORCE_TOLERANCE * force_tolerance)
     set_key(data, "stages[0].loads[1].pressure", PRECOMPRESSION[wall])
     set_key(data, "stages[1].control", control)
     set_key(data, "stages[1].limit_point", limit_point)
@@ -97,11 +105,12 @@ def run_case(data: dict, folder: str) -> dict:
 
     with xr.open_dataset(out) as ds:
         d, f, steps = pushover_data(ds)
+        iterations = int(ds["iterations"].sum()) if "iterations" in ds else -1
         k = int(np.argmax(f))
         mechanisms = {when: wall_cracks(ds, step).mechanisms for when, step in (("peak", int(steps[k])), ("end", -1))}
     at = [value_at_push(d, f, x) for x in (1e-3, 2e-3, 3e-3, 4e-3)]
     return {"peak": f[k], "d_peak": d[k], "at": at, "reached": d.max(), "wall": wall, "status": status,
-            "mechanisms": mechanisms}
+            "mechanisms": mechanisms, "iterations": iterations}
 
 
 def main(argv=None) -> int:
@@ -114,6 +123,9 @@ def main(argv=None) -> int:
     ap.add_argument("--controls", nargs="+", default=["load"], choices=["load", "dissipation"])
     ap.add_argument("--limit-points", nargs="+", default=["follow"], choices=["follow", "relax"],
                     help="control load: where a step finds no equilibrium, follow the path or relax the joints")
+    ap.add_argument("--force-tolerances", nargs="+", type=float, default=[1e-6],
+                    help="the solver's force_tolerance (default 1e-6, the solver's own); the energy tolerance is "
+                         "1e-4 times it")
     ap.add_argument("--numba-threads", type=int, default=1,
                     help="numba's threads (the composite joints' elements are shared among them); MKL and "
                          "OpenBLAS keep one")
@@ -128,21 +140,24 @@ def main(argv=None) -> int:
         set_key(warm, "stages[1].loads[0].value", ["0.4 mm"] if args.cases[0] == "constant" else ["0.4 mm", "0 mm"])
         run_case(warm, folder)
         print(f"{'wall':4s} {'case':9s} {'control':11s} {'tau ms':>7s} {'steps':>5s} {'el/unit':>7s} {'peak kN':>8s} {'at mm':>6s} "
-              f"{'F(1) kN':>8s} {'F(2)':>6s} {'F(3)':>6s} {'F(4)':>6s} {'reached':>8s} {'wall s':>7s} "
+              f"{'F(1) kN':>8s} {'F(2)':>6s} {'F(3)':>6s} {'F(4)':>6s} {'reached':>8s} {'ftol':>7s} {'Newton':>7s} "
+              f"{'wall s':>7s} "
               f"{'peak vs smallest tau':>21s}  status")
-        for wall, case, control, limit, steps, elements in itertools.product(
-                args.walls, args.cases, args.controls, args.limit_points, args.steps, args.elements):
+        for wall, case, control, limit, steps, elements, ftol in itertools.product(
+                args.walls, args.cases, args.controls, args.limit_points, args.steps, args.elements,
+                args.force_tolerances):
             if control != "load" and limit != "follow":
                 continue
             rows = []
             for tau in sorted(args.taus, reverse=True):
-                r = run_case(scene(case, tau, steps, elements, control, wall, limit), folder)
+                r = run_case(scene(case, tau, steps, elements, control, wall, limit, ftol), folder)
                 rows.append((tau, r))
             ref = rows[-1][1]["peak"]
             for tau, r in rows:
                 at = " ".join(f"{v / 1e3:6.2f}" for v in r["at"])
                 print(f"{wall:4s} {case:9s} {control + ('+relax' if limit == 'relax' else ''):11s} {tau:7.4g} {steps:5d} {elements:7d} {r['peak'] / 1e3:8.2f} {r['d_peak'] * 1e3:6.2f} "
-                      f"{at:>29s} {r['reached'] * 1e3:6.2f}mm {r['wall']:7.1f} {100 * (r['peak'] / ref - 1):+20.2f}%  "
+                      f"{at:>29s} {r['reached'] * 1e3:6.2f}mm {ftol:7.0e} {r['iterations']:7d} {r['wall']:7.1f} "
+                      f"{100 * (r['peak'] / ref - 1):+20.2f}%  "
                       f"{r['status']}", flush=True)
                 for when, names in r["mechanisms"].items():
                     print(f"     at the {when}: {'; '.join(names) or 'no failure mechanism'}", flush=True)

@@ -17,16 +17,23 @@ modelled by Lourenco & Rots 1997). The first case runs once before the timings (
 
     python benchmarks/bench_eindhoven.py [--walls J4D J6D J7D] [--cases held constant]
         [--taus 0.25 0.025 0.0025 0] [--steps 40 80] [--elements 2 4] [--controls load dissipation]
-        [--limit-points follow relax] [--force-tolerances 1e-6 1e-5 1e-4] [--numba-threads 2]
+        [--limit-points follow relax] [--force-tolerances 1e-6 1e-5 1e-4] [--crack-stiffnesses 1e6 1e4]
+        [--numba-threads 2]
+
+``--crack-stiffnesses``: the normal and shear stiffness of the units' potential cracks, N/mm3 (default: the example
+file's, 1e6); a penalty, rigid until the cracks open or slip. The converged walls of examples/eindhoven_walls.py are
+``--taus 0 --limit-points relax --steps 80 --crack-stiffnesses 1e4`` (docs/masonry_softening.md, "The units' cracks'
+penalty").
 
 ``--force-tolerances``: the solver's ``force_tolerance`` (default 1e-6), its ``energy_tolerance`` 1e-4 times that
 (the defaults' ratio): how tightly each Newton solve is converged, a knob that trades accuracy for time.
 
-Prints per case: the peak force and its displacement, the force at 1, 2, 3 and 4 mm, how far the run got, the Newton
-iterations of the run (all its solves, those that failed included), the wall time of the run, the failure mechanisms
-at the peak and at the end (:mod:`masonrydam.results.wall_cracks`: diagonal cracking, toe crushing, sliding), and
-the peak's change against the case with the smallest relaxation time of the same steps and mesh. One process, one
-thread (``--numba-threads N``: N for numba). A benchmark, not a test: it never fails on a slow figure.
+Prints per case: the peak force and its displacement, the force at 1, 2, 3 and 4 mm, how far the run got (with the
+force tolerance and the cracks' stiffness, ``file`` for the example file's), the Newton iterations of the run (all
+its solves, those that failed included), the wall time of the run, the failure mechanisms at the peak and at the end
+(:mod:`masonrydam.results.wall_cracks`: diagonal cracking, toe crushing, sliding), and the peak's change against the
+case with the smallest relaxation time of the same steps and mesh. One process, one thread (``--numba-threads N``: N
+for numba). A benchmark, not a test: it never fails on a slow figure.
 """
 from __future__ import annotations
 
@@ -70,8 +77,11 @@ ENERGY_PER_FORCE_TOLERANCE = 1e-4
 
 
 def scene(case: str, tau_ms: float, steps: int, elements: int, control: str = "load", wall: str = "J4D",
-          limit_point: str = "follow", force_tolerance: float = 1e-6) -> dict:
+          limit_point: str = "follow", force_tolerance: float = 1e-6, crack_stiffness: float | None = None) -> dict:
     data = Scene.from_toml(EXAMPLE).data
+    if crack_stiffness is not None:
+        for key in ("normal_stiffness", "shear_stiffness"):
+            set_key(data, f"joints.unit_cracks.{key}", f"{crack_stiffness:g} N/mm3")
     set_key(data, "solver.force_tolerance", force_tolerance)
     set_key(data, "solver.energy_tolerance", ENERGY_PER_FORCE_TOLERANCE * force_tolerance)
     set_key(data, "stages[0].loads[1].pressure", PRECOMPRESSION[wall])
@@ -126,6 +136,9 @@ def main(argv=None) -> int:
     ap.add_argument("--force-tolerances", nargs="+", type=float, default=[1e-6],
                     help="the solver's force_tolerance (default 1e-6, the solver's own); the energy tolerance is "
                          "1e-4 times it")
+    ap.add_argument("--crack-stiffnesses", nargs="+", type=float, default=[None],
+                    help="normal and shear stiffness of the units' potential cracks, N/mm3 (default: the example "
+                         "file's)")
     ap.add_argument("--numba-threads", type=int, default=1,
                     help="numba's threads (the composite joints' elements are shared among them); MKL and "
                          "OpenBLAS keep one")
@@ -140,23 +153,25 @@ def main(argv=None) -> int:
         set_key(warm, "stages[1].loads[0].value", ["0.4 mm"] if args.cases[0] == "constant" else ["0.4 mm", "0 mm"])
         run_case(warm, folder)
         print(f"{'wall':4s} {'case':9s} {'control':11s} {'tau ms':>7s} {'steps':>5s} {'el/unit':>7s} {'peak kN':>8s} {'at mm':>6s} "
-              f"{'F(1) kN':>8s} {'F(2)':>6s} {'F(3)':>6s} {'F(4)':>6s} {'reached':>8s} {'ftol':>7s} {'Newton':>7s} "
+              f"{'F(1) kN':>8s} {'F(2)':>6s} {'F(3)':>6s} {'F(4)':>6s} {'reached':>8s} {'ftol':>7s} {'k_crack':>8s} "
+              f"{'Newton':>7s} "
               f"{'wall s':>7s} "
               f"{'peak vs smallest tau':>21s}  status")
-        for wall, case, control, limit, steps, elements, ftol in itertools.product(
+        for wall, case, control, limit, steps, elements, ftol, kc in itertools.product(
                 args.walls, args.cases, args.controls, args.limit_points, args.steps, args.elements,
-                args.force_tolerances):
+                args.force_tolerances, args.crack_stiffnesses):
             if control != "load" and limit != "follow":
                 continue
             rows = []
             for tau in sorted(args.taus, reverse=True):
-                r = run_case(scene(case, tau, steps, elements, control, wall, limit, ftol), folder)
+                r = run_case(scene(case, tau, steps, elements, control, wall, limit, ftol, kc), folder)
                 rows.append((tau, r))
             ref = rows[-1][1]["peak"]
             for tau, r in rows:
                 at = " ".join(f"{v / 1e3:6.2f}" for v in r["at"])
                 print(f"{wall:4s} {case:9s} {control + ('+relax' if limit == 'relax' else ''):11s} {tau:7.4g} {steps:5d} {elements:7d} {r['peak'] / 1e3:8.2f} {r['d_peak'] * 1e3:6.2f} "
-                      f"{at:>29s} {r['reached'] * 1e3:6.2f}mm {ftol:7.0e} {r['iterations']:7d} {r['wall']:7.1f} "
+                      f"{at:>29s} {r['reached'] * 1e3:6.2f}mm {ftol:7.0e} {'file' if kc is None else f'{kc:.0e}':>8s} "
+                      f"{r['iterations']:7d} {r['wall']:7.1f} "
                       f"{100 * (r['peak'] / ref - 1):+20.2f}%  "
                       f"{r['status']}", flush=True)
                 for when, names in r["mechanisms"].items():

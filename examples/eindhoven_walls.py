@@ -6,7 +6,7 @@ reaches at that displacement (docs/masonry_softening.md, "The inviscid wall past
 The example file itself regularises its joints with a relaxation time: it runs in about 20 s and follows these
 curves to 2 mm, and beyond it is an upper band (it hardens to 69-80 kN at 3-4 mm). These runs are the converged
 ones: the units' cracks at :data:`UNIT_CRACK_STIFFNESS`, 80 push steps. On a 2-core AMD EPYC, with the composite
-joints on both cores, J4D takes 48 to 59 s, J6D 29 s and J7D 54 s (2026-12-08).
+joints on both cores, J4D takes 40 to 59 s, J6D 29 s and J7D 54 s (2026-12-08).
 
 Run:   python examples/eindhoven_walls.py                 all three walls
        python examples/eindhoven_walls.py J4D             one
